@@ -1,0 +1,31 @@
+/* Traces a ray file through the renderer's own traversal (pathcl rays). */
+#include "shared/types.h"
+#include "math.cl"
+#include "intersect.cl"
+
+__kernel void trace_rays(__global const BvhNode* nodes, __global const Primitive* prims,
+                         __global const RayRecord* rays, __global HitRecord* hits, uint count) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  __global const float* r = (__global const float*)(rays + i);
+  Ray ray;
+  ray.o = vload3(0, r);
+  ray.tmin = r[3];
+  ray.d = vload3(0, r + 4);
+  ray.tmax = r[7];
+  ray.skip_prim = PC_INVALID;
+  Hit hit;
+  HitRecord out;
+  if (trace_bvh(nodes, prims, &ray, false, &hit)) {
+    out.t = hit.t;
+    out.prim = prim_index_of(prims[hit.slot]);
+    out.u = hit.u;
+    out.v = hit.v;
+  } else {
+    out.t = INFINITY;
+    out.prim = PC_INVALID;
+    out.u = 0.0f;
+    out.v = 0.0f;
+  }
+  hits[i] = out;
+}

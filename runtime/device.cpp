@@ -1,0 +1,136 @@
+#include "runtime/device.h"
+
+#include <algorithm>
+#include <cctype>
+
+namespace {
+
+std::string platform_string(cl_platform_id p, cl_platform_info what) {
+  size_t size = 0;
+  CL_CHECK(clGetPlatformInfo(p, what, 0, nullptr, &size));
+  std::string s(size, '\0');
+  CL_CHECK(clGetPlatformInfo(p, what, size, s.data(), nullptr));
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
+std::string device_string(cl_device_id d, cl_device_info what) {
+  size_t size = 0;
+  CL_CHECK(clGetDeviceInfo(d, what, 0, nullptr, &size));
+  std::string s(size, '\0');
+  CL_CHECK(clGetDeviceInfo(d, what, size, s.data(), nullptr));
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
+template <class T>
+T device_value(cl_device_id d, cl_device_info what) {
+  T value{};
+  CL_CHECK(clGetDeviceInfo(d, what, sizeof(T), &value, nullptr));
+  return value;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+}  // namespace
+
+std::vector<DeviceInfo> list_devices() {
+  cl_uint platform_count = 0;
+  cl_int status = clGetPlatformIDs(0, nullptr, &platform_count);
+  if (status == CL_PLATFORM_NOT_FOUND_KHR || platform_count == 0) return {};
+  CL_CHECK(status);
+  std::vector<cl_platform_id> platforms(platform_count);
+  CL_CHECK(clGetPlatformIDs(platform_count, platforms.data(), nullptr));
+  std::vector<DeviceInfo> devices;
+  for (cl_platform_id p : platforms) {
+    cl_uint count = 0;
+    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 0, nullptr, &count) != CL_SUCCESS || count == 0) continue;
+    std::vector<cl_device_id> ids(count);
+    CL_CHECK(clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, count, ids.data(), nullptr));
+    for (cl_device_id d : ids) {
+      DeviceInfo info;
+      info.platform = p;
+      info.device = d;
+      info.platform_name = platform_string(p, CL_PLATFORM_NAME);
+      info.platform_version = platform_string(p, CL_PLATFORM_VERSION);
+      info.name = device_string(d, CL_DEVICE_NAME);
+      info.version = device_string(d, CL_DEVICE_VERSION);
+      info.driver_version = device_string(d, CL_DRIVER_VERSION);
+      info.opencl_c_version = device_string(d, CL_DEVICE_OPENCL_C_VERSION);
+      info.is_gpu = (device_value<cl_device_type>(d, CL_DEVICE_TYPE) & CL_DEVICE_TYPE_GPU) != 0;
+      info.compute_units = device_value<cl_uint>(d, CL_DEVICE_MAX_COMPUTE_UNITS);
+      info.global_memory = device_value<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
+      info.max_alloc = device_value<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
+      info.max_work_group = device_value<size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      devices.push_back(info);
+    }
+  }
+  return devices;
+}
+
+DeviceInfo select_device(const std::string& selector) {
+  std::vector<DeviceInfo> devices = list_devices();
+  if (devices.empty())
+    throw RuntimeFailure("no OpenCL device found (is an ICD such as pocl-opencl-icd installed?)");
+  if (selector.empty()) {
+    for (const DeviceInfo& d : devices)
+      if (d.is_gpu) return d;
+    return devices.front();
+  }
+  if (std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); })) {
+    size_t index = std::stoul(selector);
+    if (index < devices.size()) return devices[index];
+    throw UsageError("--device " + selector + ": no device with that index (" + std::to_string(devices.size()) +
+                     " found; see `pathcl devices`)");
+  }
+  for (const DeviceInfo& d : devices)
+    if (lower(d.name).find(lower(selector)) != std::string::npos ||
+        lower(d.platform_name).find(lower(selector)) != std::string::npos)
+      return d;
+  throw UsageError("--device " + selector + ": no device or platform name contains it (see `pathcl devices`)");
+}
+
+ClContext::ClContext(const DeviceInfo& device) : info(device) {
+  cl_context_properties props[] = {CL_CONTEXT_PLATFORM, cl_context_properties(device.platform), 0};
+  context = CL_CHECKED(clCreateContext, props, 1, &info.device, nullptr, nullptr);
+  queue = CL_CHECKED(clCreateCommandQueue, context, info.device, CL_QUEUE_PROFILING_ENABLE);
+}
+
+ClContext::~ClContext() {
+  if (queue) clReleaseCommandQueue(queue);
+  if (context) clReleaseContext(context);
+}
+
+ClBuffer::ClBuffer(ClContext& cl, cl_mem_flags flags, size_t bytes, const void* host) {
+  mem = CL_CHECKED(clCreateBuffer, cl.context, flags, bytes, const_cast<void*>(host));
+}
+
+ClBuffer::~ClBuffer() {
+  if (mem) clReleaseMemObject(mem);
+}
+
+ClBuffer& ClBuffer::operator=(ClBuffer&& o) noexcept {
+  if (this != &o) {
+    if (mem) clReleaseMemObject(mem);
+    mem = o.mem;
+    o.mem = nullptr;
+  }
+  return *this;
+}
+
+double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group) {
+  size_t global = items;
+  if (work_group > 0) global = (items + work_group - 1) / work_group * work_group;
+  cl_event event = nullptr;
+  CL_CHECK(clEnqueueNDRangeKernel(cl.queue, kernel, 1, nullptr, &global, work_group > 0 ? &work_group : nullptr,
+                                  0, nullptr, &event));
+  CL_CHECK(clWaitForEvents(1, &event));
+  cl_ulong start = 0, end = 0;
+  CL_CHECK(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr));
+  CL_CHECK(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr));
+  clReleaseEvent(event);
+  return double(end - start) * 1e-6;
+}

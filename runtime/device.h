@@ -1,0 +1,57 @@
+// OpenCL platforms and devices: listing, choosing one by index or name, and the context and queue.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "runtime/cl_check.h"
+
+struct DeviceInfo {
+  cl_platform_id platform = nullptr;
+  cl_device_id device = nullptr;
+  std::string platform_name, platform_version, name, version, driver_version, opencl_c_version;
+  bool is_gpu = false;
+  cl_uint compute_units = 0;
+  cl_ulong global_memory = 0, max_alloc = 0;
+  size_t max_work_group = 0;
+};
+
+// Every device of every platform, in platform order; the index is what `--device N` takes.
+std::vector<DeviceInfo> list_devices();
+
+// "" picks the first GPU, else the first CPU device; a number picks by index; anything else is a
+// case-insensitive substring of the device or platform name. No match is a UsageError.
+DeviceInfo select_device(const std::string& selector);
+
+// A context and an in-order profiling queue on one device.
+struct ClContext {
+  DeviceInfo info;
+  cl_context context = nullptr;
+  cl_command_queue queue = nullptr;
+  explicit ClContext(const DeviceInfo& device);
+  ~ClContext();
+  ClContext(const ClContext&) = delete;
+  ClContext& operator=(const ClContext&) = delete;
+};
+
+// A device buffer that is released with its owner.
+struct ClBuffer {
+  cl_mem mem = nullptr;
+  ClBuffer() = default;
+  ClBuffer(ClContext& cl, cl_mem_flags flags, size_t bytes, const void* host = nullptr);
+  ~ClBuffer();
+  ClBuffer(ClBuffer&& o) noexcept : mem(o.mem) { o.mem = nullptr; }
+  ClBuffer& operator=(ClBuffer&& o) noexcept;
+  ClBuffer(const ClBuffer&) = delete;
+};
+
+// Uploads a vector; an empty one gets a buffer of one zeroed element, since OpenCL has no empty buffers.
+template <class T>
+ClBuffer upload(ClContext& cl, const std::vector<T>& data) {
+  static const T zero{};
+  return data.empty() ? ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T), &zero)
+                      : ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * data.size(), data.data());
+}
+
+// Runs a 1-D kernel over `items` work items (rounded up to the work-group size; 0 lets the driver
+// choose) and returns the kernel's time on the device in milliseconds, from profiling events.
+double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0);

@@ -1,0 +1,102 @@
+#include "runtime/image_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <png.h>
+
+#include "runtime/errors.h"
+
+namespace {
+
+// Renames tmp over path, or removes tmp and throws.
+void commit_file(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw RuntimeFailure(path + ": cannot write: " + ec.message());
+  }
+}
+
+uint8_t to_srgb8(float linear) {
+  float c = std::clamp(std::isfinite(linear) ? linear : 0.0f, 0.0f, 1.0f);
+  float s = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+  return uint8_t(std::lround(s * 255.0f));
+}
+
+}  // namespace
+
+void write_exr(const std::string& path, const Image& image) {
+  std::string tmp = path + ".partial.exr";
+  try {
+    Imf::Header header(int(image.width), int(image.height));
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    header.insert("spp", Imf::IntAttribute(image.spp));
+    for (const auto& [key, value] : image.attributes) header.insert(key, Imf::StringAttribute(value));
+    Imf::FrameBuffer fb;
+    char* base = reinterpret_cast<char*>(const_cast<float*>(image.rgb.data()));
+    size_t xs = 3 * sizeof(float), ys = xs * image.width;
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    Imf::OutputFile file(tmp.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(int(image.height));
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw RuntimeFailure(path + ": cannot write the EXR file: " + e.what());
+  }
+  commit_file(tmp, path);
+}
+
+void write_png(const std::string& path, const Image& image) {
+  std::vector<uint8_t> pixels(image.rgb.size());
+  std::transform(image.rgb.begin(), image.rgb.end(), pixels.begin(), to_srgb8);
+  png_image png{};
+  png.version = PNG_IMAGE_VERSION;
+  png.width = image.width;
+  png.height = image.height;
+  png.format = PNG_FORMAT_RGB;
+  std::string tmp = path + ".partial.png";
+  if (!png_image_write_to_file(&png, tmp.c_str(), 0, pixels.data(), 0, nullptr)) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw RuntimeFailure(path + ": cannot write the PNG file: " + png.message);
+  }
+  commit_file(tmp, path);
+}
+
+Image read_exr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    Imath::Box2i dw = file.header().dataWindow();
+    Image image;
+    image.width = uint32_t(dw.max.x - dw.min.x + 1);
+    image.height = uint32_t(dw.max.y - dw.min.y + 1);
+    image.rgb.assign(size_t(image.width) * image.height * 3, 0.0f);
+    if (auto* spp = file.header().findTypedAttribute<Imf::IntAttribute>("spp")) image.spp = spp->value();
+    for (auto it = file.header().begin(); it != file.header().end(); ++it)
+      if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) image.attributes[it.name()] = s->value();
+    Imf::FrameBuffer fb;
+    size_t xs = 3 * sizeof(float), ys = xs * image.width;
+    char* base = reinterpret_cast<char*>(image.rgb.data()) - (dw.min.x * xs + dw.min.y * ys);
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return image;
+  } catch (const std::exception& e) {
+    throw UsageError(path + ": cannot read the EXR file: " + e.what());
+  }
+}

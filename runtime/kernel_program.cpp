@@ -1,0 +1,172 @@
+#include "runtime/kernel_program.h"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include <unistd.h>
+
+#include "runtime/kernel_sources.h"
+#include "scene/device_scene.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* find_source(const std::string& name) {
+  for (const KernelSourceFile& f : kernel_source_files())
+    if (name == f.name) return f.text;
+  return nullptr;
+}
+
+void expand(const std::string& name, std::set<std::string>& seen, std::string& out) {
+  const char* text = find_source(name);
+  if (!text) throw RuntimeFailure("kernel source \"" + name + "\" is not embedded in this build");
+  seen.insert(name);
+  out += "#line 1 \"" + name + "\"\n";
+  std::istringstream in(text);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    size_t start = line.find("#include \"");
+    if (start != std::string::npos && line.find_first_not_of(" \t") == start) {
+      std::string included = line.substr(start + 10, line.find('"', start + 10) - start - 10);
+      if (!seen.count(included)) expand(included, seen, out);
+      out += "#line " + std::to_string(number + 1) + " \"" + name + "\"\n";
+    } else {
+      out += line + "\n";
+    }
+  }
+}
+
+uint64_t fnv1a(const std::string& s, uint64_t h = 1469598103934665603ull) {
+  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+fs::path cache_directory() {
+  if (const char* dir = std::getenv("PATHCL_KERNEL_CACHE")) return dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return fs::path(xdg) / "pathcl" / "kernels";
+  if (const char* home = std::getenv("HOME"); home && *home) return fs::path(home) / ".cache" / "pathcl" / "kernels";
+  return {};
+}
+
+std::string build_log(cl_program program, cl_device_id device) {
+  size_t size = 0;
+  clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size);
+  std::string log(size, '\0');
+  clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
+  while (!log.empty() && (log.back() == '\0' || log.back() == '\n')) log.pop_back();
+  return log;
+}
+
+std::vector<unsigned char> program_binary(cl_program program) {
+  size_t size = 0;
+  CL_CHECK(clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, nullptr));
+  std::vector<unsigned char> binary(size);
+  unsigned char* ptr = binary.data();
+  CL_CHECK(clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof(ptr), &ptr, nullptr));
+  return binary;
+}
+
+// Loads and builds a cached binary; nullptr if there is none or the driver rejects it.
+cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& options) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return nullptr;
+  std::vector<unsigned char> binary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (binary.empty()) return nullptr;
+  const unsigned char* ptr = binary.data();
+  size_t size = binary.size();
+  cl_int status = CL_SUCCESS, binary_status = CL_SUCCESS;
+  cl_program program =
+      clCreateProgramWithBinary(cl.context, 1, &cl.info.device, &size, &ptr, &binary_status, &status);
+  if (status != CL_SUCCESS || binary_status != CL_SUCCESS) {
+    if (program) clReleaseProgram(program);
+    return nullptr;
+  }
+  if (clBuildProgram(program, 1, &cl.info.device, options.c_str(), nullptr, nullptr) != CL_SUCCESS) {
+    clReleaseProgram(program);
+    return nullptr;
+  }
+  return program;
+}
+
+// Writes through a temporary file and a rename, so concurrent processes never read half a binary.
+void store_cached(const fs::path& file, const std::vector<unsigned char>& binary) {
+  std::error_code ec;
+  fs::create_directories(file.parent_path(), ec);
+  if (ec) return;  // the cache is an optimisation: an unwritable directory only costs build time
+  fs::path tmp = file;
+  tmp += ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()))) return;
+  }
+  fs::rename(tmp, file, ec);
+  if (ec) fs::remove(tmp, ec);
+}
+
+}  // namespace
+
+std::string assemble_kernel_source(const std::string& main_file) {
+  std::set<std::string> seen;
+  std::string out;
+  expand(main_file, seen, out);
+  return out;
+}
+
+std::string kernel_options(uint32_t features) {
+  // No fast-math options: they break the slab test's infinities and the watertight triangle test.
+  std::string options = "-cl-std=CL1.2";
+  if (features & kFeatureTriangles) options += " -DPC_HAS_TRIANGLES";
+  if (features & kFeatureSpheres) options += " -DPC_HAS_SPHERES";
+  if (features & kFeatureSmoothNormals) options += " -DPC_HAS_SMOOTH_NORMALS";
+  if (features & kFeatureAreaLights) options += " -DPC_HAS_AREA_LIGHTS";
+  if (features & kFeatureDiffuse) options += " -DPC_HAS_DIFFUSE";
+  return options;
+}
+
+KernelProgram::KernelProgram(KernelProgram&& o) noexcept
+    : program(o.program), build_ms(o.build_ms), from_cache(o.from_cache), options(std::move(o.options)) {
+  o.program = nullptr;
+}
+
+KernelProgram::~KernelProgram() {
+  if (program) clReleaseProgram(program);
+}
+
+cl_kernel KernelProgram::kernel(const char* name) const { return CL_CHECKED(clCreateKernel, program, name); }
+
+KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, const std::string& options) {
+  auto start = std::chrono::steady_clock::now();
+  std::string source = assemble_kernel_source(main_file);
+  KernelProgram result;
+  result.options = options;
+  const DeviceInfo& d = cl.info;
+  uint64_t key = fnv1a(source + '\x1f' + options + '\x1f' + d.platform_name + '\x1f' + d.platform_version + '\x1f' +
+                       d.name + '\x1f' + d.version + '\x1f' + d.driver_version);
+  fs::path dir = cache_directory();
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
+  fs::path file = dir.empty() ? fs::path() : dir / (fs::path(main_file).stem().string() + "-" + hex + ".bin");
+
+  if (!file.empty()) result.program = load_cached(cl, file, options);
+  result.from_cache = result.program != nullptr;
+  if (!result.program) {
+    const char* text = source.c_str();
+    size_t length = source.size();
+    result.program = CL_CHECKED(clCreateProgramWithSource, cl.context, 1, &text, &length);
+    cl_int status = clBuildProgram(result.program, 1, &d.device, options.c_str(), nullptr, nullptr);
+    if (status != CL_SUCCESS)
+      throw RuntimeFailure("kernel build of " + main_file + " failed (" + cl_error_name(status) + ") on " + d.name +
+                           " with options \"" + options + "\":\n" + build_log(result.program, d.device));
+    if (!file.empty()) store_cached(file, program_binary(result.program));
+  }
+  result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}

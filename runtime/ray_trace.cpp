@@ -1,0 +1,66 @@
+#include "runtime/ray_trace.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "runtime/kernel_program.h"
+
+std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
+                                         int repeat, TraceTiming& timing, size_t work_group) {
+  KernelProgram program = build_kernel_program(cl, "trace.cl", kernel_options(scene.features));
+  timing.kernel_build_ms = program.build_ms;
+  timing.kernel_from_cache = program.from_cache;
+  std::vector<HitRecord> hits(rays.size());
+  if (rays.empty()) return hits;
+  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), ray_buf = upload(cl, rays);
+  ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
+  ClKernel kernel(program.kernel("trace_rays"));
+  kernel.arg(0, nodes.mem);
+  kernel.arg(1, prims.mem);
+  kernel.arg(2, ray_buf.mem);
+  kernel.arg(3, hit_buf.mem);
+  kernel.arg(4, cl_uint(rays.size()));
+  for (int r = 0; r < repeat; ++r) {
+    auto start = std::chrono::steady_clock::now();
+    timing.kernel_ms.push_back(run_kernel(cl, kernel.k, rays.size(), work_group));
+    timing.wall_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, hit_buf.mem, CL_TRUE, 0, sizeof(HitRecord) * hits.size(), hits.data(), 0,
+                               nullptr, nullptr));
+  return hits;
+}
+
+std::vector<RayRecord> read_ray_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UsageError(path + ": cannot open the ray file");
+  in.seekg(0, std::ios::end);
+  size_t bytes = size_t(in.tellg());
+  in.seekg(0);
+  if (bytes % sizeof(RayRecord) != 0)
+    throw UsageError(path + ": size " + std::to_string(bytes) + " is not a multiple of the 32-byte ray record");
+  std::vector<RayRecord> rays(bytes / sizeof(RayRecord));
+  in.read(reinterpret_cast<char*>(rays.data()), std::streamsize(bytes));
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const RayRecord& r = rays[i];
+    bool finite = std::isfinite(r.org[0]) && std::isfinite(r.org[1]) && std::isfinite(r.org[2]) &&
+                  std::isfinite(r.dir[0]) && std::isfinite(r.dir[1]) && std::isfinite(r.dir[2]) && !std::isnan(r.tmin) &&
+                  !std::isnan(r.tmax);
+    if (!finite || (r.dir[0] == 0 && r.dir[1] == 0 && r.dir[2] == 0))
+      throw UsageError(path + ": ray " + std::to_string(i) + " has a non-finite value or a zero direction");
+  }
+  return rays;
+}
+
+void write_hit_file(const std::string& path, const std::vector<HitRecord>& hits) {
+  std::string tmp = path + ".partial";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out.write(reinterpret_cast<const char*>(hits.data()), std::streamsize(hits.size() * sizeof(HitRecord)))) {
+      std::filesystem::remove(tmp);
+      throw RuntimeFailure(path + ": cannot write the hit file");
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}

@@ -1,0 +1,169 @@
+// Binned SAH build (Wald 2007): at each node the centroids are binned along each axis, the cheapest
+// plane by the surface area heuristic is taken, and a leaf is made when splitting costs more than
+// intersecting every primitive. Nodes are emitted depth-first so the left child follows its parent.
+#include "scene/bvh_build.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <glm/common.hpp>
+
+void Aabb::grow(const glm::vec3& p) {
+  lo = glm::min(lo, p);
+  hi = glm::max(hi, p);
+}
+void Aabb::grow(const Aabb& b) {
+  lo = glm::min(lo, b.lo);
+  hi = glm::max(hi, b.hi);
+}
+float Aabb::half_area() const {
+  glm::vec3 e = hi - lo;
+  if (e.x < 0 || e.y < 0 || e.z < 0) return 0;
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+namespace {
+
+constexpr int kBins = 32;
+constexpr float kTraversalCost = 1, kIntersectionCost = 1;
+constexpr uint32_t kMaxLeafSize = 16;
+constexpr uint32_t kMedianSplitDepth = kBvhMaxDepth - 24;  // past this, split by count to bound depth
+
+struct Builder {
+  const std::vector<Aabb>& boxes;
+  std::vector<glm::vec3> centroids;
+  Bvh& bvh;
+  float root_area = 0;
+
+  // Builds the subtree of order[begin, end) into nodes[index]; returns nothing, fills bvh.
+  void build(uint32_t index, uint32_t begin, uint32_t end, uint32_t depth) {
+    bvh.depth = std::max(bvh.depth, depth + 1);
+    Aabb bounds, centroid_bounds;
+    for (uint32_t i = begin; i < end; ++i) {
+      bounds.grow(boxes[bvh.prim_order[i]]);
+      centroid_bounds.grow(centroids[bvh.prim_order[i]]);
+    }
+    BvhNode& node = bvh.nodes[index];
+    for (int k = 0; k < 3; ++k) {
+      node.lo[k] = bounds.lo[k];
+      node.hi[k] = bounds.hi[k];
+    }
+    uint32_t count = end - begin;
+    float area = bounds.half_area();
+    float leaf_cost = kIntersectionCost * float(count);
+
+    int best_axis = -1, best_plane = 0;
+    float best_cost = INFINITY;
+    glm::vec3 extent = centroid_bounds.hi - centroid_bounds.lo;
+    if (count > 1 && depth < kMedianSplitDepth) {
+      for (int axis = 0; axis < 3; ++axis) {
+        if (!(extent[axis] > 0)) continue;
+        Aabb bin_box[kBins];
+        uint32_t bin_count[kBins] = {};
+        float scale = kBins / extent[axis];
+        for (uint32_t i = begin; i < end; ++i) {
+          uint32_t p = bvh.prim_order[i];
+          int b = std::min(kBins - 1, int((centroids[p][axis] - centroid_bounds.lo[axis]) * scale));
+          bin_box[b].grow(boxes[p]);
+          ++bin_count[b];
+        }
+        // Sweep from the right to get the right side's area and count for every plane.
+        float right_area[kBins];
+        uint32_t right_count[kBins];
+        Aabb acc;
+        uint32_t n = 0;
+        for (int b = kBins - 1; b > 0; --b) {
+          acc.grow(bin_box[b]);
+          n += bin_count[b];
+          right_area[b] = acc.half_area();
+          right_count[b] = n;
+        }
+        acc = Aabb();
+        n = 0;
+        for (int plane = 1; plane < kBins; ++plane) {
+          acc.grow(bin_box[plane - 1]);
+          n += bin_count[plane - 1];
+          if (n == 0 || right_count[plane] == 0) continue;
+          float cost = kTraversalCost + kIntersectionCost *
+                                            (acc.half_area() * n + right_area[plane] * right_count[plane]) / area;
+          if (cost < best_cost) {
+            best_cost = cost;
+            best_axis = axis;
+            best_plane = plane;
+          }
+        }
+      }
+    }
+
+    uint32_t mid;
+    if (best_axis >= 0 && (best_cost < leaf_cost || count > kMaxLeafSize)) {
+      float scale = kBins / extent[best_axis];
+      float lo = centroid_bounds.lo[best_axis];
+      auto first_right = std::partition(
+          bvh.prim_order.begin() + begin, bvh.prim_order.begin() + end, [&](uint32_t p) {
+            return std::min(kBins - 1, int((centroids[p][best_axis] - lo) * scale)) < best_plane;
+          });
+      mid = uint32_t(first_right - bvh.prim_order.begin());
+    } else if (count > kMaxLeafSize) {
+      // All centroids coincide (or the tree is too deep): split by count along the widest axis.
+      int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+      mid = begin + count / 2;
+      std::nth_element(bvh.prim_order.begin() + begin, bvh.prim_order.begin() + mid,
+                       bvh.prim_order.begin() + end,
+                       [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+    } else {
+      node.left_first = begin;
+      node.prim_count = count;
+      bvh.leaf_count++;
+      bvh.max_leaf_size = std::max(bvh.max_leaf_size, count);
+      bvh.sah_cost += kIntersectionCost * count * area / root_area;
+      return;
+    }
+    bvh.sah_cost += kTraversalCost * area / root_area;
+    uint32_t left = uint32_t(bvh.nodes.size());
+    bvh.nodes.emplace_back();
+    build(left, begin, mid, depth + 1);
+    uint32_t right = uint32_t(bvh.nodes.size());
+    bvh.nodes.emplace_back();
+    build(right, mid, end, depth + 1);
+    bvh.nodes[index].left_first = right;  // `node` may dangle after the children grew the vector
+    bvh.nodes[index].prim_count = 0;
+  }
+};
+
+}  // namespace
+
+Bvh build_bvh(const std::vector<Aabb>& prim_boxes) {
+  auto start = std::chrono::steady_clock::now();
+  Bvh bvh;
+  uint32_t n = uint32_t(prim_boxes.size());
+  bvh.prim_order.resize(n);
+  for (uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = i;
+  bvh.nodes.reserve(n > 0 ? 2 * n : 1);
+  bvh.nodes.emplace_back();
+  if (n == 0) {
+    // An empty scene: a leaf with no primitives and an empty box that no ray enters.
+    BvhNode& root = bvh.nodes[0];
+    for (int k = 0; k < 3; ++k) {
+      root.lo[k] = 1e30f;
+      root.hi[k] = -1e30f;
+    }
+    root.left_first = 0;
+    root.prim_count = 0;
+    bvh.depth = 1;
+    bvh.leaf_count = 1;
+  } else {
+    Builder builder{prim_boxes, {}, bvh};
+    builder.centroids.resize(n);
+    Aabb root;
+    for (uint32_t i = 0; i < n; ++i) {
+      builder.centroids[i] = (prim_boxes[i].lo + prim_boxes[i].hi) * 0.5f;
+      root.grow(prim_boxes[i]);
+    }
+    builder.root_area = std::max(root.half_area(), 1e-30f);
+    builder.build(0, 0, n, 0);
+  }
+  bvh.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return bvh;
+}

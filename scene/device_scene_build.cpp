@@ -1,0 +1,135 @@
+#include "scene/device_scene.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+
+namespace {
+
+pc_float4 f4(const glm::vec3& v, float w = 0) { return {v.x, v.y, v.z, w}; }
+float bits_to_float(uint32_t u) {
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+SceneHeader camera_header(const CameraDesc& c) {
+  SceneHeader h{};
+  glm::vec3 forward = glm::normalize(c.look_at - c.position);
+  glm::vec3 right = glm::normalize(glm::cross(forward, c.up));
+  glm::vec3 up = glm::cross(right, forward);
+  float tan_half = std::tan(glm::radians(c.fov_y_degrees) * 0.5f);
+  float aspect = float(c.width) / float(c.height);
+  h.cam_position = f4(c.position);
+  h.cam_right = f4(right * tan_half * aspect);
+  h.cam_up = f4(up * tan_half);
+  h.cam_forward = f4(forward);
+  h.width = c.width;
+  h.height = c.height;
+  return h;
+}
+
+}  // namespace
+
+Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
+  return scene.prims[scene.leaf_slot[prim_index]];
+}
+
+DeviceScene build_device_scene(const SceneDescription& scene) {
+  DeviceScene out;
+  out.header = camera_header(scene.camera);
+  for (const MaterialDesc& m : scene.materials) {
+    Material mat{};
+    mat.reflectance = f4(m.reflectance);
+    mat.type = PC_MAT_DIFFUSE;
+    out.materials.push_back(mat);
+    out.features |= kFeatureDiffuse;
+  }
+
+  // Primitives in scene order, with their boxes and (for emitters) light candidates.
+  std::vector<Primitive> prims;
+  std::vector<Aabb> boxes;
+  struct Emitter { uint32_t prim; glm::vec3 emission; float area; bool two_sided; };
+  std::vector<Emitter> emitters;
+  for (const ShapeDesc& s : scene.shapes) {
+    bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
+    uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
+    if (s.is_sphere) {
+      uint32_t index = uint32_t(prims.size());
+      prims.push_back({f4(s.center, bits_to_float(index)), {s.radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
+      boxes.push_back({s.center - glm::vec3(s.radius), s.center + glm::vec3(s.radius)});
+      out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
+      if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * s.radius * s.radius, s.two_sided});
+      out.sphere_count++;
+      out.features |= kFeatureSpheres;
+      continue;
+    }
+    bool smooth = !s.mesh.normals.empty();
+    if (smooth) out.features |= kFeatureSmoothNormals;
+    for (const auto& t : s.mesh.triangles) {
+      uint32_t index = uint32_t(prims.size());
+      glm::vec3 a = s.mesh.positions[t[0]], b = s.mesh.positions[t[1]], c = s.mesh.positions[t[2]];
+      prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
+      Aabb box;
+      box.grow(a);
+      box.grow(b);
+      box.grow(c);
+      boxes.push_back(box);
+      out.shading.push_back({s.material, PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
+      if (smooth)
+        for (int k = 0; k < 3; ++k) out.normals.push_back(f4(s.mesh.normals[t[k]]));
+      else
+        out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
+      float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+      if (emits) {
+        if (area > 0 && std::isfinite(area))
+          emitters.push_back({index, s.emission, area, s.two_sided});
+        else
+          out.skipped_zero_area_emitters++;
+      }
+      out.triangle_count++;
+      out.features |= kFeatureTriangles;
+    }
+  }
+  if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
+
+  // One distribution over all emitters, proportional to emitted power.
+  double total = 0;
+  std::vector<double> power;
+  for (const Emitter& e : emitters) {
+    power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
+    total += power.back();
+  }
+  out.light_cdf.push_back(0);
+  double running = 0;
+  for (size_t i = 0; i < emitters.size(); ++i) {
+    const Emitter& e = emitters[i];
+    Light light{};
+    light.emission = f4(e.emission);
+    light.prim = e.prim;
+    light.area = e.area;
+    light.select_pdf = float(power[i] / total);
+    out.shading[e.prim].light = uint32_t(out.lights.size());
+    out.lights.push_back(light);
+    running += power[i];
+    out.light_cdf.push_back(i + 1 == emitters.size() ? 1.0f : float(running / total));
+  }
+  if (!out.lights.empty()) out.features |= kFeatureAreaLights;
+
+  out.bvh = build_bvh(boxes);
+  out.nodes = std::move(out.bvh.nodes);
+  out.prims.reserve(prims.size());
+  out.leaf_slot.resize(prims.size());
+  for (uint32_t slot = 0; slot < prims.size(); ++slot) {
+    out.prims.push_back(prims[out.bvh.prim_order[slot]]);
+    out.leaf_slot[out.bvh.prim_order[slot]] = slot;
+  }
+  for (Light& light : out.lights) light.slot = out.leaf_slot[light.prim];
+  out.header.prim_count = uint32_t(prims.size());
+  out.header.light_count = uint32_t(out.lights.size());
+  out.header.node_count = uint32_t(out.nodes.size());
+  return out;
+}

@@ -1,0 +1,297 @@
+// Mesh clean-up with CGAL Polygon Mesh Processing: polygon soup in, indexed triangle mesh out.
+//
+// Pipeline (each step counted into CleanReport):
+//   soup -> merge duplicate points -> drop polygons with < 3 distinct vertices -> triangulate polygons
+//   -> drop collinear triangles -> drop duplicate faces -> drop isolated points
+//   -> [orient: orient_polygon_soup, outward if closed] -> [smooth normals: compute_vertex_normals]
+//
+// Two orders matter to the renderer and CGAL does not keep them by itself:
+//   * triangle order (the renderer reports primitive indices): merge_duplicate_polygons_in_polygon_soup
+//     moves removed polygons to the back by swapping, so we tag every triangle with its position and
+//     sort the survivors back afterwards;
+//   * vertex order (kept as the input's, after merging): remove_isolated_points_in_polygon_soup fills
+//     the holes with points from the back, so we run it on a range of original vertex ids instead of
+//     the points themselves, and put the ids back in ascending order afterwards.
+#include "scene/mesh_clean.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/compute_normal.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include "scene/scene_error.h"
+
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Vector = Kernel::Vector_3;
+using Mesh = CGAL::Surface_mesh<Point>;
+using Polygon = std::vector<std::size_t>;
+
+// A triangle that remembers its position in the triangle list, so that the order can be restored after
+// a CGAL function that reorders polygons. CGAL only needs a random-access range of indices per polygon;
+// the extra member travels along when CGAL swaps polygons.
+struct TaggedTriangle : std::array<std::size_t, 3> {
+  std::size_t order = 0;
+};
+
+// Newell normal of a polygon (not normalized): robust for non-convex and slightly non-planar polygons.
+Vector newell_normal(const std::vector<Point>& pts) {
+  double x = 0, y = 0, z = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Point& a = pts[i];
+    const Point& b = pts[(i + 1) % pts.size()];
+    x += (a.y() - b.y()) * (a.z() + b.z());
+    y += (a.z() - b.z()) * (a.x() + b.x());
+    z += (a.x() - b.x()) * (a.y() + b.y());
+  }
+  return Vector(x, y, z);
+}
+
+// Removes consecutive repeats (cyclically): {a, a, b, c, a} -> {a, b, c}.
+void remove_consecutive_duplicates(Polygon& polygon) {
+  polygon.erase(std::unique(polygon.begin(), polygon.end()), polygon.end());
+  while (polygon.size() > 1 && polygon.front() == polygon.back()) polygon.pop_back();
+}
+
+std::size_t distinct_count(Polygon polygon) {
+  std::sort(polygon.begin(), polygon.end());
+  return static_cast<std::size_t>(std::unique(polygon.begin(), polygon.end()) - polygon.begin());
+}
+
+// Splits a polygon with more than 3 vertices into triangles (indices into `points`), keeping the
+// polygon's winding. Appends to `out` and returns how many triangles were added.
+std::size_t triangulate_polygon(const std::vector<Point>& points, const Polygon& polygon,
+                                std::vector<std::array<std::size_t, 3>>& out) {
+  std::vector<Point> pts;
+  pts.reserve(polygon.size());
+  for (std::size_t v : polygon) pts.push_back(points[v]);
+
+  // The 2D constrained Delaunay path handles (near) planar simple polygons, convex or not, exactly as
+  // the polygon's inside; CGAL falls back to its 3D search (min max dihedral angle) for the others.
+  // (CGAL 5.5's documentation says this parameter defaults to true, but the code defaults to false.)
+  std::vector<CGAL::Triple<int, int, int>> patch;
+  PMP::triangulate_hole_polyline(pts, std::back_inserter(patch),
+                                 CGAL::parameters::use_2d_constrained_delaunay_triangulation(true));
+
+  std::vector<std::array<std::size_t, 3>> tris;
+  if (patch.empty()) {
+    // CGAL found no triangulation: fall back to a fan, degenerate pieces are removed later.
+    for (std::size_t i = 1; i + 1 < polygon.size(); ++i) tris.push_back({0, i, i + 1});
+  } else {
+    for (const auto& t : patch)
+      tris.push_back({static_cast<std::size_t>(t.first), static_cast<std::size_t>(t.second),
+                      static_cast<std::size_t>(t.third)});
+  }
+
+  // Whatever orientation the hole filler (or the fan on a non-convex polygon) gives, orient every
+  // triangle like the polygon; a zero Newell normal (e.g. a figure eight) gives no preference.
+  const Vector n = newell_normal(pts);
+  for (auto& t : tris) {
+    const Vector tn = CGAL::cross_product(pts[t[1]] - pts[t[0]], pts[t[2]] - pts[t[0]]);
+    if (tn * n < 0) std::swap(t[1], t[2]);
+    out.push_back({polygon[t[0]], polygon[t[1]], polygon[t[2]]});
+  }
+  return tris.size();
+}
+
+// True if `b` is `a` with the same cyclic vertex order (compared by position, because orienting may
+// have replaced a vertex by a duplicate at the same place).
+bool same_winding(const std::array<Point, 3>& a, const std::array<Point, 3>& b) {
+  for (int r = 0; r < 3; ++r)
+    if (a[0] == b[r] && a[1] == b[(r + 1) % 3] && a[2] == b[(r + 2) % 3]) return true;
+  return false;
+}
+
+bool is_closed_soup(const std::vector<Polygon>& triangles) {
+  std::map<std::pair<std::size_t, std::size_t>, int> edge_use;
+  for (const Polygon& t : triangles)
+    for (std::size_t i = 0; i < 3; ++i) {
+      std::size_t a = t[i], b = t[(i + 1) % 3];
+      if (a > b) std::swap(a, b);
+      ++edge_use[{a, b}];
+    }
+  for (const auto& [edge, count] : edge_use)
+    if (count != 2) return false;
+  return true;
+}
+
+}  // namespace
+
+TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
+  report = CleanReport{};
+  report.input_vertices = soup.positions.size();
+  report.input_polygons = soup.polygons.size();
+
+  // 1. CGAL polygon soup. Coordinates go float -> double exactly and come back the same way.
+  std::vector<Point> points;
+  points.reserve(soup.positions.size());
+  for (std::size_t i = 0; i < soup.positions.size(); ++i) {
+    const glm::vec3& p = soup.positions[i];
+    // NaN would break the lexicographic order CGAL merges points with.
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw SceneError("vertex " + std::to_string(i) + ": coordinate is not finite");
+    points.emplace_back(p.x, p.y, p.z);
+  }
+  std::vector<Polygon> polygons;
+  polygons.reserve(soup.polygons.size());
+  for (std::size_t i = 0; i < soup.polygons.size(); ++i) {
+    for (uint32_t v : soup.polygons[i])
+      if (v >= points.size())
+        throw SceneError("polygon " + std::to_string(i) + ": vertex index " + std::to_string(v) +
+                         " out of range");
+    polygons.emplace_back(soup.polygons[i].begin(), soup.polygons[i].end());
+  }
+
+  // 2. Merge duplicate points (keeps the first occurrence, in input order). Polygons left with fewer
+  // than 3 distinct vertices are dropped in the loop below.
+  report.merged_vertices = PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
+
+  // 3. Triangulate, keeping the polygon order: a polygon's triangles replace it in place.
+  std::vector<std::array<std::size_t, 3>> triangles;
+  triangles.reserve(polygons.size());
+  for (Polygon& polygon : polygons) {
+    remove_consecutive_duplicates(polygon);
+    if (distinct_count(polygon) < 3) {
+      ++report.degenerate_faces;
+      continue;
+    }
+    if (polygon.size() == 3) {
+      triangles.push_back({polygon[0], polygon[1], polygon[2]});
+      continue;
+    }
+    ++report.polygons_triangulated;
+    report.triangles_from_polygons += triangulate_polygon(points, polygon, triangles);
+  }
+
+  // 4. Degenerate triangles: exact collinearity test on the coordinates as given (also catches a
+  // repeated vertex).
+  std::vector<TaggedTriangle> tagged;
+  tagged.reserve(triangles.size());
+  for (const auto& t : triangles) {
+    if (CGAL::collinear(points[t[0]], points[t[1]], points[t[2]])) {
+      ++report.degenerate_faces;
+      continue;
+    }
+    TaggedTriangle tt;
+    static_cast<std::array<std::size_t, 3>&>(tt) = t;
+    tt.order = tagged.size();
+    tagged.push_back(tt);
+  }
+
+  // 5. Duplicate faces, in either orientation. CGAL keeps one face of each group (in 5.5 the earliest:
+  // it is the one found first in its hash set) and reorders the list; the tags restore the order.
+  report.duplicate_faces = PMP::merge_duplicate_polygons_in_polygon_soup(
+      points, tagged, CGAL::parameters::erase_all_duplicates(false).require_same_orientation(false));
+  std::sort(tagged.begin(), tagged.end(),
+            [](const TaggedTriangle& a, const TaggedTriangle& b) { return a.order < b.order; });
+
+  std::vector<Polygon> tris;
+  tris.reserve(tagged.size());
+  for (const auto& t : tagged) tris.push_back({t[0], t[1], t[2]});
+
+  // 6. Isolated points. Run on the vertex ids rather than the points: CGAL only moves the range's
+  // elements around and renumbers the polygons, so afterwards ids[k] is the old index of new vertex k.
+  std::vector<std::size_t> ids(points.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = i;
+  report.removed_isolated_vertices = PMP::remove_isolated_points_in_polygon_soup(ids, tris);
+  {
+    // Put the kept vertices back in their original (merged) order.
+    std::vector<std::size_t> by_old(ids.size());  // new slot -> rank of its old index
+    std::vector<std::size_t> slots(ids.size());
+    for (std::size_t k = 0; k < slots.size(); ++k) slots[k] = k;
+    std::sort(slots.begin(), slots.end(), [&](std::size_t a, std::size_t b) { return ids[a] < ids[b]; });
+    std::vector<Point> kept(ids.size());
+    for (std::size_t rank = 0; rank < slots.size(); ++rank) {
+      by_old[slots[rank]] = rank;
+      kept[rank] = points[ids[slots[rank]]];
+    }
+    for (Polygon& t : tris)
+      for (std::size_t& v : t) v = by_old[v];
+    points = std::move(kept);
+  }
+
+  // 8. Orientation.
+  const std::vector<Polygon> before_orient = options.orient ? tris : std::vector<Polygon>{};
+  if (options.orient && !tris.empty()) {
+    // Makes neighbouring faces agree; may append duplicates of non-manifold points (fine for us).
+    // Polygons keep their place in the list, only their index order may be reversed.
+    PMP::orient_polygon_soup(points, tris);
+  }
+
+  std::vector<glm::vec3> normals;
+  if ((options.orient || options.smooth_normals) && !tris.empty()) {
+    const bool is_mesh = PMP::is_polygon_soup_a_polygon_mesh(tris);
+    if (!is_mesh && options.smooth_normals)
+      throw SceneError("smooth normals need a manifold, consistently oriented mesh (set \"orient\": true)");
+    if (is_mesh) {
+      // polygon_soup_to_polygon_mesh adds vertex i for point i and face j for polygon j, in order, so
+      // the Surface_mesh indices are the soup's indices.
+      Mesh mesh;
+      PMP::polygon_soup_to_polygon_mesh(points, tris, mesh);
+
+      if (options.orient && CGAL::is_closed(mesh)) {
+        PMP::orient_to_bound_a_volume(mesh);  // outward normals; reverses faces in place
+        for (Mesh::Face_index f : mesh.faces()) {
+          Polygon& t = tris[f.idx()];
+          t.clear();
+          for (Mesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) t.push_back(v.idx());
+        }
+      }
+
+      if (options.smooth_normals) {
+        auto vnormals = mesh.add_property_map<Mesh::Vertex_index, Vector>("v:normal", CGAL::NULL_VECTOR).first;
+        PMP::compute_vertex_normals(mesh, vnormals);
+        normals.resize(points.size());
+        for (Mesh::Vertex_index v : mesh.vertices()) {
+          const Vector& n = vnormals[v];
+          // CGAL already normalizes in double; normalize again in float so the output is unit there.
+          glm::vec3 g(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+          const float len = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
+          normals[v.idx()] = len > 0 ? g / len : g;
+        }
+      }
+    }
+  }
+
+  if (options.orient) {
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      const Polygon& a = before_orient[i];
+      const Polygon& b = tris[i];
+      if (!same_winding({points[a[0]], points[a[1]], points[a[2]]}, {points[b[0]], points[b[1]], points[b[2]]}))
+        ++report.faces_flipped;
+    }
+  }
+
+  // 7. Closed: every undirected edge used by exactly two triangles, measured on the final output.
+  report.closed = !tris.empty() && is_closed_soup(tris);
+
+  TriangleMesh result;
+  result.positions.reserve(points.size());
+  for (const Point& p : points)
+    result.positions.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  result.triangles.reserve(tris.size());
+  for (const Polygon& t : tris)
+    result.triangles.push_back({static_cast<uint32_t>(t[0]), static_cast<uint32_t>(t[1]), static_cast<uint32_t>(t[2])});
+  if (options.smooth_normals) {
+    normals.resize(result.positions.size());  // empty mesh: no normals to compute
+    result.normals = std::move(normals);
+  }
+  return result;
+}

@@ -1,0 +1,44 @@
+// Mesh clean-up with CGAL Polygon Mesh Processing. CGAL stays inside mesh_clean.cpp; this header only
+// speaks in our own plain types.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+// Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list.
+struct PolygonSoup {
+  std::vector<glm::vec3> positions;
+  std::vector<std::vector<uint32_t>> polygons;
+};
+
+struct CleanOptions {
+  bool orient = false;          // make orientation consistent (outward if closed); otherwise kept as given
+  bool smooth_normals = false;  // compute per-vertex normals with CGAL
+};
+
+// What cleaning changed, for `pathcl info`.
+struct CleanReport {
+  size_t input_vertices = 0, input_polygons = 0;
+  size_t merged_vertices = 0;        // duplicate positions merged into one vertex
+  size_t removed_isolated_vertices = 0;
+  size_t degenerate_faces = 0;       // polygons with < 3 distinct vertices, collinear or zero-area triangles
+  size_t duplicate_faces = 0;        // faces with the same vertex set as an earlier one
+  size_t polygons_triangulated = 0;  // polygons with more than 3 vertices
+  size_t triangles_from_polygons = 0;
+  size_t faces_flipped = 0;          // only when CleanOptions::orient
+  bool closed = false;               // every edge shared by exactly two faces
+};
+
+struct TriangleMesh {
+  std::vector<glm::vec3> positions;
+  std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
+  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals
+};
+
+// Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place
+// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh).
+TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report);

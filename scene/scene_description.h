@@ -1,0 +1,57 @@
+// The scene as the JSON file describes it, after validation and transformation to world space and
+// mesh cleaning: what scene/device_scene_build.cpp flattens for the device.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "scene/mesh_clean.h"
+
+struct CameraDesc {
+  glm::vec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
+  float fov_y_degrees = 40;
+  uint32_t width = 512, height = 512;
+};
+
+struct MaterialDesc {
+  std::string name;
+  std::string type;  // "diffuse"
+  glm::vec3 reflectance{0.5f};
+};
+
+struct RenderSettings {
+  uint32_t spp = 16;
+  uint32_t max_depth = 8;
+  uint32_t seed = 1;
+};
+
+// One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space.
+struct ShapeDesc {
+  std::string label;  // "shapes[3] (meshes/box.obj)" for messages and `pathcl info`
+  bool is_sphere = false;
+  TriangleMesh mesh;  // when !is_sphere
+  CleanReport clean;  // when !is_sphere
+  glm::vec3 center{0};
+  float radius = 0;
+  bool flip_normals = false;  // sphere: normals point inwards (meshes are flipped by winding at load)
+  uint32_t material = 0;      // index into SceneDescription::materials
+  glm::vec3 emission{0};
+  bool two_sided = false;
+};
+
+struct SceneDescription {
+  std::string path;  // the scene file, for messages
+  CameraDesc camera;
+  std::vector<MaterialDesc> materials;
+  std::vector<ShapeDesc> shapes;
+  RenderSettings render;
+};
+
+// Reads and validates a scene file; throws SceneError naming the file and JSON path on bad input.
+SceneDescription load_scene(const std::string& path);
+
+// Loads an OBJ file into a polygon soup (all groups together), validating indices and coordinates;
+// throws SceneError naming the file and line.
+PolygonSoup load_obj(const std::string& path);

@@ -1,0 +1,102 @@
+// The command line: exit codes, messages, and that bad input never leaves an output file.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "runtime/image_io.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string scene(const std::string& name) { return std::string(PATHCL_TEST_SCENES) + "/" + name; }
+
+}  // namespace
+
+TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
+  struct Case {
+    std::string args, message;
+  } cases[] = {
+      {scene("bad-malformed.json"), "malformed JSON"},
+      {scene("bad-unknown-key.json"), "unknown key \"colour\""},
+      {scene("bad-missing-obj.json"), "cannot open the mesh file"},
+      {scene("bad-face-index.json"), "bad-face-index.obj:7: face index 9 out of range"},
+      {scene("bad-nan-vertex.json"), "nan-vertex.obj:2"},
+      {scene("bad-unknown-material.json"), "unknown material \"glas\""},
+      {scene("bad-negative-spp.json"), "render.spp"},
+      {scene("tiny.json") + " --spp -3", "--spp"},
+      {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
+      {scene("tiny.json") + " --device 99", "no device with that index"},
+      {scene("no-such-scene.json"), "cannot open the scene file"},
+  };
+  for (const Case& c : cases) {
+    std::string out = temp_dir() + "/bad.exr", png = temp_dir() + "/bad.png", stats = temp_dir() + "/bad.json";
+    std::string err;
+    int code = run_pathcl("render " + c.args + " -o " + out + " --png " + png + " --stats " + stats, &err);
+    EXPECT_EQ(code, 2) << c.args << "\n" << err;
+    EXPECT_NE(err.find(c.message), std::string::npos) << c.args << "\n" << err;
+    EXPECT_FALSE(fs::exists(out) || fs::exists(png) || fs::exists(stats)) << c.args;
+  }
+  EXPECT_EQ(run_pathcl("render"), 2);
+  EXPECT_EQ(run_pathcl("frobnicate"), 2);
+}
+
+TEST(Cli, RenderWritesExrPngAndStats) {
+  std::string out = temp_dir() + "/tiny.exr", png = temp_dir() + "/tiny.png", stats = temp_dir() + "/tiny.json";
+  std::string err;
+  ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " -o " + out + " --png " + png + " --stats " + stats +
+                       " --spp 3 --seed 5 --max-depth 2", &err), 0) << err;
+  Image image = read_exr(out);
+  EXPECT_EQ(image.width, 24u);
+  EXPECT_EQ(image.height, 16u);
+  EXPECT_EQ(image.spp, 3);
+  EXPECT_TRUE(fs::file_size(png) > 0);
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+  for (const char* key : {"device", "width", "height", "spp", "seed", "max_depth", "triangles", "bvh_nodes", "sah_cost",
+                          "bvh_build_ms", "kernel_build_ms", "kernel_from_cache", "render_seconds", "samples_per_second",
+                          "rays_traced", "rays_per_second", "nan_samples", "inf_samples", "negative_samples"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["spp"], 3);
+  EXPECT_EQ(j["seed"], 5);
+  EXPECT_EQ(j["max_depth"], 2);
+  EXPECT_EQ(j["triangles"], 8);  // 3 quads of the box + the 2-triangle lamp
+  EXPECT_EQ(j["nan_samples"], 0);
+  EXPECT_GE(j["rays_traced"].get<double>(), 24 * 16 * 3);
+
+  // A second render of the same features takes the kernel from the cache.
+  ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " -o " + out + " --stats " + stats + " --spp 1"), 0);
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>());
+}
+
+TEST(Cli, UnwritableOutputIsARuntimeFailure) {
+  std::string err;
+  EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 -o /proc/pathcl-cannot-write.exr", &err), 1) << err;
+  EXPECT_NE(err.find("cannot write"), std::string::npos) << err;
+}
+
+TEST(Cli, DevicesInfoAndRays) {
+  EXPECT_EQ(run_pathcl("devices"), 0);
+  std::string err;
+  EXPECT_EQ(run_pathcl("info " + scene("tiny.json"), &err), 0) << err;
+
+  // Two rays: one down onto the floor of the box (y = 0), one into the sky.
+  std::vector<RayRecord> rays = {{{0.5f, 1, 0.5f}, 0, {0, -1, 0}, INFINITY}, {{0, 1, 5}, 0, {0, 0, 1}, INFINITY}};
+  std::string ray_file = temp_dir() + "/two.rays", hit_file = temp_dir() + "/two.hits";
+  std::ofstream(ray_file, std::ios::binary).write(reinterpret_cast<const char*>(rays.data()), sizeof(RayRecord) * 2);
+  ASSERT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays " + ray_file + " --hits " + hit_file + " --repeat 2", &err), 0)
+      << err;
+  std::vector<HitRecord> hits(2);
+  std::ifstream(hit_file, std::ios::binary).read(reinterpret_cast<char*>(hits.data()), sizeof(HitRecord) * 2);
+  EXPECT_FLOAT_EQ(hits[0].t, 1.0f);
+  EXPECT_LE(hits[0].prim, 1u);  // the floor: the first quad of the first shape, as two triangles
+  EXPECT_EQ(hits[1].t, INFINITY);
+  EXPECT_EQ(hits[1].prim, PC_INVALID);
+
+  // A ray file whose size is not a multiple of 32 bytes is bad input.
+  std::ofstream(ray_file, std::ios::binary) << "short";
+  EXPECT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays " + ray_file, &err), 2);
+  EXPECT_NE(err.find("multiple of the 32-byte"), std::string::npos) << err;
+}

@@ -1,0 +1,37 @@
+// The shared structs have the same size and field offsets on the host and as the kernel compiler sees
+// them on the test device.
+#include <gtest/gtest.h>
+
+#include "runtime/kernel_sources.h"
+#include "test_support.h"
+
+TEST(Layout, SharedStructsMatchTheDevice) {
+  ClContext& cl = test_device();
+  KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
+  std::vector<std::string> names;
+  std::vector<uint32_t> host;
+#define HOST_SIZE(S)         \
+  names.push_back("sizeof " #S); \
+  host.push_back(uint32_t(sizeof(S)));
+#define HOST_OFFSET(S, F)           \
+  names.push_back("offsetof " #S "." #F); \
+  host.push_back(uint32_t(offsetof(S, F)));
+  PC_LAYOUT_STRUCTS(HOST_SIZE)
+  PC_LAYOUT_FIELDS(HOST_OFFSET)
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, host.size() * sizeof(uint32_t));
+  ClKernel kernel(program.kernel("layout_report"));
+  kernel.arg(0, out.mem);
+  run_kernel(cl, kernel.k, 1);
+  std::vector<uint32_t> device(host.size());
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, device.size() * 4, device.data(), 0, nullptr, nullptr));
+  for (size_t i = 0; i < host.size(); ++i) EXPECT_EQ(device[i], host[i]) << names[i];
+  EXPECT_GT(host.size(), 40u);
+}
+
+TEST(Layout, KernelSourcesCarryLineMarkers) {
+  std::string source = assemble_kernel_source("integrator.cl");
+  EXPECT_NE(source.find("#line 1 \"intersect.cl\""), std::string::npos);
+  EXPECT_NE(source.find("#line 1 \"shared/types.h\""), std::string::npos);
+  // Each file is included once even though several files include math.cl.
+  EXPECT_EQ(source.find("#line 1 \"math.cl\""), source.rfind("#line 1 \"math.cl\""));
+}

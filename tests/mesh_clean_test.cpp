@@ -1,0 +1,421 @@
+// Tests for clean_mesh (scene/mesh_clean.cpp): merging, degeneracies, duplicates, triangulation,
+// orientation and smooth normals.
+#include "scene/mesh_clean.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include <glm/geometric.hpp>
+
+#include "scene/scene_error.h"
+
+namespace {
+
+using glm::vec3;
+
+glm::dvec3 d(const vec3& v) { return glm::dvec3(v); }
+
+glm::dvec3 tri_normal(const TriangleMesh& m, const std::array<uint32_t, 3>& t) {
+  const glm::dvec3 a = d(m.positions[t[0]]), b = d(m.positions[t[1]]), c = d(m.positions[t[2]]);
+  return glm::cross(b - a, c - a);  // length = 2 * area
+}
+
+double total_area(const TriangleMesh& m) {
+  double area = 0;
+  for (const auto& t : m.triangles) area += 0.5 * glm::length(tri_normal(m, t));
+  return area;
+}
+
+// Signed volume by the divergence theorem: positive when a closed mesh's faces point outward.
+double signed_volume(const TriangleMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles)
+    v += glm::dot(d(m.positions[t[0]]), glm::cross(d(m.positions[t[1]]), d(m.positions[t[2]]))) / 6.0;
+  return v;
+}
+
+// Every undirected edge is used once in each direction: a consistently oriented closed surface.
+bool consistently_oriented_closed(const TriangleMesh& m) {
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i) ++directed[{t[i], t[(i + 1) % 3]}];
+  for (const auto& [e, n] : directed)
+    if (n != 1 || directed.count({e.second, e.first}) == 0) return false;
+  return true;
+}
+
+// No directed edge used twice: neighbouring faces agree (the surface may be open).
+bool consistently_oriented(const TriangleMesh& m) {
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i)
+      if (++directed[{t[i], t[(i + 1) % 3]}] > 1) return false;
+  return true;
+}
+
+vec3 centroid(const TriangleMesh& m, std::size_t tri) {
+  const auto& t = m.triangles[tri];
+  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0f;
+}
+
+// Unit cube [0,1]^3 as 8 shared vertices and 6 outward (CCW seen from outside) quads.
+PolygonSoup cube_quads() {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  s.polygons = {
+      {0, 3, 2, 1},  // z = 0, normal -z
+      {4, 5, 6, 7},  // z = 1, normal +z
+      {0, 1, 5, 4},  // y = 0, normal -y
+      {3, 7, 6, 2},  // y = 1, normal +y
+      {0, 4, 7, 3},  // x = 0, normal -x
+      {1, 2, 6, 5},  // x = 1, normal +x
+  };
+  return s;
+}
+
+TEST(MeshClean, ReportsInputSizes) {
+  PolygonSoup s = cube_quads();
+  CleanReport r;
+  clean_mesh(s, {}, r);
+  EXPECT_EQ(r.input_vertices, 8u);
+  EXPECT_EQ(r.input_polygons, 6u);
+}
+
+TEST(MeshClean, MergesDuplicateVertices) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2}, {3, 4, 5}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  EXPECT_EQ(m.positions.size(), 4u);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(r.merged_vertices, 2u);
+  EXPECT_FALSE(r.closed);
+  // The shared edge really is shared now: exactly 5 distinct undirected edges.
+  std::map<std::pair<uint32_t, uint32_t>, int> edges;
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i) ++edges[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}];
+  EXPECT_EQ(edges.size(), 5u);
+  // Positions are kept exactly, in input order (first occurrence).
+  EXPECT_EQ(m.positions[0], vec3(0, 0, 0));
+  EXPECT_EQ(m.positions[1], vec3(1, 0, 0));
+  EXPECT_EQ(m.positions[2], vec3(1, 1, 0));
+  EXPECT_EQ(m.positions[3], vec3(0, 1, 0));
+  // Winding kept: both face +z.
+  for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0);
+}
+
+TEST(MeshClean, RemovesCollinearTriangle) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}};
+  s.polygons = {{0, 1, 2}, {3, 4, 5}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(r.degenerate_faces, 1u);
+  EXPECT_EQ(r.removed_isolated_vertices, 3u);
+  EXPECT_EQ(m.positions.size(), 3u);
+}
+
+TEST(MeshClean, CollinearityIsExactOnFloatCoordinates) {
+  // Exactly collinear, with non-integer coordinates: removed.
+  PolygonSoup s;
+  s.positions = {{0.5f, 0.25f, 0}, {1.0f, 0.5f, 0}, {2.0f, 1.0f, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  s.polygons = {{0, 1, 2}, {3, 4, 5}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  EXPECT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(r.degenerate_faces, 1u);
+
+  // A sliver one float step off the line: tiny but not zero area, so it is kept.
+  s.positions[2].y = std::nextafter(1.0f, 2.0f);
+  m = clean_mesh(s, {}, r);
+  EXPECT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(r.degenerate_faces, 0u);
+}
+
+TEST(MeshClean, RemovesTriangleWithRepeatedVertex) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}};
+  // Same index twice, and a different index at the same place as vertex 1 (merged, then degenerate).
+  s.positions.push_back({1, 0, 0});
+  s.polygons = {{0, 1, 2}, {0, 3, 3}, {1, 4, 0}, {2, 2}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(r.degenerate_faces, 3u);
+  EXPECT_EQ(r.merged_vertices, 1u);
+  EXPECT_EQ(r.removed_isolated_vertices, 1u);  // (5, 5, 5)
+  EXPECT_EQ(m.positions.size(), 3u);
+}
+
+TEST(MeshClean, RemovesDuplicateFacesKeepingTheFirst) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  s.polygons = {{0, 2, 1},   // first: faces -z
+                {0, 1, 3},   // another face
+                {1, 2, 0},   // same as the first, reversed orientation
+                {1, 0, 2},   // same as the first, rotated
+                {3, 1, 0}};  // same as the second, reversed
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(r.duplicate_faces, 3u);
+  // The first one is kept with its own winding and order.
+  EXPECT_LT(tri_normal(m, m.triangles[0]).z, 0.0);
+  EXPECT_LT(tri_normal(m, m.triangles[1]).y, 0.0);
+}
+
+// L-shaped hexagon (non-convex at (1, 1)) of area 3 in the plane z = 0, counter-clockwise seen from +z.
+PolygonSoup l_shape() {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 2, 0}, {0, 2, 0}};
+  s.polygons = {{0, 1, 2, 3, 4, 5}};
+  return s;
+}
+
+TEST(MeshClean, TriangulatesNonConvexPolygon) {
+  // Try every starting vertex: a fan from some of them would cover area outside the L.
+  for (uint32_t start = 0; start < 6; ++start) {
+    PolygonSoup s = l_shape();
+    std::rotate(s.polygons[0].begin(), s.polygons[0].begin() + start, s.polygons[0].end());
+    CleanReport r;
+    TriangleMesh m = clean_mesh(s, {}, r);
+    ASSERT_EQ(m.triangles.size(), 4u) << "start " << start;
+    EXPECT_EQ(r.polygons_triangulated, 1u);
+    EXPECT_EQ(r.triangles_from_polygons, 4u);
+    EXPECT_NEAR(total_area(m), 3.0, 1e-5) << "start " << start;
+    for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0) << "start " << start;
+    // No triangle's centroid lies in the notch [1,2]x[1,2].
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+      const vec3 c = centroid(m, i);
+      EXPECT_FALSE(c.x > 1 && c.y > 1) << "start " << start;
+    }
+  }
+}
+
+TEST(MeshClean, TriangulationKeepsClockwiseWinding) {
+  PolygonSoup s = l_shape();
+  std::reverse(s.polygons[0].begin(), s.polygons[0].end());
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 4u);
+  EXPECT_NEAR(total_area(m), 3.0, 1e-5);
+  for (const auto& t : m.triangles) EXPECT_LT(tri_normal(m, t).z, 0.0);
+}
+
+TEST(MeshClean, TriangulatesTiltedNonConvexPolygon) {
+  // The L in a tilted plane (rotated about x by 30 degrees): same area, triangles face the polygon normal.
+  PolygonSoup s = l_shape();
+  const float c = std::cos(0.5235988f), sn = std::sin(0.5235988f);
+  for (vec3& p : s.positions) p = vec3(p.x, c * p.y - sn * p.z, sn * p.y + c * p.z);
+  const glm::dvec3 normal(0, -sn, c);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 4u);
+  EXPECT_NEAR(total_area(m), 3.0, 1e-5);
+  for (const auto& t : m.triangles) EXPECT_GT(glm::dot(tri_normal(m, t), normal), 0.0);
+}
+
+TEST(MeshClean, TriangulatesNonPlanarPolygonFacingItsNormal) {
+  // A hexagon zig-zagging in z (too far from planar for CGAL's 2D path): the 3D hole filler is used;
+  // every triangle still faces the polygon's side, for both windings.
+  for (bool reversed : {false, true}) {
+    PolygonSoup s;
+    for (int i = 0; i < 6; ++i) {
+      const float a = static_cast<float>(i) * 1.04719755f;
+      s.positions.push_back({std::cos(a), std::sin(a), (i % 2) ? 0.8f : -0.8f});
+    }
+    s.polygons = {{0, 1, 2, 3, 4, 5}};
+    if (reversed) std::reverse(s.polygons[0].begin(), s.polygons[0].end());
+    CleanReport r;
+    TriangleMesh m = clean_mesh(s, {}, r);
+    ASSERT_EQ(m.triangles.size(), 4u);
+    for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z * (reversed ? -1 : 1), 0.0) << reversed;
+  }
+}
+
+TEST(MeshClean, KeepsTriangleOrder) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0},                  // triangle A at z = 0
+                 {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1},       // quad B at z = 1
+                 {0, 0, 2}, {1, 0, 2}, {2, 0, 2},                  // collinear C at z = 2
+                 {0, 0, 3}, {1, 0, 3}, {0, 1, 3}};                 // triangle D at z = 3
+  // A duplicate of A right after it: CGAL's duplicate removal moves the last triangle into its place.
+  s.polygons = {{0, 1, 2}, {2, 1, 0}, {3, 4, 5, 6}, {7, 8, 9}, {10, 11, 12}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 4u);
+  EXPECT_EQ(r.duplicate_faces, 1u);
+  EXPECT_GT(tri_normal(m, m.triangles[0]).z, 0.0);  // A, not its reversed duplicate
+  EXPECT_FLOAT_EQ(centroid(m, 0).z, 0.0f);
+  EXPECT_FLOAT_EQ(centroid(m, 1).z, 1.0f);
+  EXPECT_FLOAT_EQ(centroid(m, 2).z, 1.0f);
+  EXPECT_FLOAT_EQ(centroid(m, 3).z, 3.0f);
+  // Vertex order: the input's, without the removed (isolated) ones.
+  ASSERT_EQ(m.positions.size(), 10u);
+  EXPECT_EQ(m.positions[6], vec3(0, 1, 1));
+  EXPECT_EQ(m.positions[7], vec3(0, 0, 3));
+  EXPECT_EQ(r.removed_isolated_vertices, 3u);
+}
+
+TEST(MeshClean, OrientFixesInvertedQuadOfCube) {
+  PolygonSoup s = cube_quads();
+  std::reverse(s.polygons[3].begin(), s.polygons[3].end());
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true}, r);
+  ASSERT_EQ(m.triangles.size(), 12u);
+  EXPECT_TRUE(r.closed);
+  EXPECT_TRUE(consistently_oriented_closed(m));
+  EXPECT_NEAR(signed_volume(m), 1.0, 1e-6);
+  EXPECT_EQ(r.faces_flipped, 2u);  // the two triangles of the inverted quad
+  EXPECT_EQ(r.polygons_triangulated, 6u);
+  EXPECT_EQ(r.triangles_from_polygons, 12u);
+  EXPECT_EQ(m.positions.size(), 8u);
+  // Triangles 6 and 7 come from the (fixed) y = 1 quad: they now face +y.
+  EXPECT_GT(tri_normal(m, m.triangles[6]).y, 0.0);
+  EXPECT_GT(tri_normal(m, m.triangles[7]).y, 0.0);
+}
+
+TEST(MeshClean, OrientTurnsInsideOutCubeOutward) {
+  PolygonSoup s = cube_quads();
+  for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true}, r);
+  EXPECT_TRUE(r.closed);
+  EXPECT_NEAR(signed_volume(m), 1.0, 1e-6);
+  EXPECT_EQ(r.faces_flipped, 12u);
+}
+
+TEST(MeshClean, WithoutOrientWindingIsKept) {
+  PolygonSoup s = cube_quads();
+  std::reverse(s.polygons[3].begin(), s.polygons[3].end());
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 12u);
+  EXPECT_TRUE(r.closed);  // closed is about edge use, not orientation
+  EXPECT_EQ(r.faces_flipped, 0u);
+  EXPECT_FALSE(consistently_oriented_closed(m));
+  EXPECT_LT(tri_normal(m, m.triangles[6]).y, 0.0);
+  EXPECT_LT(tri_normal(m, m.triangles[7]).y, 0.0);
+  EXPECT_NEAR(signed_volume(m), 1.0 - 2.0 / 3.0, 1e-6);  // the y = 1 face's +1/3 now counts -1/3
+}
+
+TEST(MeshClean, OrientOpenBoxIsConsistent) {
+  PolygonSoup s = cube_quads();
+  s.polygons.erase(s.polygons.begin() + 1);               // open top
+  std::reverse(s.polygons[2].begin(), s.polygons[2].end());  // invert the y = 1 side
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true}, r);
+  ASSERT_EQ(m.triangles.size(), 10u);
+  EXPECT_FALSE(r.closed);
+  EXPECT_TRUE(consistently_oriented(m));
+  // Either the inverted side or the other four were flipped.
+  EXPECT_TRUE(r.faces_flipped == 2u || r.faces_flipped == 8u) << r.faces_flipped;
+}
+
+// Checks unit, outward (for a shape around the origin) per-vertex normals.
+void expect_outward_unit_normals(const TriangleMesh& m) {
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-5f) << i;
+    EXPECT_GT(glm::dot(m.normals[i], m.positions[i]), 0.0f) << i;
+  }
+}
+
+TEST(MeshClean, SmoothNormalsOfCubePointOutward) {
+  PolygonSoup s = cube_quads();
+  for (vec3& p : s.positions) p -= vec3(0.5f);  // centre on the origin
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  expect_outward_unit_normals(m);
+  // A cube corner's normal is along the diagonal, whatever the triangulation weights.
+  for (std::size_t i = 0; i < m.positions.size(); ++i)
+    EXPECT_GT(glm::dot(m.normals[i], glm::normalize(m.positions[i])), 0.9f);
+}
+
+TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
+  PolygonSoup s;
+  s.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  s.polygons = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  EXPECT_TRUE(r.closed);
+  EXPECT_NEAR(signed_volume(m), 4.0 / 3.0, 1e-6);
+  expect_outward_unit_normals(m);
+  for (std::size_t i = 0; i < m.positions.size(); ++i)
+    EXPECT_NEAR(glm::dot(m.normals[i], m.positions[i]), 1.0f, 1e-5f);  // exactly radial by symmetry
+}
+
+TEST(MeshClean, SmoothNormalsAfterOrientingInsideOutCube) {
+  PolygonSoup s = cube_quads();
+  for (vec3& p : s.positions) p -= vec3(0.5f);
+  for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true, .smooth_normals = true}, r);
+  expect_outward_unit_normals(m);
+}
+
+// Three triangles on the edge (0, 1): a non-manifold edge.
+PolygonSoup three_fins() {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {0, 0, 1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  return s;
+}
+
+TEST(MeshClean, SmoothNormalsOnNonManifoldSoupThrows) {
+  CleanReport r;
+  EXPECT_THROW(clean_mesh(three_fins(), {.smooth_normals = true}, r), SceneError);
+  // An inconsistently oriented (but manifold) mesh is refused too without orient.
+  PolygonSoup cube = cube_quads();
+  std::reverse(cube.polygons[0].begin(), cube.polygons[0].end());
+  EXPECT_THROW(clean_mesh(cube, {.smooth_normals = true}, r), SceneError);
+}
+
+TEST(MeshClean, OrientSplitsNonManifoldEdge) {
+  // orient_polygon_soup duplicates vertices here; the result is a valid mesh, so smooth normals work.
+  CleanReport r;
+  TriangleMesh m = clean_mesh(three_fins(), {.orient = true, .smooth_normals = true}, r);
+  ASSERT_EQ(m.triangles.size(), 3u);
+  EXPECT_GT(m.positions.size(), 5u);
+  EXPECT_FALSE(r.closed);
+  EXPECT_EQ(m.normals.size(), m.positions.size());
+  for (const vec3& n : m.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+}
+
+TEST(MeshClean, OutOfRangeIndexThrows) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2}, {0, 1, 7}};
+  CleanReport r;
+  try {
+    clean_mesh(s, {}, r);
+    FAIL() << "expected SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_STREQ(e.what(), "polygon 1: vertex index 7 out of range");
+  }
+}
+
+TEST(MeshClean, EmptyAndFullyDegenerateInput) {
+  CleanReport r;
+  TriangleMesh m = clean_mesh(PolygonSoup{}, {.orient = true, .smooth_normals = true}, r);
+  EXPECT_TRUE(m.triangles.empty());
+  EXPECT_TRUE(m.positions.empty());
+  EXPECT_FALSE(r.closed);
+
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  s.polygons = {{0, 1, 2}, {0, 1}};
+  m = clean_mesh(s, {.orient = true}, r);
+  EXPECT_TRUE(m.triangles.empty());
+  EXPECT_TRUE(m.positions.empty());
+  EXPECT_EQ(r.degenerate_faces, 2u);
+  EXPECT_EQ(r.removed_isolated_vertices, 3u);
+}
+
+}  // namespace

@@ -1,0 +1,117 @@
+// Scene files: every error names the file and the place; transforms and flags do what they say.
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "scene/scene_error.h"
+#include "test_support.h"
+
+namespace {
+
+std::string scenes() { return PATHCL_TEST_SCENES; }
+
+// The message of the SceneError that loading `path` throws, or "" if it loads.
+std::string load_error(const std::string& path) {
+  try {
+    load_scene(path);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string scene_with_shape(const std::string& shape) {
+  return R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse"}}, "shapes": [)" + shape + "]}";
+}
+
+}  // namespace
+
+TEST(SceneLoad, ErrorsNameFileAndPlace) {
+  EXPECT_NE(load_error(scenes() + "/bad-malformed.json").find("bad-malformed.json: malformed JSON"), std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-malformed.json").find("line 5"), std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-unknown-key.json").find("shapes[0]: unknown key \"colour\""), std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-unknown-material.json").find("shapes[0].material: unknown material \"glas\""),
+            std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-missing-obj.json").find("does-not-exist.obj: cannot open"), std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-face-index.json").find("bad-face-index.obj:7: face index 9 out of range"),
+            std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-nan-vertex.json").find("nan-vertex.obj:2:"), std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/bad-negative-spp.json").find("render.spp: expected an integer in [1,"),
+            std::string::npos);
+  EXPECT_NE(load_error(scenes() + "/no-such-scene.json").find("cannot open the scene file"), std::string::npos);
+}
+
+TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
+  struct Case {
+    std::string shape, expected;
+  } cases[] = {
+      {R"({"type": "sphere", "radius": "1", "material": "m"})", "shapes[0].radius: expected a number"},
+      {R"({"type": "sphere", "radius": -1, "material": "m"})", "shapes[0].radius: expected a number > 0"},
+      {R"({"type": "sphere", "radius": 1, "material": "m", "center": [0, 1]})", "shapes[0].center: expected an array of 3"},
+      {R"({"type": "cone", "material": "m"})", "shapes[0].type: unknown shape type \"cone\""},
+      {R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,3]], "material": "m"})",
+       "shapes[0].indices[0][2]: vertex index 3 out of range"},
+      {R"({"type": "sphere", "radius": 1, "material": "m", "emission": [1, -1, 0]})",
+       "shapes[0].emission: expected non-negative values"},
+      {R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"scale": [1, 2, 1]}})",
+       "shapes[0].transform: a sphere allows only translation, rotation and uniform scale"},
+      {R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"skew": 1}})",
+       "shapes[0].transform: unknown key \"skew\""},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("case.json", scene_with_shape(c.shape));
+    std::string error = load_error(path);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.shape << "\n  gave: " << error;
+    EXPECT_EQ(error.rfind(path, 0), 0u) << "the message starts with the file: " << error;
+  }
+}
+
+TEST(SceneLoad, TransformsMoveGeometryAndMirrorsKeepTheFrontSide) {
+  std::string tri = R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m")";
+  SceneDescription moved = load_scene(write_temp_file(
+      "moved.json", scene_with_shape(tri + R"(, "transform": {"translate": [1, 2, 3], "scale": 2}})")));
+  const TriangleMesh& m = moved.shapes[0].mesh;
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(m.positions[m.triangles[0][1]], glm::vec3(3, 2, 3));  // (1,0,0) scaled by 2, then moved
+
+  SceneDescription mirrored = load_scene(write_temp_file(
+      "mirrored.json", scene_with_shape(tri + R"(, "transform": {"scale": [1, 1, -1]}})")));
+  const TriangleMesh& mm = mirrored.shapes[0].mesh;
+  glm::vec3 a = mm.positions[mm.triangles[0][0]], b = mm.positions[mm.triangles[0][1]], c = mm.positions[mm.triangles[0][2]];
+  // The front faces +z; mirrored in z it must face -z, as the transformed normal M^-T n does. The
+  // points do not move, so only the swapped winding can say so.
+  EXPECT_LT(glm::cross(b - a, c - a).z, 0.0f);
+
+  SceneDescription sphere = load_scene(write_temp_file(
+      "sphere.json", scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "center": [1, 0, 0],
+        "transform": {"translate": [0, 1, 0], "rotate": {"axis": [0, 0, 1], "degrees": 90}, "scale": 3}})")));
+  EXPECT_NEAR(sphere.shapes[0].radius, 3.0f, 1e-5f);
+  EXPECT_NEAR(sphere.shapes[0].center.x, 0.0f, 1e-5f);
+  EXPECT_NEAR(sphere.shapes[0].center.y, 4.0f, 1e-5f);
+}
+
+TEST(SceneLoad, ZeroAreaEmittersNeverReachLightSampling) {
+  std::string scene = scene_with_shape(
+      R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0],[2,0,0]], "indices": [[0,1,2],[0,1,3]],
+          "material": "m", "emission": [1, 1, 1]})");
+  DeviceScene d = load_device_scene(write_temp_file("zero-area.json", scene));
+  EXPECT_EQ(d.triangle_count, 1u);  // the collinear triangle is removed by clean-up
+  ASSERT_EQ(d.lights.size(), 1u);
+  EXPECT_FLOAT_EQ(d.lights[0].area, 0.5f);
+  EXPECT_FLOAT_EQ(d.lights[0].select_pdf, 1.0f);
+}
+
+TEST(SceneLoad, LightsAreChosenInProportionToPower) {
+  std::string scene = R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse"}}, "shapes": [
+      {"type": "sphere", "radius": 1, "material": "m", "emission": [1, 1, 1]},
+      {"type": "sphere", "radius": 2, "center": [5, 0, 0], "material": "m", "emission": [1, 1, 1], "two_sided": true}]})";
+  DeviceScene d = load_device_scene(write_temp_file("power.json", scene));
+  ASSERT_EQ(d.lights.size(), 2u);
+  // Power ~ area x sides: 4 pi vs 16 pi x 2.
+  EXPECT_NEAR(d.lights[0].select_pdf, 1.0 / 9.0, 1e-6);
+  EXPECT_NEAR(d.lights[1].select_pdf, 8.0 / 9.0, 1e-6);
+  EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
+}

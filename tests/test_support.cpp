@@ -1,0 +1,111 @@
+#include "test_support.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+namespace fs = std::filesystem;
+
+ClContext& test_device() {
+  static std::unique_ptr<ClContext> cl;
+  if (!cl) {
+    const char* selector = std::getenv("PATHCL_TEST_DEVICE");
+    cl = std::make_unique<ClContext>(select_device(selector ? selector : ""));
+  }
+  return *cl;
+}
+
+std::string temp_dir() {
+  static std::string dir;
+  if (dir.empty()) {
+    char pattern[] = "/tmp/pathcl-test-XXXXXX";
+    dir = mkdtemp(pattern);
+    std::atexit([] { fs::remove_all(dir); });
+  }
+  return dir;
+}
+
+std::string write_temp_file(const std::string& name, const std::string& text) {
+  std::string path = temp_dir() + "/" + name;
+  fs::create_directories(fs::path(path).parent_path());
+  std::ofstream(path) << text;
+  return path;
+}
+
+DeviceScene load_device_scene(const std::string& path) { return build_device_scene(load_scene(path)); }
+
+int run_pathcl(const std::string& args, std::string* err) {
+  std::string err_file = temp_dir() + "/stderr.txt";
+  std::string command = std::string(PATHCL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
+  int status = std::system(command.c_str());
+  if (err) {
+    std::ifstream in(err_file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    *err = ss.str();
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+MeanStd mean_and_error(const std::vector<double>& values) {
+  MeanStd r;
+  double n = double(values.size());
+  for (double v : values) r.mean += v;
+  r.mean /= n;
+  double var = 0;
+  for (double v : values) var += (v - r.mean) * (v - r.mean);
+  var /= (n - 1);
+  r.std_error = std::sqrt(var / n);
+  return r;
+}
+
+std::string icosphere_json(float radius, int subdivisions, bool inward) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  std::vector<glm::vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& p : v) p = glm::normalize(p);
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back(glm::normalize(v[a] + v[b]));
+      return mid[key] = int(v.size() - 1);
+    };
+    std::vector<std::array<int, 3>> next;
+    for (auto& tri : f) {
+      int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      next.push_back({tri[0], a, c});
+      next.push_back({tri[1], b, a});
+      next.push_back({tri[2], c, b});
+      next.push_back({a, b, c});
+    }
+    f = next;
+  }
+  std::ostringstream out;
+  out.precision(9);
+  out << "{\"type\": \"triangles\", \"positions\": [";
+  for (size_t i = 0; i < v.size(); ++i)
+    out << (i ? "," : "") << "[" << v[i].x * radius << "," << v[i].y * radius << "," << v[i].z * radius << "]";
+  out << "], \"indices\": [";
+  for (size_t i = 0; i < f.size(); ++i) {
+    auto tri = f[i];
+    if (inward) std::swap(tri[1], tri[2]);
+    out << (i ? "," : "") << "[" << tri[0] << "," << tri[1] << "," << tri[2] << "]";
+  }
+  out << "]";
+  return out.str();  // the caller adds the material etc. and the closing brace
+}

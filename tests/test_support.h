@@ -1,0 +1,35 @@
+// Shared helpers of the device tests: the test device, temporary scene files, running pathcl.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/device.h"
+#include "runtime/kernel_program.h"
+#include "runtime/renderer.h"
+#include "scene/device_scene.h"
+
+// The device named by $PATHCL_TEST_DEVICE (default: pathcl's own default), one per test process.
+ClContext& test_device();
+
+// A fresh temporary directory for this test, removed at exit.
+std::string temp_dir();
+
+// Writes text to a file in temp_dir() and returns its path.
+std::string write_temp_file(const std::string& name, const std::string& text);
+
+// Loads and flattens a scene file.
+DeviceScene load_device_scene(const std::string& path);
+
+// Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err.
+int run_pathcl(const std::string& args, std::string* err = nullptr);
+
+// Mean and standard error of the mean of values.
+struct MeanStd {
+  double mean = 0, std_error = 0;
+};
+MeanStd mean_and_error(const std::vector<double>& values);
+
+// JSON text of a closed triangle mesh approximating a sphere (icosphere with `subdivisions`), CCW
+// faces with normals pointing inwards when `inward` (for a camera inside).
+std::string icosphere_json(float radius, int subdivisions, bool inward);
