@@ -19,29 +19,28 @@ typedef struct {
   float u, v; /* barycentrics of vertices b and c */
 } Hit;
 
-/* Per-ray constants of the watertight triangle test (Woop, Benthin, Wald 2013) and the slab test. */
+/* Per-ray constants of the watertight triangle test (Woop, Benthin, Wald 2013) and the slab test.
+ * kz is the dominant axis of the direction, kx and ky the next two. The test does not swap kx and ky
+ * for a negative d[kz] as the paper does: that only flips the sign of all three edge functions, and
+ * both signs count as a hit here. */
 typedef struct {
   float3 inv_d;
-  uint4 perm; /* kx, ky, kz, 3 */
-  float3 shear; /* Sx, Sy, Sz */
+  float sx, sy, sz; /* shear: -d[kx] / d[kz], -d[ky] / d[kz], 1 / d[kz] */
+  uint kz;
 } RayPrecomp;
+
+inline float axis_component(float3 v, uint k) { return k == 0u ? v.x : k == 1u ? v.y : v.z; }
 
 inline RayPrecomp ray_precompute(float3 d) {
   RayPrecomp p;
   p.inv_d = 1.0f / d; /* +-inf for axis-parallel rays; ray_box handles the NaNs that may follow */
   float3 ad = fabs(d);
-  uint kz = ad.x > ad.y ? (ad.x > ad.z ? 0u : 2u) : (ad.y > ad.z ? 1u : 2u);
-  uint kx = kz == 2u ? 0u : kz + 1u;
-  uint ky = kx == 2u ? 0u : kx + 1u;
-  float dz = kz == 0u ? d.x : kz == 1u ? d.y : d.z;
-  if (dz < 0.0f) {
-    uint t = kx;
-    kx = ky;
-    ky = t;
-  }
-  p.perm = (uint4)(kx, ky, kz, 3u);
-  float3 dp = shuffle((float4)(d, 0.0f), p.perm).xyz;
-  p.shear = (float3)(-dp.x / dp.z, -dp.y / dp.z, 1.0f / dp.z);
+  p.kz = ad.x > ad.y ? (ad.x > ad.z ? 0u : 2u) : (ad.y > ad.z ? 1u : 2u);
+  uint kx = p.kz == 2u ? 0u : p.kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
+  float dz = axis_component(d, p.kz);
+  p.sx = -axis_component(d, kx) / dz;
+  p.sy = -axis_component(d, ky) / dz;
+  p.sz = 1.0f / dz;
   return p;
 }
 
@@ -54,28 +53,34 @@ inline float ray_box(float3 o, float3 inv_d, float tmin, float tmax, float3 lo, 
   float3 t_lo = (lo - o) * inv_d, t_hi = (hi - o) * inv_d;
   int3 negative = inv_d < 0.0f;
   float3 tn = select(t_lo, t_hi, negative), tf = select(t_hi, t_lo, negative);
-  float enter = fmax(fmax(tn.x, tn.y), fmax(tn.z, tmin));
-  float exit = fmin(fmin(tf.x, tf.y), fmin(tf.z, tmax)) * (1.0f + 2.0f * error_gamma(3));
-  return enter <= exit ? enter : INFINITY;
+  /* Comparisons rather than fmin/fmax: a NaN compares false and is skipped, and they compile to plain
+   * min/max instructions. */
+  float enter = tn.x > tmin ? tn.x : tmin;
+  enter = tn.y > enter ? tn.y : enter;
+  enter = tn.z > enter ? tn.z : enter;
+  float exit = tf.x < tmax ? tf.x : tmax;
+  exit = tf.y < exit ? tf.y : exit;
+  exit = tf.z < exit ? tf.z : exit;
+  return enter <= exit * (1.0f + 2.0f * error_gamma(3)) ? enter : INFINITY;
 }
 
 /* Watertight ray/triangle test. Edge functions of a shared edge are computed from the same sheared
  * vertex coordinates in both triangles, so a ray through the edge hits at least one of them. */
-inline bool ray_triangle(float3 o, const RayPrecomp* rp, float tmin, float tmax, float3 a, float3 b, float3 c,
-                         float* t_out, float* u_out, float* v_out) {
-  float3 A = shuffle((float4)(a - o, 0.0f), rp->perm).xyz;
-  float3 B = shuffle((float4)(b - o, 0.0f), rp->perm).xyz;
-  float3 C = shuffle((float4)(c - o, 0.0f), rp->perm).xyz;
-  float Ax = A.x + rp->shear.x * A.z, Ay = A.y + rp->shear.y * A.z;
-  float Bx = B.x + rp->shear.x * B.z, By = B.y + rp->shear.y * B.z;
-  float Cx = C.x + rp->shear.x * C.z, Cy = C.y + rp->shear.y * C.z;
+__attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPrecomp* rp, uint kz, float tmin, float tmax, float3 a, float3 b,
+                         float3 c, float* t_out, float* u_out, float* v_out) {
+  uint kx = kz == 2u ? 0u : kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
+  float3 A = a - o, B = b - o, C = c - o;
+  float Akz = axis_component(A, kz), Bkz = axis_component(B, kz), Ckz = axis_component(C, kz);
+  float Ax = axis_component(A, kx) + rp->sx * Akz, Ay = axis_component(A, ky) + rp->sy * Akz;
+  float Bx = axis_component(B, kx) + rp->sx * Bkz, By = axis_component(B, ky) + rp->sy * Bkz;
+  float Cx = axis_component(C, kx) + rp->sx * Ckz, Cy = axis_component(C, ky) + rp->sy * Ckz;
   float U = Cx * By - Cy * Bx;
   float V = Ax * Cy - Ay * Cx;
   float W = Bx * Ay - By * Ax;
   if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
   float det = U + V + W;
   if (det == 0.0f) return false;
-  float Az = rp->shear.z * A.z, Bz = rp->shear.z * B.z, Cz = rp->shear.z * C.z;
+  float Az = rp->sz * Akz, Bz = rp->sz * Bkz, Cz = rp->sz * Ckz;
   float T = U * Az + V * Bz + W * Cz;
   if (det < 0.0f ? (T >= tmin * det || T < tmax * det) : (T <= tmin * det || T > tmax * det)) return false;
   float inv_det = 1.0f / det;
@@ -132,8 +137,8 @@ inline uint prim_index_of(Primitive p) { return as_uint(p.a.w); }
 inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
 
 /* Intersects one primitive; updates *hit when closer. */
-inline bool intersect_prim(__global const Primitive* prims, uint slot, const Ray* ray, const RayPrecomp* rp,
-                           float tmax, Hit* hit) {
+__attribute__((always_inline)) inline bool intersect_prim(__global const Primitive* prims, uint slot, const Ray* ray, const RayPrecomp* rp,
+                           uint kz, float tmax, Hit* hit) {
   Primitive p = prims[slot];
   bool from_surface = prim_index_of(p) == ray->skip_prim;
   float t, u = 0.0f, v = 0.0f;
@@ -144,7 +149,7 @@ inline bool intersect_prim(__global const Primitive* prims, uint slot, const Ray
 #endif
   {
     if (from_surface) return false; /* a flat triangle cannot occlude a ray that leaves it */
-    if (!ray_triangle(ray->o, rp, ray->tmin, tmax, p.a.xyz, p.b.xyz, p.c.xyz, &t, &u, &v)) return false;
+    if (!ray_triangle(ray->o, rp, kz, ray->tmin, tmax, p.a.xyz, p.b.xyz, p.c.xyz, &t, &u, &v)) return false;
   }
   hit->t = t;
   hit->slot = slot;
@@ -158,10 +163,11 @@ inline float node_entry(__global const BvhNode* nodes, uint i, float3 o, float3 
   return ray_box(o, inv_d, tmin, tmax, vload3(0, f), vload3(0, f + 4));
 }
 
-/* BVH traversal, nearer child first. With any_hit it returns at the first hit (shadow rays). */
-inline bool trace_bvh(__global const BvhNode* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
-                      Hit* hit) {
-  RayPrecomp rp = ray_precompute(ray->d);
+/* BVH traversal, nearer child first. With any_hit it returns at the first hit (shadow rays).
+ * kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices. */
+__attribute__((always_inline)) inline bool trace_bvh_axis(__global const BvhNode* nodes,
+                                                          __global const Primitive* prims, const Ray* ray,
+                                                          const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   hit->t = ray->tmax;
   hit->slot = PC_INVALID;
   uint stack[PC_BVH_STACK];
@@ -169,19 +175,19 @@ inline bool trace_bvh(__global const BvhNode* nodes, __global const Primitive* p
   int sp = 0;
   uint node = 0;
   if (nodes[0].prim_count == 0 && nodes[0].left_first == 0) return false; /* the empty scene's root */
-  if (node_entry(nodes, 0, ray->o, rp.inv_d, ray->tmin, ray->tmax) == INFINITY) return false;
+  if (node_entry(nodes, 0, ray->o, rp->inv_d, ray->tmin, ray->tmax) == INFINITY) return false;
   for (;;) {
     __global const BvhNode* n = nodes + node;
     uint count = n->prim_count;
     if (count > 0) {
       uint first = n->left_first;
       for (uint i = 0; i < count; ++i) {
-        if (intersect_prim(prims, first + i, ray, &rp, hit->t, hit) && any_hit) return true;
+        if (intersect_prim(prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
       }
     } else {
       uint left = node + 1, right = n->left_first;
-      float dl = node_entry(nodes, left, ray->o, rp.inv_d, ray->tmin, hit->t);
-      float dr = node_entry(nodes, right, ray->o, rp.inv_d, ray->tmin, hit->t);
+      float dl = node_entry(nodes, left, ray->o, rp->inv_d, ray->tmin, hit->t);
+      float dr = node_entry(nodes, right, ray->o, rp->inv_d, ray->tmin, hit->t);
       if (dl > dr) {
         float td = dl;
         dl = dr;
@@ -208,6 +214,14 @@ inline bool trace_bvh(__global const BvhNode* nodes, __global const Primitive* p
     }
     node = stack[sp];
   }
+}
+
+inline bool trace_bvh(__global const BvhNode* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
+                      Hit* hit) {
+  RayPrecomp rp = ray_precompute(ray->d);
+  if (rp.kz == 0u) return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 0u);
+  if (rp.kz == 1u) return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 1u);
+  return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 2u);
 }
 
 #endif

@@ -37,7 +37,7 @@ __kernel void ray_triangle_test(__global const RayRecord* rays, __global const f
   h.prim = PC_INVALID;
   h.u = h.v = 0.0f;
   float t, u, v;
-  if (ray_triangle(o, &rp, r[3], r[7], vload3(0, tris + 9 * i), vload3(0, tris + 9 * i + 3),
+  if (ray_triangle(o, &rp, rp.kz, r[3], r[7], vload3(0, tris + 9 * i), vload3(0, tris + 9 * i + 3),
                    vload3(0, tris + 9 * i + 6), &t, &u, &v)) {
     h.t = t;
     h.prim = 0u;
@@ -62,7 +62,7 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
   Hit hit;
   hit.t = ray.tmax;
   hit.slot = PC_INVALID;
-  for (uint p = 0; p < prim_count; ++p) intersect_prim(prims, p, &ray, &rp, hit.t, &hit);
+  for (uint p = 0; p < prim_count; ++p) intersect_prim(prims, p, &ray, &rp, rp.kz, hit.t, &hit);
   HitRecord out;
   out.t = hit.slot == PC_INVALID ? INFINITY : hit.t;
   out.prim = hit.slot == PC_INVALID ? PC_INVALID : prim_index_of(prims[hit.slot]);

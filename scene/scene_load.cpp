@@ -107,7 +107,8 @@ CameraDesc read_camera(const Node& n) {
   c.height = n.at("height").count(1, 16384);
   glm::vec3 forward = c.look_at - c.position;
   if (glm::length(forward) == 0) n.fail("position and look_at coincide");
-  if (glm::length(glm::cross(forward, c.up)) == 0) n.at("up").fail("up is parallel to the view direction");
+  if (glm::length(glm::cross(forward, c.up)) == 0)
+    (n.has("up") ? n.at("up") : n).fail("up is parallel to the view direction (set camera.up)");
   return c;
 }
 

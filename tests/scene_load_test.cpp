@@ -68,6 +68,12 @@ TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
   }
 }
 
+TEST(SceneLoad, CameraLookingAlongTheDefaultUpIsAClearError) {
+  std::string path = write_temp_file("up.json", R"({"camera": {"position": [0,5,0], "look_at": [0,0,0], "width": 8,
+    "height": 8}, "materials": {}, "shapes": []})");
+  EXPECT_NE(load_error(path).find("camera: up is parallel to the view direction"), std::string::npos) << load_error(path);
+}
+
 TEST(SceneLoad, TransformsMoveGeometryAndMirrorsKeepTheFrontSide) {
   std::string tri = R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m")";
   SceneDescription moved = load_scene(write_temp_file(
