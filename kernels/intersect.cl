@@ -188,21 +188,16 @@ __attribute__((always_inline)) inline bool trace_bvh_axis(__global const BvhNode
       uint left = node + 1, right = n->left_first;
       float dl = node_entry(nodes, left, ray->o, rp->inv_d, ray->tmin, hit->t);
       float dr = node_entry(nodes, right, ray->o, rp->inv_d, ray->tmin, hit->t);
-      if (dl > dr) {
-        float td = dl;
-        dl = dr;
-        dr = td;
-        uint tn = left;
-        left = right;
-        right = tn;
-      }
-      if (dl != INFINITY) {
-        if (dr != INFINITY) {
-          stack[sp] = right;
-          stack_entry[sp] = dr;
-          ++sp;
-        }
-        node = left;
+      /* Branch-free ordering and push: traversal branches are unpredictable, so only "was any child hit"
+       * is a branch. The far child is always written and the stack grows only if it was hit too. */
+      bool right_first = dr < dl;
+      uint near = right_first ? right : left, far = right_first ? left : right;
+      float d_near = right_first ? dr : dl, d_far = right_first ? dl : dr;
+      stack[sp] = far;
+      stack_entry[sp] = d_far;
+      sp += d_far != INFINITY ? 1 : 0;
+      if (d_near != INFINITY) {
+        node = near;
         continue;
       }
     }
