@@ -60,7 +60,9 @@ std::vector<DeviceInfo> list_devices() {
       info.version = device_string(d, CL_DEVICE_VERSION);
       info.driver_version = device_string(d, CL_DRIVER_VERSION);
       info.opencl_c_version = device_string(d, CL_DEVICE_OPENCL_C_VERSION);
-      info.is_gpu = (device_value<cl_device_type>(d, CL_DEVICE_TYPE) & CL_DEVICE_TYPE_GPU) != 0;
+      cl_device_type type = device_value<cl_device_type>(d, CL_DEVICE_TYPE);
+      info.is_gpu = (type & CL_DEVICE_TYPE_GPU) != 0;
+      info.is_cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
       info.compute_units = device_value<cl_uint>(d, CL_DEVICE_MAX_COMPUTE_UNITS);
       info.global_memory = device_value<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
       info.max_alloc = device_value<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
@@ -78,6 +80,8 @@ DeviceInfo select_device(const std::string& selector) {
   if (selector.empty()) {
     for (const DeviceInfo& d : devices)
       if (d.is_gpu) return d;
+    for (const DeviceInfo& d : devices)
+      if (d.is_cpu) return d;
     return devices.front();
   }
   if (std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); })) {

@@ -9,7 +9,7 @@ struct DeviceInfo {
   cl_platform_id platform = nullptr;
   cl_device_id device = nullptr;
   std::string platform_name, platform_version, name, version, driver_version, opencl_c_version;
-  bool is_gpu = false;
+  bool is_gpu = false, is_cpu = false;
   cl_uint compute_units = 0;
   cl_ulong global_memory = 0, max_alloc = 0;
   size_t max_work_group = 0;
