@@ -1,4 +1,4 @@
-// The pathcl command line: render, devices, info, rays.
+// The pathcl command line: render, devices, info, rays, compare (apps/compare_command.cpp).
 // Exit codes: 0 success, 2 bad usage or bad scene/mesh input, 1 runtime failure (device, kernel build, I/O).
 #include <algorithm>
 #include <chrono>
@@ -13,8 +13,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "apps/compare_command.h"
 #include "runtime/device.h"
 #include "runtime/errors.h"
+#include "runtime/image_compare.h"
 #include "runtime/image_io.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
@@ -48,15 +50,17 @@ LoadedScene load(const std::string& path) {
   return s;
 }
 
-// Writes a JSON file through a temporary file and a rename.
-void write_json(const std::string& path, const nlohmann::json& j) {
+// Writes a text file through a temporary file and a rename.
+void write_text(const std::string& path, const std::string& text) {
   std::string tmp = path + ".partial";
   {
     std::ofstream out(tmp);
-    if (!(out << j.dump(2) << "\n")) throw RuntimeFailure(path + ": cannot write");
+    if (!(out << text)) throw RuntimeFailure(path + ": cannot write");
   }
   std::filesystem::rename(tmp, path);
 }
+
+void write_json(const std::string& path, const nlohmann::json& j) { write_text(path, j.dump(2) + "\n"); }
 
 void make_parent_directory(const std::string& path) {
   std::filesystem::path parent = std::filesystem::path(path).parent_path();
@@ -83,55 +87,133 @@ void print_progress(uint32_t done, uint32_t total, double seconds, size_t pixels
 }
 
 struct RenderArgs {
-  std::string scene, out, png, stats, device;
+  std::string scene, out, png, stats, device, sampler, reference, convergence;
   std::optional<uint32_t> spp, seed, max_depth;
+  std::optional<double> time_budget, target_error;
   uint32_t pass_spp = 0;
   size_t work_group = 0;
-  bool quiet = false, all_features = false;
+  bool quiet = false, all_features = false, variance = false;
+};
+
+// Rows of `--convergence`: one per power of two spp and at the end.
+struct ConvergenceLog {
+  std::string path;
+  std::optional<Image> reference;
+  std::string text = "wall_seconds,load_seconds,bvh_seconds,kernel_build_seconds,render_seconds,spp,rmse,relmse,mae,"
+                     "mean,relmse_estimate\n";
+
+  void add(double wall, const LoadedScene& s, double kernel_build_ms, double render_seconds, const Film& film) {
+    char row[512];
+    double mean = 0;
+    for (float v : film.mean) mean += v;
+    mean /= std::max<size_t>(film.mean.size(), 1);
+    std::string errors = ",,";
+    if (reference) {
+      ImageErrors e = compare_images(*reference, film_image(film), nullptr);
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g", e.rmse, e.rel_mse, e.mae);
+      errors = buf;
+    }
+    std::snprintf(row, sizeof row, "%.6f,%.6f,%.6f,%.6f,%.6f,%u,%s,%.9g,%.9g\n", wall, s.load_ms * 1e-3,
+                  s.device.bvh.build_ms * 1e-3, kernel_build_ms * 1e-3, render_seconds, film.spp, errors.c_str(), mean,
+                  estimated_rel_mse(film));
+    text += row;
+  }
+
+  static Image film_image(const Film& film) {
+    Image image;
+    image.width = film.width;
+    image.height = film.height;
+    image.rgb = film.mean;
+    image.spp = int(film.spp);
+    return image;
+  }
 };
 
 int run_render(const RenderArgs& a) {
+  auto started = std::chrono::steady_clock::now();
   LoadedScene s = load(a.scene);
   RenderOptions opt;
-  opt.spp = a.spp.value_or(s.description.render.spp);
+  bool budgeted = a.time_budget || a.target_error;
+  // A time or error budget without --spp renders until the budget ends.
+  opt.spp = a.spp.value_or(budgeted ? (1u << 24) : s.description.render.spp);
   opt.seed = a.seed.value_or(s.description.render.seed);
   opt.max_depth = a.max_depth.value_or(s.description.render.max_depth);
+  opt.sampler = s.description.render.sampler;
+  if (!a.sampler.empty() && !sampler_from_name(a.sampler, &opt.sampler))
+    throw UsageError("--sampler " + a.sampler + ": expected independent, stratified, sobol or halton");
   opt.pass_spp = a.pass_spp;
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
+  opt.power_of_two_passes = !a.convergence.empty() || a.target_error.has_value();
   if (opt.spp == 0) throw UsageError("--spp: expected at least 1 sample per pixel");
+  if (a.time_budget && !(*a.time_budget > 0)) throw UsageError("--time: expected a number of seconds > 0");
+  if (a.target_error && !(*a.target_error > 0)) throw UsageError("--target-error: expected a relMSE > 0");
   std::string out = a.out.empty() ? std::filesystem::path(a.scene).stem().string() + ".exr" : a.out;
+  ConvergenceLog log;
+  log.path = a.convergence;
+  if (!a.reference.empty()) {
+    log.reference = read_exr(a.reference);
+    if (log.reference->width != s.device.header.width || log.reference->height != s.device.header.height)
+      throw UsageError(a.reference + ": the reference is " + std::to_string(log.reference->width) + "x" +
+                       std::to_string(log.reference->height) + ", the render " +
+                       std::to_string(s.device.header.width) + "x" + std::to_string(s.device.header.height));
+  }
 
   ClContext cl(select_device(a.device));
   bool show = !a.quiet && isatty(STDERR_FILENO);
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
-  RenderResult r = render(cl, s.device, opt, [&](uint32_t done, uint32_t total, double seconds) {
-    if (show) print_progress(done, total, seconds, pixels);
+  std::string stop_reason = "spp";
+  RenderResult r = render(cl, s.device, opt, [&](const PassInfo& pass, const std::function<Film()>& read_film) {
+    if (show && !budgeted) print_progress(pass.spp_done, pass.spp_total, pass.seconds, pixels);
+    bool power_of_two = (pass.spp_done & (pass.spp_done - 1)) == 0;
+    if (power_of_two && (!log.path.empty() || a.target_error)) {
+      Film film = read_film();
+      if (!log.path.empty()) log.add(ms_since(started) * 1e-3, s, pass.kernel_build_ms, pass.seconds, film);
+      // The half-image estimate needs a few samples in each half before it can be trusted.
+      if (a.target_error && film.spp >= 8 && estimated_rel_mse(film) < *a.target_error) {
+        stop_reason = "target_error";
+        return false;
+      }
+    }
+    if (a.time_budget && pass.seconds >= *a.time_budget) {
+      stop_reason = "time";
+      return false;
+    }
+    return true;
   });
+  if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", stop_reason.c_str(), r.film.spp);
+  if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
+    log.add(ms_since(started) * 1e-3, s, r.kernel_build_ms, r.render_seconds, r.film);
 
-  Image image;
-  image.width = r.width;
-  image.height = r.height;
-  image.rgb = std::move(r.rgb);
-  image.spp = int(r.spp);
+  Image image = ConvergenceLog::film_image(r.film);
+  if (a.variance) image.variance = r.film.variance;
   image.attributes = {{"renderer", "pathcl"}, {"device", cl.info.name}, {"seed", std::to_string(opt.seed)},
-                      {"max_depth", std::to_string(opt.max_depth)}};
+                      {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
+                      {"stop_reason", stop_reason}};
   make_parent_directory(out);
   write_exr(out, image);
   if (!a.png.empty()) {
     make_parent_directory(a.png);
     write_png(a.png, image);
   }
-  double samples = double(pixels) * r.spp;
+  if (!log.path.empty()) {
+    make_parent_directory(log.path);
+    write_text(log.path, log.text);
+  }
+  double samples = double(pixels) * r.film.spp;
   if (!a.stats.empty()) {
     nlohmann::json j = scene_stats(s);
     j.update({{"device", cl.info.name},
               {"platform", cl.info.platform_name},
-              {"width", r.width},
-              {"height", r.height},
-              {"spp", r.spp},
+              {"width", r.film.width},
+              {"height", r.film.height},
+              {"spp", r.film.spp},
               {"seed", opt.seed},
               {"max_depth", opt.max_depth},
+              {"sampler", sampler_name(opt.sampler)},
+              {"stop_reason", stop_reason},
+              {"relmse_estimate", estimated_rel_mse(r.film)},
               {"kernel_build_ms", r.kernel_build_ms},
               {"kernel_from_cache", r.kernel_from_cache},
               {"kernel_options", r.kernel_options},
@@ -149,7 +231,7 @@ int run_render(const RenderArgs& a) {
   }
   if (!a.quiet)
     std::fprintf(stderr, "%s: %ux%u, %u spp in %.2f s (%.2f Msamples/s, %.2f Mrays/s) on %s -> %s\n", a.scene.c_str(),
-                 r.width, r.height, r.spp, r.render_seconds, samples / r.render_seconds * 1e-6,
+                 r.film.width, r.film.height, r.film.spp, r.render_seconds, samples / r.render_seconds * 1e-6,
                  double(r.rays) / r.render_seconds * 1e-6, cl.info.name.c_str(), out.c_str());
   if (r.nan_samples + r.inf_samples + r.negative_samples > 0)
     std::fprintf(stderr, "warning: discarded %llu NaN, %llu infinite and %llu negative samples\n",
@@ -266,6 +348,12 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: automatic)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
+  render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");
+  render_cmd->add_option("--reference", ra.reference, "reference EXR for the error columns of --convergence");
+  render_cmd->add_option("--convergence", ra.convergence, "write time, spp and error at every power of two spp (CSV)");
+  render_cmd->add_option("--time", ra.time_budget, "stop after this many seconds of rendering");
+  render_cmd->add_option("--target-error", ra.target_error, "stop when the estimated relMSE falls below this");
+  render_cmd->add_flag("--variance", ra.variance, "add the per-pixel variance of the mean to the EXR");
   render_cmd->add_flag("-q,--quiet", ra.quiet, "no progress or summary on stderr");
 
   app.add_subcommand("devices", "list OpenCL platforms and devices");
@@ -284,6 +372,8 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--stats", ya.stats, "write statistics as JSON");
   rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: the driver's choice)");
 
+  add_compare_command(app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -294,6 +384,7 @@ int main(int argc, char** argv) {
     if (render_cmd->parsed()) return run_render(ra);
     if (info_cmd->parsed()) return run_info(info_scene);
     if (rays_cmd->parsed()) return run_rays(ya);
+    if (compare_command_parsed()) return run_compare_command();
     return run_devices();
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -3,6 +3,7 @@
 #include "shared/types.h"
 #include "math.cl"
 #include "rng.cl"
+#include "sampler.cl"
 #include "sampling.cl"
 #include "camera.cl"
 #include "intersect.cl"
@@ -18,7 +19,7 @@ inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode
                          __global const float4* normals, __global const Material* materials,
                          __global const Light* lights, __global const float* light_cdf, SampleKey key, uint px,
                          uint py, uint* rays) {
-  float4 u0 = sample4(key, 0);
+  float4 u0 = sample4(h, key, 0);
   Ray ray;
   ray.o = h->cam_position.xyz;
   ray.d = camera_direction(h, px, py, u0.xy);
@@ -47,8 +48,8 @@ inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode
     Material m = materials[sh.material];
     float3 n = dot(s.ns, wo) < 0.0f ? -s.ns : s.ns; /* shading normal on the side of wo */
     float3 ng = dot(s.ng, wo) < 0.0f ? -s.ng : s.ng;
-    float4 u_light = sample4(key, 1 + 2 * depth);
-    float4 u_bsdf = sample4(key, 2 + 2 * depth);
+    float4 u_light = sample4(h, key, 1 + 2 * depth);
+    float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
 
 #ifdef PC_HAS_AREA_LIGHTS
     /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
@@ -98,6 +99,8 @@ inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode
   return radiance;
 }
 
+/* The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
+ * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself. */
 __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNode* nodes,
                           __global const Primitive* prims, __global const PrimShading* shading,
                           __global const float4* normals, __global const Material* materials,
@@ -110,7 +113,8 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNod
   key.pixel = pixel;
   key.seed = h->seed;
   PassStats st = {0u, 0u, 0u, 0u};
-  float4 acc = film[pixel];
+  float4 half_sum[2] = {film[3 * pixel], film[3 * pixel + 1]};
+  float4 squares = film[3 * pixel + 2];
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     float3 L = trace_path(h, nodes, prims, shading, normals, materials, lights, light_cdf, key, px, py, &st.rays);
@@ -125,9 +129,11 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNod
       ++st.negative_samples;
       L = (float3)(0.0f);
     }
-    acc.xyz += L;
+    half_sum[s & 1u] += (float4)(L, 1.0f);
+    squares.xyz += L * L;
   }
-  acc.w += (float)sample_count;
-  film[pixel] = acc;
+  film[3 * pixel] = half_sum[0];
+  film[3 * pixel + 1] = half_sum[1];
+  film[3 * pixel + 2] = squares;
   stats[pixel] = st;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -33,21 +34,39 @@ uint8_t to_srgb8(float linear) {
   return uint8_t(std::lround(s * 255.0f));
 }
 
+// Adds R, G, B slices for an interleaved width * 3 float buffer to fb under names prefix + "R" etc.
+// base is the address of pixel (0, 0) of the data window (it may lie outside the buffer).
+void insert_rgb_slices(Imf::FrameBuffer& fb, const std::string& prefix, char* base, uint32_t width) {
+  size_t xs = 3 * sizeof(float), ys = xs * width;
+  fb.insert(prefix + "R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+  fb.insert(prefix + "G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+  fb.insert(prefix + "B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+}
+
+bool has_rgb_channels(const Imf::ChannelList& channels, const std::string& prefix) {
+  for (const char* c : {"R", "G", "B"})
+    if (!channels.findChannel(prefix + c)) return false;
+  return true;
+}
+
 }  // namespace
 
 void write_exr(const std::string& path, const Image& image) {
   std::string tmp = path + ".partial.exr";
   try {
+    bool variance = !image.variance.empty();
+    if (variance && image.variance.size() != image.rgb.size())
+      throw std::invalid_argument("the variance buffer does not match the image size");
     Imf::Header header(int(image.width), int(image.height));
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    if (variance)
+      for (const char* c : {"variance.R", "variance.G", "variance.B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     header.insert("spp", Imf::IntAttribute(image.spp));
     for (const auto& [key, value] : image.attributes) header.insert(key, Imf::StringAttribute(value));
     Imf::FrameBuffer fb;
-    char* base = reinterpret_cast<char*>(const_cast<float*>(image.rgb.data()));
-    size_t xs = 3 * sizeof(float), ys = xs * image.width;
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    insert_rgb_slices(fb, "", reinterpret_cast<char*>(const_cast<float*>(image.rgb.data())), image.width);
+    if (variance)
+      insert_rgb_slices(fb, "variance.", reinterpret_cast<char*>(const_cast<float*>(image.variance.data())), image.width);
     Imf::OutputFile file(tmp.c_str(), header);
     file.setFrameBuffer(fb);
     file.writePixels(int(image.height));
@@ -79,23 +98,31 @@ void write_png(const std::string& path, const Image& image) {
 Image read_exr(const std::string& path) {
   try {
     Imf::InputFile file(path.c_str());
+    const Imf::ChannelList& channels = file.header().channels();
+    // Without this check OpenEXR would silently fill missing channels with zeros.
+    if (!has_rgb_channels(channels, "")) throw UsageError(path + ": not an RGB EXR file (no R, G and B channels)");
     Imath::Box2i dw = file.header().dataWindow();
     Image image;
     image.width = uint32_t(dw.max.x - dw.min.x + 1);
     image.height = uint32_t(dw.max.y - dw.min.y + 1);
-    image.rgb.assign(size_t(image.width) * image.height * 3, 0.0f);
+    size_t floats = size_t(image.width) * image.height * 3;
+    image.rgb.assign(floats, 0.0f);
     if (auto* spp = file.header().findTypedAttribute<Imf::IntAttribute>("spp")) image.spp = spp->value();
     for (auto it = file.header().begin(); it != file.header().end(); ++it)
       if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) image.attributes[it.name()] = s->value();
+    // Slices are addressed from pixel (0, 0), so shift the base by the data window's origin.
+    ptrdiff_t origin = (ptrdiff_t(dw.min.x) + ptrdiff_t(dw.min.y) * image.width) * 3 * ptrdiff_t(sizeof(float));
     Imf::FrameBuffer fb;
-    size_t xs = 3 * sizeof(float), ys = xs * image.width;
-    char* base = reinterpret_cast<char*>(image.rgb.data()) - (dw.min.x * xs + dw.min.y * ys);
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    insert_rgb_slices(fb, "", reinterpret_cast<char*>(image.rgb.data()) - origin, image.width);
+    if (has_rgb_channels(channels, "variance.")) {
+      image.variance.assign(floats, 0.0f);
+      insert_rgb_slices(fb, "variance.", reinterpret_cast<char*>(image.variance.data()) - origin, image.width);
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return image;
+  } catch (const UsageError&) {
+    throw;
   } catch (const std::exception& e) {
     throw UsageError(path + ": cannot read the EXR file: " + e.what());
   }

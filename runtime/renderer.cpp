@@ -5,16 +5,65 @@
 
 #include "runtime/kernel_program.h"
 
+namespace {
+
+// Reads the three accumulators per pixel (even sum, odd sum, sum of squares) and derives the film.
+Film read_film(ClContext& cl, const ClBuffer& film_buf, uint32_t width, uint32_t height) {
+  size_t pixels = size_t(width) * height;
+  std::vector<pc_float4> acc(3 * pixels);
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, film_buf.mem, CL_TRUE, 0, acc.size() * sizeof(pc_float4), acc.data(), 0,
+                               nullptr, nullptr));
+  Film f;
+  f.width = width;
+  f.height = height;
+  f.mean.resize(3 * pixels);
+  f.variance.resize(3 * pixels);
+  f.even_mean.resize(3 * pixels);
+  f.odd_mean.resize(3 * pixels);
+  for (size_t p = 0; p < pixels; ++p) {
+    const pc_float4 &even = acc[3 * p], &odd = acc[3 * p + 1], &sq = acc[3 * p + 2];
+    double n = double(even.w) + odd.w;
+    f.spp = uint32_t(n);
+    const float e[3] = {even.x, even.y, even.z}, o[3] = {odd.x, odd.y, odd.z}, s[3] = {sq.x, sq.y, sq.z};
+    for (int c = 0; c < 3; ++c) {
+      double sum = double(e[c]) + o[c];
+      double mean = n > 0 ? sum / n : 0;
+      f.mean[3 * p + c] = float(mean);
+      f.even_mean[3 * p + c] = even.w > 0 ? e[c] / even.w : 0.0f;
+      f.odd_mean[3 * p + c] = odd.w > 0 ? o[c] / odd.w : 0.0f;
+      double sample_variance = n > 1 ? std::max(0.0, (s[c] - sum * mean) / (n - 1)) : 0.0;
+      f.variance[3 * p + c] = float(n > 0 ? sample_variance / n : 0.0);
+    }
+  }
+  return f;
+}
+
+}  // namespace
+
+double estimated_rel_mse(const Film& film) {
+  size_t n = film.mean.size();
+  if (n == 0 || film.spp < 2) return 0;
+  // With n_e even and n_o odd samples, Var(even - odd) = s^2 (1/n_e + 1/n_o) and Var(mean) = s^2 / n.
+  double n_even = (film.spp + 1) / 2, n_odd = film.spp / 2;
+  double scale = 1.0 / (film.spp * (1.0 / n_even + 1.0 / n_odd));
+  double sum = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double d = double(film.even_mean[i]) - film.odd_mean[i];
+    double m = film.mean[i];
+    sum += d * d * scale / (m * m + 0.01);
+  }
+  return sum / n;
+}
+
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
-                    const ProgressFn& progress) {
+                    const PassObserver& observer) {
   RenderResult result;
   SceneHeader header = scene.header;
   header.max_depth = options.max_depth;
   header.seed = options.seed;
   header.rr_depth = options.rr_depth;
-  result.width = header.width;
-  result.height = header.height;
-  result.spp = options.spp;
+  header.sampler = options.sampler;
+  header.spp = options.spp;
   const size_t pixels = size_t(header.width) * header.height;
 
   KernelProgram program =
@@ -28,10 +77,11 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
            normals = upload(cl, scene.normals), materials = upload(cl, scene.materials),
            lights = upload(cl, scene.lights), cdf = upload(cl, scene.light_cdf);
-  ClBuffer film(cl, CL_MEM_READ_WRITE, pixels * sizeof(pc_float4));
+  ClBuffer film(cl, CL_MEM_READ_WRITE, 3 * pixels * sizeof(pc_float4));
   ClBuffer stats(cl, CL_MEM_WRITE_ONLY, pixels * sizeof(PassStats));
   const pc_float4 zero{0, 0, 0, 0};
-  CL_CHECK(clEnqueueFillBuffer(cl.queue, film.mem, &zero, sizeof zero, 0, pixels * sizeof zero, 0, nullptr, nullptr));
+  CL_CHECK(clEnqueueFillBuffer(cl.queue, film.mem, &zero, sizeof zero, 0, 3 * pixels * sizeof zero, 0, nullptr,
+                               nullptr));
 
   ClKernel kernel(program.kernel("render_pass"));
   cl_mem args[] = {header_buf.mem, nodes.mem, prims.mem, shading.mem, normals.mem,
@@ -41,8 +91,15 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   uint32_t pass_spp = options.pass_spp;
   if (pass_spp == 0) pass_spp = uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
   std::vector<PassStats> pass_stats(pixels);
-  for (uint32_t done = 0; done < options.spp;) {
+  auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  uint32_t done = 0;
+  while (done < options.spp) {
     uint32_t count = std::min(pass_spp, options.spp - done);
+    if (options.power_of_two_passes) {
+      uint32_t next_power = 1;
+      while (next_power <= done) next_power *= 2;
+      count = std::min(count, next_power - done);
+    }
     kernel.arg(10, done);
     kernel.arg(11, count);
     result.kernel_ms += run_kernel(cl, kernel.k, pixels, options.work_group);
@@ -56,20 +113,13 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     }
     done += count;
     result.passes++;
-    if (progress)
-      progress(done, options.spp, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, [&] { return read_film(cl, film, header.width, header.height); }) &&
+        done < options.spp) {
+      result.stopped_early = true;
+      break;
+    }
   }
-
-  std::vector<pc_float4> sums(pixels);
-  CL_CHECK(clEnqueueReadBuffer(cl.queue, film.mem, CL_TRUE, 0, pixels * sizeof(pc_float4), sums.data(), 0, nullptr,
-                               nullptr));
-  result.rgb.resize(pixels * 3);
-  for (size_t i = 0; i < pixels; ++i) {
-    float n = sums[i].w > 0 ? sums[i].w : 1;
-    result.rgb[3 * i] = sums[i].x / n;
-    result.rgb[3 * i + 1] = sums[i].y / n;
-    result.rgb[3 * i + 2] = sums[i].z / n;
-  }
-  result.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.film = read_film(cl, film, header.width, header.height);
+  result.render_seconds = seconds();
   return result;
 }

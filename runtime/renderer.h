@@ -14,14 +14,27 @@ struct RenderOptions {
   uint32_t max_depth = 8;
   uint32_t seed = 1;
   uint32_t rr_depth = 3;       // Russian roulette only on paths longer than this many scattering events
+  uint32_t sampler = PC_SAMPLER_INDEPENDENT;
   uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 picks about 2^20 samples a pass
+  bool power_of_two_passes = false;  // also end a pass at every power of two spp (for convergence rows)
   size_t work_group = 0;       // 0 lets the driver choose
   bool all_features = false;   // build the unspecialised kernel
 };
 
-struct RenderResult {
+// The film as read back: per pixel RGB, row 0 at the top.
+struct Film {
   uint32_t width = 0, height = 0, spp = 0;
-  std::vector<float> rgb;  // width * height * 3, the mean of the samples, row 0 at the top
+  std::vector<float> mean;      // the mean of all samples
+  std::vector<float> variance;  // the estimated variance of that mean (sample variance / spp)
+  std::vector<float> even_mean, odd_mean;  // means of the even- and odd-numbered samples
+};
+
+// The relative MSE of the film's mean, estimated from the difference of its two half images:
+// mean over pixels and channels of E[(even - odd)^2] scaled to one full mean, over (mean^2 + 0.01).
+double estimated_rel_mse(const Film& film);
+
+struct RenderResult {
+  Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;
   double kernel_build_ms = 0;
   bool kernel_from_cache = false;
@@ -29,10 +42,18 @@ struct RenderResult {
   double render_seconds = 0;  // wall time of the passes, upload and read-back included
   double kernel_ms = 0;       // device time of the render passes
   uint32_t passes = 0;
+  bool stopped_early = false; // the observer ended the render before options.spp
 };
 
-// Called after each pass with the samples per pixel done so far.
-using ProgressFn = std::function<void(uint32_t spp_done, uint32_t spp_total, double seconds)>;
+struct PassInfo {
+  uint32_t spp_done = 0, spp_total = 0;
+  double seconds = 0;  // since the render started (after the kernel build)
+  double kernel_build_ms = 0;
+};
+
+// Called after each pass. read_film() reads the film back (costly: call it only when needed).
+// Returning false stops the render after this pass.
+using PassObserver = std::function<bool(const PassInfo& pass, const std::function<Film()>& read_film)>;
 
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
-                    const ProgressFn& progress = {});
+                    const PassObserver& observer = {});

@@ -25,7 +25,12 @@ struct RenderSettings {
   uint32_t spp = 16;
   uint32_t max_depth = 8;
   uint32_t seed = 1;
+  uint32_t sampler = 0;  // PC_SAMPLER_* of kernels/shared/types.h
 };
+
+// "independent", "stratified", "sobol", "halton" -> PC_SAMPLER_*; false for an unknown name.
+bool sampler_from_name(const std::string& name, uint32_t* sampler);
+const char* sampler_name(uint32_t sampler);
 
 // One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space.
 struct ShapeDesc {

@@ -257,6 +257,21 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
 
 }  // namespace
 
+namespace {
+const char* const kSamplerNames[] = {"independent", "stratified", "sobol", "halton"};  // by PC_SAMPLER_*
+}
+
+bool sampler_from_name(const std::string& name, uint32_t* sampler) {
+  for (uint32_t i = 0; i < 4; ++i)
+    if (name == kSamplerNames[i]) {
+      *sampler = i;
+      return true;
+    }
+  return false;
+}
+
+const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
+
 SceneDescription load_scene(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the scene file");
@@ -285,10 +300,13 @@ SceneDescription load_scene(const std::string& path) {
 
   if (top.has("render")) {
     Node r = top.at("render");
-    r.expect_object({"spp", "max_depth", "seed"});
+    r.expect_object({"spp", "max_depth", "seed", "sampler"});
     if (r.has("spp")) scene.render.spp = r.at("spp").count(1, 1u << 24);
     if (r.has("max_depth")) scene.render.max_depth = r.at("max_depth").count(0, 1024);
     if (r.has("seed")) scene.render.seed = r.at("seed").count(0, 0xffffffffu);
+    if (r.has("sampler") && !sampler_from_name(r.at("sampler").string(), &scene.render.sampler))
+      r.at("sampler").fail("unknown sampler \"" + r.at("sampler").string() +
+                           "\" (expected independent, stratified, sobol or halton)");
   }
   return scene;
 }

@@ -22,7 +22,7 @@ std::vector<float> render_with(const DeviceScene& scene, uint32_t seed, uint32_t
   opt.seed = seed;
   opt.pass_spp = pass_spp;
   opt.work_group = work_group;
-  return render(test_device(), scene, opt).rgb;
+  return render(test_device(), scene, opt).film.mean;
 }
 
 bool bitwise_equal(const std::vector<float>& a, const std::vector<float>& b) {

@@ -50,7 +50,7 @@ TEST(Furnace, AnalyticSphereIsExactPerPixelWithoutRussianRoulette) {
     expect_clean(r);
     double expected = furnace_value(depth);
     double worst = 0;
-    for (float v : r.rgb) worst = std::max(worst, std::abs(v - expected) / expected);
+    for (float v : r.film.mean) worst = std::max(worst, std::abs(v - expected) / expected);
     EXPECT_LT(worst, 2e-5) << "max_depth " << depth << ": expected " << expected;
   }
 }
@@ -61,7 +61,7 @@ TEST(Furnace, AnalyticSphereMeanWithRussianRouletteWithinFourStandardErrors) {
     RenderResult r = render_scene(scene, 16, depth, 11);
     expect_clean(r);
     std::vector<double> pixels;
-    for (size_t i = 0; i < r.rgb.size(); i += 3) pixels.push_back(r.rgb[i]);
+    for (size_t i = 0; i < r.film.mean.size(); i += 3) pixels.push_back(r.film.mean[i]);
     MeanStd m = mean_and_error(pixels);
     double expected = furnace_value(depth);
     EXPECT_GT(m.std_error, 0);  // Russian roulette adds noise; zero would mean it never ran
@@ -79,14 +79,14 @@ TEST(Furnace, ClosedTriangleMeshNoPixelLeaksAndMeanIsExact) {
   RenderResult direct = render_scene(scene, 4, 0);
   expect_clean(direct);
   size_t wrong = 0;
-  for (float v : direct.rgb) wrong += std::abs(v - kLe) > 1e-6;
+  for (float v : direct.film.mean) wrong += std::abs(v - kLe) > 1e-6;
   EXPECT_EQ(wrong, 0u);
 
   for (uint32_t depth : {1u, 3u}) {
     RenderResult r = render_scene(scene, 8, depth, 5);
     expect_clean(r);
     std::vector<double> pixels;
-    for (size_t i = 0; i < r.rgb.size(); i += 3) pixels.push_back(r.rgb[i]);
+    for (size_t i = 0; i < r.film.mean.size(); i += 3) pixels.push_back(r.film.mean[i]);
     MeanStd m = mean_and_error(pixels);
     EXPECT_NEAR(m.mean, furnace_value(depth), 4 * m.std_error + 1e-6) << "max_depth " << depth;
     for (double p : pixels) ASSERT_GE(p, kLe * 0.999);  // emission is always seen: no leak, no black pixel
@@ -100,7 +100,7 @@ TEST(Furnace, CornellBoxHasNoInvalidSamples) {
   RenderResult r = render_scene(scene, 8, 8);
   expect_clean(r);
   double sum = 0;
-  for (float v : r.rgb) sum += v;
-  EXPECT_GT(sum / r.rgb.size(), 0.05);  // lit, not black
+  for (float v : r.film.mean) sum += v;
+  EXPECT_GT(sum / r.film.mean.size(), 0.05);  // lit, not black
   EXPECT_GT(r.rays, uint64_t(64 * 64 * 8 * 2));
 }

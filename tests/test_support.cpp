@@ -42,16 +42,17 @@ std::string write_temp_file(const std::string& name, const std::string& text) {
 
 DeviceScene load_device_scene(const std::string& path) { return build_device_scene(load_scene(path)); }
 
-int run_pathcl(const std::string& args, std::string* err) {
-  std::string err_file = temp_dir() + "/stderr.txt";
-  std::string command = std::string(PATHCL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
+int run_pathcl(const std::string& args, std::string* err, std::string* out) {
+  std::string err_file = temp_dir() + "/stderr.txt", out_file = temp_dir() + "/stdout.txt";
+  std::string command = std::string(PATHCL_BINARY) + " " + args + " >" + out_file + " 2>" + err_file;
   int status = std::system(command.c_str());
-  if (err) {
-    std::ifstream in(err_file);
+  auto slurp = [](const std::string& path) {
     std::stringstream ss;
-    ss << in.rdbuf();
-    *err = ss.str();
-  }
+    ss << std::ifstream(path).rdbuf();
+    return ss.str();
+  };
+  if (err) *err = slurp(err_file);
+  if (out) *out = slurp(out_file);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

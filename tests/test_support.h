@@ -21,8 +21,9 @@ std::string write_temp_file(const std::string& name, const std::string& text);
 // Loads and flattens a scene file.
 DeviceScene load_device_scene(const std::string& path);
 
-// Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err.
-int run_pathcl(const std::string& args, std::string* err = nullptr);
+// Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err and
+// stdout in *out when given.
+int run_pathcl(const std::string& args, std::string* err = nullptr, std::string* out = nullptr);
 
 // Mean and standard error of the mean of values.
 struct MeanStd {

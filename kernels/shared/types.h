@@ -26,6 +26,12 @@ typedef uint32_t pc_uint;
 /* Material types (Material.type). */
 #define PC_MAT_DIFFUSE 0u
 
+/* Samplers (SceneHeader.sampler): a per-render setting, chosen at run time. */
+#define PC_SAMPLER_INDEPENDENT 0u
+#define PC_SAMPLER_STRATIFIED 1u
+#define PC_SAMPLER_SOBOL 2u
+#define PC_SAMPLER_HALTON 3u
+
 /* PrimShading.flags */
 #define PC_FLAG_TWO_SIDED 1u   /* emits from both sides */
 #define PC_FLAG_FLIP_NORMAL 2u /* sphere: normal points to the centre */
@@ -89,7 +95,9 @@ typedef struct {
   pc_uint seed;
   pc_uint rr_depth;      /* Russian roulette starts after this many scattering events */
   pc_uint node_count;
-  pc_uint pad[4];
+  pc_uint sampler;       /* PC_SAMPLER_* */
+  pc_uint spp;           /* samples per pixel of the whole render (the stratified sampler's grid) */
+  pc_uint pad[2];
 } SceneHeader;
 
 /* Statistics one work item writes per pass (not accumulated, so any split gives the same totals):
@@ -127,7 +135,7 @@ typedef struct {
   X(Light, slot) X(Light, area) X(Light, select_pdf) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
-  X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(PassStats, rays) X(PassStats, nan_samples)         \
+  X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(PassStats, rays) X(PassStats, nan_samples)         \
   X(PassStats, inf_samples) X(PassStats, negative_samples) X(RayRecord, org) X(RayRecord, tmin)            \
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
