@@ -1,6 +1,7 @@
 // The pathcl command line: render, devices, info, rays, compare (apps/compare_command.cpp).
 // Exit codes: 0 success, 2 bad usage or bad scene/mesh input, 1 runtime failure (device, kernel build, I/O).
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/compare_command.h"
+#include "runtime/checkpoint.h"
 #include "runtime/device.h"
 #include "runtime/errors.h"
 #include "runtime/image_compare.h"
@@ -86,8 +88,19 @@ void print_progress(uint32_t done, uint32_t total, double seconds, size_t pixels
   if (done == total) std::fprintf(stderr, "\n");
 }
 
+// The first SIGINT or SIGTERM asks the render to stop after the current pass and write what it has; the
+// handler then restores the default action, so a second signal ends the process at once (outputs are
+// written through temporary files and renames, so none is left half-written).
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+void on_stop_signal(int signal) {
+  g_stop_signal = signal;
+  std::signal(signal, SIG_DFL);
+}
+
 struct RenderArgs {
-  std::string scene, out, png, stats, device, sampler, reference, convergence;
+  std::string scene, out, png, stats, device, sampler, reference, convergence, checkpoint, resume;
+  double checkpoint_every = 60;
   std::optional<uint32_t> spp, seed, max_depth;
   std::optional<double> time_budget, target_error;
   uint32_t pass_spp = 0;
@@ -160,12 +173,32 @@ int run_render(const RenderArgs& a) {
                        std::to_string(s.device.header.width) + "x" + std::to_string(s.device.header.height));
   }
 
+  if (!(a.checkpoint_every >= 0)) throw UsageError("--checkpoint-every: expected a number of seconds >= 0");
+  uint64_t key = render_key(s.device, opt);
+  Film resumed;
+  if (!a.resume.empty()) {
+    resumed = read_checkpoint(a.resume, key, s.device.header.width, s.device.header.height);
+    opt.resume = &resumed;
+  }
+
   ClContext cl(select_device(a.device));
   bool show = !a.quiet && isatty(STDERR_FILENO);
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
   std::string stop_reason = "spp";
+  double last_checkpoint = 0;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   RenderResult r = render(cl, s.device, opt, [&](const PassInfo& pass, const std::function<Film()>& read_film) {
     if (show && !budgeted) print_progress(pass.spp_done, pass.spp_total, pass.seconds, pixels);
+    if (!a.checkpoint.empty() && pass.seconds - last_checkpoint >= a.checkpoint_every) {
+      make_parent_directory(a.checkpoint);
+      write_checkpoint(a.checkpoint, key, read_film());
+      last_checkpoint = pass.seconds;
+    }
+    if (g_stop_signal) {
+      stop_reason = "interrupted";
+      return false;
+    }
     bool power_of_two = (pass.spp_done & (pass.spp_done - 1)) == 0;
     if (power_of_two && (!log.path.empty() || a.target_error)) {
       Film film = read_film();
@@ -183,6 +216,7 @@ int run_render(const RenderArgs& a) {
     return true;
   });
   if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", stop_reason.c_str(), r.film.spp);
+  if (!a.checkpoint.empty()) write_checkpoint(a.checkpoint, key, r.film);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
     log.add(ms_since(started) * 1e-3, s, r.kernel_build_ms, r.render_seconds, r.film);
 
@@ -237,6 +271,11 @@ int run_render(const RenderArgs& a) {
     std::fprintf(stderr, "warning: discarded %llu NaN, %llu infinite and %llu negative samples\n",
                  (unsigned long long)r.nan_samples, (unsigned long long)r.inf_samples,
                  (unsigned long long)r.negative_samples);
+  if (g_stop_signal) {
+    std::fprintf(stderr, "interrupted after %u spp%s\n", r.film.spp,
+                 a.checkpoint.empty() ? "" : (": resume with --resume " + a.checkpoint).c_str());
+    return 128 + g_stop_signal;
+  }
   return 0;
 }
 
@@ -354,6 +393,9 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--time", ra.time_budget, "stop after this many seconds of rendering");
   render_cmd->add_option("--target-error", ra.target_error, "stop when the estimated relMSE falls below this");
   render_cmd->add_flag("--variance", ra.variance, "add the per-pixel variance of the mean to the EXR");
+  render_cmd->add_option("--checkpoint", ra.checkpoint, "keep the render state in this file (atomically replaced)");
+  render_cmd->add_option("--checkpoint-every", ra.checkpoint_every, "seconds between checkpoints (default 60)");
+  render_cmd->add_option("--resume", ra.resume, "continue a render from a checkpoint of the same scene and settings");
   render_cmd->add_flag("-q,--quiet", ra.quiet, "no progress or summary on stderr");
 
   app.add_subcommand("devices", "list OpenCL platforms and devices");

@@ -7,12 +7,17 @@
 
 namespace {
 
-// Reads the three accumulators per pixel (even sum, odd sum, sum of squares) and derives the film.
 Film read_film(ClContext& cl, const ClBuffer& film_buf, uint32_t width, uint32_t height) {
-  size_t pixels = size_t(width) * height;
-  std::vector<pc_float4> acc(3 * pixels);
+  std::vector<pc_float4> acc(3 * size_t(width) * height);
   CL_CHECK(clEnqueueReadBuffer(cl.queue, film_buf.mem, CL_TRUE, 0, acc.size() * sizeof(pc_float4), acc.data(), 0,
                                nullptr, nullptr));
+  return film_from_accumulators(width, height, std::move(acc));
+}
+
+}  // namespace
+
+Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_float4> acc) {
+  size_t pixels = size_t(width) * height;
   Film f;
   f.width = width;
   f.height = height;
@@ -35,10 +40,9 @@ Film read_film(ClContext& cl, const ClBuffer& film_buf, uint32_t width, uint32_t
       f.variance[3 * p + c] = float(n > 0 ? sample_variance / n : 0.0);
     }
   }
+  f.accumulators = std::move(acc);
   return f;
 }
-
-}  // namespace
 
 double estimated_rel_mse(const Film& film) {
   size_t n = film.mean.size();
@@ -79,9 +83,19 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
            lights = upload(cl, scene.lights), cdf = upload(cl, scene.light_cdf);
   ClBuffer film(cl, CL_MEM_READ_WRITE, 3 * pixels * sizeof(pc_float4));
   ClBuffer stats(cl, CL_MEM_WRITE_ONLY, pixels * sizeof(PassStats));
-  const pc_float4 zero{0, 0, 0, 0};
-  CL_CHECK(clEnqueueFillBuffer(cl.queue, film.mem, &zero, sizeof zero, 0, 3 * pixels * sizeof zero, 0, nullptr,
-                               nullptr));
+  uint32_t done = 0;
+  if (options.resume) {
+    if (options.resume->accumulators.size() != 3 * pixels)
+      throw RuntimeFailure("the film to resume from has " + std::to_string(options.resume->accumulators.size() / 3) +
+                           " pixels, the render " + std::to_string(pixels));
+    CL_CHECK(clEnqueueWriteBuffer(cl.queue, film.mem, CL_TRUE, 0, 3 * pixels * sizeof(pc_float4),
+                                  options.resume->accumulators.data(), 0, nullptr, nullptr));
+    done = options.resume->spp;
+  } else {
+    const pc_float4 zero{0, 0, 0, 0};
+    CL_CHECK(clEnqueueFillBuffer(cl.queue, film.mem, &zero, sizeof zero, 0, 3 * pixels * sizeof zero, 0, nullptr,
+                                 nullptr));
+  }
 
   ClKernel kernel(program.kernel("render_pass"));
   cl_mem args[] = {header_buf.mem, nodes.mem, prims.mem, shading.mem, normals.mem,
@@ -92,7 +106,6 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   if (pass_spp == 0) pass_spp = uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
   std::vector<PassStats> pass_stats(pixels);
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  uint32_t done = 0;
   while (done < options.spp) {
     uint32_t count = std::min(pass_spp, options.spp - done);
     if (options.power_of_two_passes) {

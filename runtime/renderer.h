@@ -9,6 +9,8 @@
 #include "runtime/device.h"
 #include "scene/device_scene.h"
 
+struct Film;
+
 struct RenderOptions {
   uint32_t spp = 16;
   uint32_t max_depth = 8;
@@ -19,6 +21,7 @@ struct RenderOptions {
   bool power_of_two_passes = false;  // also end a pass at every power of two spp (for convergence rows)
   size_t work_group = 0;       // 0 lets the driver choose
   bool all_features = false;   // build the unspecialised kernel
+  const Film* resume = nullptr; // continue from this film (its accumulators and spp), e.g. a checkpoint
 };
 
 // The film as read back: per pixel RGB, row 0 at the top.
@@ -27,7 +30,12 @@ struct Film {
   std::vector<float> mean;      // the mean of all samples
   std::vector<float> variance;  // the estimated variance of that mean (sample variance / spp)
   std::vector<float> even_mean, odd_mean;  // means of the even- and odd-numbered samples
+  // The device's accumulators, 3 per pixel: even-sample sum (w: count), odd-sample sum, sum of squares.
+  std::vector<pc_float4> accumulators;
 };
+
+// Derives the means and variances from accumulators (3 per pixel).
+Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_float4> accumulators);
 
 // The relative MSE of the film's mean, estimated from the difference of its two half images:
 // mean over pixels and channels of E[(even - odd)^2] scaled to one full mean, over (mean^2 + 0.01).

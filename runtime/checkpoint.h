@@ -1,0 +1,19 @@
+// Render checkpoints: the film's accumulators and sample count, written atomically (temporary file +
+// rename) with a checksum, and keyed by everything that decides the pixels, so a render resumed from
+// any checkpoint gives exactly the pixels of an uninterrupted one.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "runtime/renderer.h"
+
+// A hash of the scene content (geometry, BVH, materials, lights, camera) and of the settings that
+// change pixels (spp, max_depth, seed, Russian roulette depth, sampler).
+uint64_t render_key(const DeviceScene& scene, const RenderOptions& options);
+
+// RuntimeFailure on I/O errors.
+void write_checkpoint(const std::string& path, uint64_t key, const Film& film);
+
+// UsageError naming the file when it is not a checkpoint, is damaged, or belongs to another scene,
+// other settings or another film size.
+Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height);
