@@ -7,6 +7,8 @@
 
 #include <unistd.h>
 
+#include "runtime/hash.h"
+
 namespace {
 
 constexpr char kMagic[8] = {'P', 'C', 'L', 'C', 'K', 'P', 'T', '1'};
@@ -16,12 +18,6 @@ struct Header {  // followed by 3 * width * height pc_float4 accumulators, then 
   uint64_t key;
   uint32_t width, height, spp, pad;
 };
-
-uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 1469598103934665603ull) {
-  const unsigned char* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  return h;
-}
 
 template <class T>
 uint64_t hash_vector(const std::vector<T>& v, uint64_t h) {

@@ -109,6 +109,12 @@ ClContext::~ClContext() {
 }
 
 ClBuffer::ClBuffer(ClContext& cl, cl_mem_flags flags, size_t bytes, const void* host) {
+  // Checked here, with the sizes in the message, rather than left to a driver that may fail late or
+  // vaguely (CL_OUT_OF_RESOURCES at the first launch) or not at all until the launch crashes.
+  if (bytes > cl.info.max_alloc || bytes > cl.info.global_memory)
+    throw RuntimeFailure("a buffer of " + std::to_string(bytes >> 20) + " MiB exceeds what " + cl.info.name +
+                         " allows in one allocation (" + std::to_string(cl.info.max_alloc >> 20) + " MiB of " +
+                         std::to_string(cl.info.global_memory >> 20) + " MiB): the scene or film is too large");
   mem = CL_CHECKED(clCreateBuffer, cl.context, flags, bytes, const_cast<void*>(host));
 }
 

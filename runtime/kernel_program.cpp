@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -12,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "runtime/hash.h"
 #include "runtime/kernel_sources.h"
 #include "scene/device_scene.h"
 
@@ -44,11 +46,6 @@ void expand(const std::string& name, std::set<std::string>& seen, std::string& o
   }
 }
 
-uint64_t fnv1a(const std::string& s, uint64_t h = 1469598103934665603ull) {
-  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
 fs::path cache_directory() {
   if (const char* dir = std::getenv("PATHCL_KERNEL_CACHE")) return dir;
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return fs::path(xdg) / "pathcl" / "kernels";
@@ -74,12 +71,17 @@ std::vector<unsigned char> program_binary(cl_program program) {
   return binary;
 }
 
-// Loads and builds a cached binary; nullptr if there is none or the driver rejects it.
+// Loads and builds a cached binary; nullptr if there is none, it is damaged (the file ends with an FNV-1a
+// checksum of the binary, checked before a driver ever sees the bytes) or the driver rejects it.
 cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& options) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return nullptr;
   std::vector<unsigned char> binary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (binary.empty()) return nullptr;
+  if (binary.size() <= sizeof(uint64_t)) return nullptr;
+  uint64_t stored;
+  std::memcpy(&stored, binary.data() + binary.size() - sizeof stored, sizeof stored);
+  binary.resize(binary.size() - sizeof stored);
+  if (fnv1a(binary.data(), binary.size()) != stored) return nullptr;
   const unsigned char* ptr = binary.data();
   size_t size = binary.size();
   cl_int status = CL_SUCCESS, binary_status = CL_SUCCESS;
@@ -104,8 +106,10 @@ void store_cached(const fs::path& file, const std::vector<unsigned char>& binary
   fs::path tmp = file;
   tmp += ".tmp." + std::to_string(::getpid());
   {
+    uint64_t checksum = fnv1a(binary.data(), binary.size());
     std::ofstream out(tmp, std::ios::binary);
-    if (!out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()))) return;
+    out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()));
+    if (!out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum)) return;
   }
   fs::rename(tmp, file, ec);
   if (ec) fs::remove(tmp, ec);
@@ -148,8 +152,9 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   KernelProgram result;
   result.options = options;
   const DeviceInfo& d = cl.info;
-  uint64_t key = fnv1a(source + '\x1f' + options + '\x1f' + d.platform_name + '\x1f' + d.platform_version + '\x1f' +
-                       d.name + '\x1f' + d.version + '\x1f' + d.driver_version);
+  std::string identity = source + '\x1f' + options + '\x1f' + d.platform_name + '\x1f' + d.platform_version + '\x1f' +
+                         d.name + '\x1f' + d.version + '\x1f' + d.driver_version;
+  uint64_t key = fnv1a(identity.data(), identity.size());
   fs::path dir = cache_directory();
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));

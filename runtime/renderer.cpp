@@ -76,6 +76,17 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   result.kernel_from_cache = program.from_cache;
   result.kernel_options = program.options;
 
+  // Everything the render keeps on the device must fit in its memory.
+  size_t scene_bytes = sizeof(SceneHeader) + scene.nodes.size() * sizeof(BvhNode) + scene.prims.size() * sizeof(Primitive) +
+                       scene.shading.size() * sizeof(PrimShading) + scene.normals.size() * sizeof(pc_float4) +
+                       scene.materials.size() * sizeof(Material) + scene.lights.size() * sizeof(Light) +
+                       scene.light_cdf.size() * sizeof(float);
+  size_t film_bytes = pixels * (3 * sizeof(pc_float4) + sizeof(PassStats));
+  if (scene_bytes + film_bytes > cl.info.global_memory)
+    throw RuntimeFailure("the render needs " + std::to_string((scene_bytes + film_bytes) >> 20) + " MiB on the device (scene " +
+                         std::to_string(scene_bytes >> 20) + " MiB, film " + std::to_string(film_bytes >> 20) + " MiB), " +
+                         cl.info.name + " has " + std::to_string(cl.info.global_memory >> 20) + " MiB");
+
   auto start = std::chrono::steady_clock::now();
   ClBuffer header_buf(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof header, &header);
   ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),

@@ -100,3 +100,40 @@ TEST(Cli, DevicesInfoAndRays) {
   EXPECT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays " + ray_file, &err), 2);
   EXPECT_NE(err.find("multiple of the 32-byte"), std::string::npos) << err;
 }
+
+TEST(Cli, FilmLargerThanTheDeviceIsAClearRuntimeFailure) {
+  std::string scene_file = write_temp_file("huge.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0],
+    "width": 16384, "height": 16384}, "materials": {"m": {"type": "diffuse"}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "m"}]})");
+  std::string err, out = temp_dir() + "/huge.exr";
+  EXPECT_EQ(run_pathcl("render " + scene_file + " --spp 1 -o " + out, &err), 1) << err;
+  EXPECT_NE(err.find("MiB"), std::string::npos) << err;  // names the sizes involved
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Cli, DamagedKernelCacheEntryIsDetectedAndRebuilt) {
+  std::string cache = temp_dir() + "/kernel-cache-damage", stats = temp_dir() + "/cache.json";
+  const char* previous = std::getenv("PATHCL_KERNEL_CACHE");
+  std::string saved = previous ? previous : "";
+  setenv("PATHCL_KERNEL_CACHE", cache.c_str(), 1);
+  std::string render = "render " + scene("tiny.json") + " --spp 1 --quiet -o " + temp_dir() + "/c.exr --stats " + stats;
+  auto from_cache = [&] { return nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>(); };
+  std::string err;
+  ASSERT_EQ(run_pathcl(render, &err), 0) << err;
+  EXPECT_FALSE(from_cache());
+  ASSERT_EQ(run_pathcl(render, &err), 0) << err;
+  EXPECT_TRUE(from_cache());
+  size_t damaged = 0;
+  for (const auto& entry : fs::directory_iterator(cache)) {
+    std::fstream f(entry.path(), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(fs::file_size(entry.path()) / 2));
+    f.put('\x7f');
+    ++damaged;
+  }
+  EXPECT_GT(damaged, 0u);
+  ASSERT_EQ(run_pathcl(render, &err), 0) << err;  // rebuilt from source, not handed to the driver
+  EXPECT_FALSE(from_cache());
+  ASSERT_EQ(run_pathcl(render, &err), 0) << err;  // and stored again
+  EXPECT_TRUE(from_cache());
+  if (previous) setenv("PATHCL_KERNEL_CACHE", saved.c_str(), 1); else unsetenv("PATHCL_KERNEL_CACHE");
+}
