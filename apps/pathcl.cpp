@@ -143,9 +143,22 @@ struct ConvergenceLog {
   }
 };
 
+// Clean-up that dropped geometry is worth a line: a mesh may not be what its author thinks it is.
+void warn_about_clean_up(const LoadedScene& s) {
+  for (const ShapeDesc& shape : s.description.shapes) {
+    const CleanReport& c = shape.clean;
+    if (c.degenerate_faces + c.duplicate_faces > 0)
+      std::fprintf(stderr, "warning: %s: removed %zu degenerate and %zu duplicate faces\n", shape.label.c_str(),
+                   c.degenerate_faces, c.duplicate_faces);
+  }
+  if (s.device.skipped_zero_area_emitters > 0)
+    std::fprintf(stderr, "warning: %u zero-area emitting triangles are not lights\n", s.device.skipped_zero_area_emitters);
+}
+
 int run_render(const RenderArgs& a) {
   auto started = std::chrono::steady_clock::now();
   LoadedScene s = load(a.scene);
+  if (!a.quiet) warn_about_clean_up(s);
   RenderOptions opt;
   bool budgeted = a.time_budget || a.target_error;
   // A time or error budget without --spp renders until the budget ends.

@@ -118,6 +118,12 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNod
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     float3 L = trace_path(h, nodes, prims, shading, normals, materials, lights, light_cdf, key, px, py, &st.rays);
+#ifdef PC_DEBUG_INJECT_HAZARDS
+    /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
+    if (s % 7u == 3u) L.x = NAN;
+    if (s % 11u == 5u) L.y = INFINITY;
+    if (s % 13u == 6u) L.z = -1.0f;
+#endif
     /* A sample that is not a finite non-negative radiance is counted and dropped: it is a bug to find. */
     if (isnan(L.x) || isnan(L.y) || isnan(L.z)) {
       ++st.nan_samples;

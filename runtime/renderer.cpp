@@ -70,8 +70,9 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   header.spp = options.spp;
   const size_t pixels = size_t(header.width) * header.height;
 
-  KernelProgram program =
-      build_kernel_program(cl, "integrator.cl", kernel_options(options.all_features ? kFeatureAll : scene.features));
+  std::string build_options = kernel_options(options.all_features ? kFeatureAll : scene.features);
+  if (options.debug_inject_hazards) build_options += " -DPC_DEBUG_INJECT_HAZARDS";
+  KernelProgram program = build_kernel_program(cl, "integrator.cl", build_options);
   result.kernel_build_ms = program.build_ms;
   result.kernel_from_cache = program.from_cache;
   result.kernel_options = program.options;

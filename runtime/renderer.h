@@ -22,6 +22,7 @@ struct RenderOptions {
   size_t work_group = 0;       // 0 lets the driver choose
   bool all_features = false;   // build the unspecialised kernel
   const Film* resume = nullptr; // continue from this film (its accumulators and spp), e.g. a checkpoint
+  bool debug_inject_hazards = false;  // tests only: make some samples NaN, infinite or negative
 };
 
 // The film as read back: per pixel RGB, row 0 at the top.

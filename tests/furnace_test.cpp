@@ -104,3 +104,27 @@ TEST(Furnace, CornellBoxHasNoInvalidSamples) {
   EXPECT_GT(sum / r.film.mean.size(), 0.05);  // lit, not black
   EXPECT_GT(r.rays, uint64_t(64 * 64 * 8 * 2));
 }
+
+TEST(Furnace, HazardCountersCountForcedHazardsAndKeepThemOffTheFilm) {
+  DeviceScene scene = load_device_scene(write_temp_file("furnace-hazard.json", furnace_scene(kSphere, 8)));
+  RenderOptions opt;
+  opt.spp = 30;
+  opt.max_depth = 2;
+  opt.debug_inject_hazards = true;
+  RenderResult r = render(test_device(), scene, opt);
+  // The kernel's classification, replayed: NaN first, then infinity, then negative.
+  uint64_t nan = 0, inf = 0, negative = 0;
+  for (uint32_t s = 0; s < opt.spp; ++s) {
+    if (s % 7 == 3) ++nan;
+    else if (s % 11 == 5) ++inf;
+    else if (s % 13 == 6) ++negative;
+  }
+  uint64_t pixels = 8 * 8;
+  EXPECT_EQ(r.nan_samples, nan * pixels);
+  EXPECT_EQ(r.inf_samples, inf * pixels);
+  EXPECT_EQ(r.negative_samples, negative * pixels);
+  for (float v : r.film.mean) ASSERT_TRUE(std::isfinite(v) && v >= 0);
+  // Dropped samples count as zero: the mean is the exact value scaled by the kept fraction.
+  double kept = double(opt.spp - nan - inf - negative) / opt.spp;
+  EXPECT_NEAR(r.film.mean[0], furnace_value(2) * kept, 1e-4);
+}

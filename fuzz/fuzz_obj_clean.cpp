@@ -1,0 +1,44 @@
+// libFuzzer target: an OBJ file through load_obj (tinyobjloader plus our line checks) and clean_mesh
+// (CGAL repair, triangulation, orientation, normals). The first input byte selects the options
+// (bit 0: orient, bit 1: smooth normals; the seeds start with '0' to '3' for that), the rest is the
+// OBJ text. Bad input must end in SceneError; any other exception, crash, sanitizer report or broken
+// invariant below is a bug. Run by scripts/fuzz.
+#include <cstdint>
+
+#include "fuzz/fuzz_common.h"
+#include "scene/mesh_clean.h"
+#include "scene/scene_description.h"
+#include "scene/scene_error.h"
+
+namespace {
+// Bounds on the CGAL work per input (triangulating a polygon of n vertices costs up to O(n^3)).
+constexpr size_t kMaxPolygons = 2000;
+constexpr size_t kMaxPolygonVertices = 64;
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size < 1 || size > fuzz::kMaxInputBytes) return 0;
+  CleanOptions options;
+  options.orient = (data[0] & 1) != 0;
+  options.smooth_normals = (data[0] & 2) != 0;
+  const std::string path = fuzz::scratch().write("f.obj", data + 1, size - 1);
+  try {
+    const PolygonSoup soup = load_obj(path);
+    if (soup.polygons.size() > kMaxPolygons) return 0;
+    for (const auto& polygon : soup.polygons)
+      if (polygon.size() > kMaxPolygonVertices) return 0;
+    CleanReport report;
+    const TriangleMesh mesh = clean_mesh(soup, options, report);
+
+    // What build_device_scene relies on.
+    for (const auto& t : mesh.triangles)
+      for (uint32_t v : t)
+        if (v >= mesh.positions.size()) fuzz::invariant_failed("triangle index out of range");
+    if (options.smooth_normals && mesh.normals.size() != mesh.positions.size())
+      fuzz::invariant_failed("one normal per vertex");
+    if (!options.smooth_normals && !mesh.normals.empty()) fuzz::invariant_failed("normals without smooth_normals");
+  } catch (const SceneError&) {
+    // Rejected input: expected.
+  }
+  return 0;
+}

@@ -1,0 +1,37 @@
+// libFuzzer target: a scene file through load_scene (JSON, OBJ meshes, CGAL clean-up, transforms) and
+// build_device_scene (flattening, light distribution, BVH). Bad input must end in SceneError; any
+// other exception, crash, sanitizer report or broken invariant below is a bug.
+// The scene lies next to a valid unit cube, so shapes may use "file": "m.obj". Run by scripts/fuzz.
+#include <cstdint>
+#include <vector>
+
+#include "fuzz/fuzz_common.h"
+#include "scene/device_scene.h"
+#include "scene/scene_description.h"
+#include "scene/scene_error.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size > fuzz::kMaxInputBytes) return 0;
+  const std::string path = fuzz::scratch().write("s.json", data, size);
+  try {
+    const SceneDescription scene = load_scene(path);
+    const DeviceScene device = build_device_scene(scene);
+
+    // What the kernels rely on.
+    const size_t prims = device.prims.size();
+    if (device.header.prim_count != prims || device.leaf_slot.size() != prims || device.shading.size() != prims)
+      fuzz::invariant_failed("primitive arrays disagree in size");
+    if (device.bvh.depth > kBvhMaxDepth) fuzz::invariant_failed("BVH deeper than the kernel's stack");
+    std::vector<bool> seen(prims, false);
+    for (uint32_t slot : device.leaf_slot) {
+      if (slot >= prims || seen[slot]) fuzz::invariant_failed("leaf slots are not a permutation");
+      seen[slot] = true;
+    }
+    if (device.light_cdf.size() != device.lights.size() + 1) fuzz::invariant_failed("light CDF size");
+    for (const Light& light : device.lights)
+      if (light.prim >= prims || light.slot >= prims) fuzz::invariant_failed("light primitive out of range");
+  } catch (const SceneError&) {
+    // Rejected input: expected.
+  }
+  return 0;
+}
