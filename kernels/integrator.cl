@@ -11,9 +11,6 @@
 #include "bsdf_diffuse.cl"
 #include "lights.cl"
 
-/* Shadow rays stop this fraction short of the light point, so the light's own surface does not block. */
-#define PC_SHADOW_EPSILON 1e-4f
-
 inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode* nodes,
                          __global const Primitive* prims, __global const PrimShading* shading,
                          __global const float4* normals, __global const Material* materials,
@@ -59,14 +56,7 @@ inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode
       float3 wi = normalize(ls.p - s.p);
       float3 f = diffuse_eval(m, n, wo, wi);
       if (dot(wi, ng) > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
-        Ray shadow;
-        shadow.o = offset_ray_origin(s.p, s.p_err, s.ng, wi);
-        float3 to_light = ls.p - shadow.o;
-        float dist = length(to_light);
-        shadow.d = to_light / dist;
-        shadow.tmin = 0.0f;
-        shadow.tmax = dist * (1.0f - PC_SHADOW_EPSILON);
-        shadow.skip_prim = s.prim;
+        Ray shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, ls.p, ls.p_err, ls.n);
         Hit blocker;
         ++*rays;
         if (!trace_bvh(nodes, prims, &shadow, true, &blocker)) {

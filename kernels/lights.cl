@@ -6,6 +6,8 @@
 
 typedef struct {
   float3 p;   /* point on the light */
+  float3 p_err; /* bound on the rounding error of p */
+  float3 n;   /* the light's geometric normal at p */
   float3 Le;  /* radiance leaving it towards the shading point (0 when its back faces the point) */
   float pdf;  /* solid-angle density at the shading point, light choice included */
 } LightSample;
@@ -113,14 +115,18 @@ inline bool sample_light(__global const Light* lights, __global const float* cdf
       out->p = sample_sphere_cone(p, x, u, &pdf);
       ny = sphere_normal(p, out->p, flags);
     }
+    out->p_err = error_gamma(5) * fabs(out->p - c) + error_gamma(1) * fabs(out->p);
   } else
 #endif
   {
     float2 b = sample_uniform_triangle(u);
-    out->p = b.x * p.a.xyz + b.y * p.b.xyz + (1.0f - b.x - b.y) * p.c.xyz;
+    float3 pa = b.x * p.a.xyz, pb = b.y * p.b.xyz, pc = (1.0f - b.x - b.y) * p.c.xyz;
+    out->p = pa + pb + pc;
+    out->p_err = error_gamma(7) * (fabs(pa) + fabs(pb) + fabs(pc));
     ny = triangle_normal(p);
     pdf = triangle_light_pdf(light, x, out->p, ny);
   }
+  out->n = ny;
   out->pdf = light.select_pdf * pdf;
   out->Le = emitted_towards(light.emission.xyz, flags, ny, out->p, x);
   return out->pdf > 0.0f && isfinite(out->pdf) && (out->Le.x > 0.0f || out->Le.y > 0.0f || out->Le.z > 0.0f);

@@ -53,4 +53,20 @@ inline Surface surface_at(__global const Primitive* prims, __global const PrimSh
   return s;
 }
 
+/* Shadow rays stop this fraction short of their far end. */
+#define PC_SHADOW_EPSILON 1e-4f
+
+/* A shadow ray between two surface points, each moved off its surface by its error bound towards the
+ * other (pbrt-v4's SpawnRayTo): neither end's own surface can block it. The direction is not unit
+ * length; the ray covers [0, 1 - PC_SHADOW_EPSILON] of the way. */
+inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, float3 q, float3 q_err, float3 nq) {
+  Ray r;
+  r.o = offset_ray_origin(p, p_err, n, q - p);
+  r.d = offset_ray_origin(q, q_err, nq, r.o - q) - r.o;
+  r.tmin = 0.0f;
+  r.tmax = 1.0f - PC_SHADOW_EPSILON;
+  r.skip_prim = prim;
+  return r;
+}
+
 #endif

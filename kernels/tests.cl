@@ -70,3 +70,43 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
   out.v = hit.v;
   hits[i] = out;
 }
+
+#include "surface.cl"
+
+/* Rays spawned from surface points, as the integrator spawns them (offset origin, own primitive
+ * skipped). queries: 8 floats each: slot (uint bits), u, v, then either a direction (mode 0: closest
+ * hit, any hit counts as a self-intersection) or, in mode 1, the slot, u, v of a second point (a
+ * shadow ray to it, stopped short like the integrator's). out: scene-order primitive hit, or PC_INVALID. */
+__kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive* prims,
+                         __global const PrimShading* shading, __global const float4* normals,
+                         __global const float* queries, uint mode, __global uint* out) {
+  uint i = get_global_id(0);
+  __global const float* q = queries + 8 * i;
+  Ray dummy;
+  dummy.o = (float3)(0.0f);
+  dummy.d = (float3)(0.0f, 0.0f, 1.0f);
+  Hit at;
+  at.t = 0.0f;
+  at.slot = as_uint(q[0]);
+  at.u = q[1];
+  at.v = q[2];
+  Surface s = surface_at(prims, shading, normals, &dummy, &at);
+  Ray ray;
+  ray.tmin = 0.0f;
+  ray.skip_prim = s.prim;
+  if (mode == 0u) {
+    ray.d = normalize(vload3(0, q + 3));
+    ray.o = offset_ray_origin(s.p, s.p_err, s.ng, ray.d);
+    ray.tmax = INFINITY;
+  } else {
+    Hit other;
+    other.t = 0.0f;
+    other.slot = as_uint(q[3]);
+    other.u = q[4];
+    other.v = q[5];
+    Surface target = surface_at(prims, shading, normals, &dummy, &other);
+    ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, target.p, target.p_err, target.ng);
+  }
+  Hit hit;
+  out[i] = trace_bvh(nodes, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
+}

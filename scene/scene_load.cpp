@@ -278,8 +278,9 @@ SceneDescription load_scene(const std::string& path) {
   json root;
   try {
     root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    // nlohmann's message names the line and column.
+  } catch (const json::exception& e) {
+    // nlohmann's message names the line and column. Not only parse_error: a number too large for a
+    // double (1e400) is an out_of_range error.
     throw SceneError(path + ": malformed JSON: " + e.what());
   }
   SceneDescription scene;
