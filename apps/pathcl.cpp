@@ -267,6 +267,7 @@ int run_render(const RenderArgs& a) {
               {"render_seconds", r.render_seconds},
               {"kernel_seconds", r.kernel_ms * 1e-3},
               {"passes", r.passes},
+              {"launches", r.launches},
               {"samples_per_second", samples / r.render_seconds},
               {"rays_traced", r.rays},
               {"rays_per_second", double(r.rays) / r.render_seconds},
@@ -397,7 +398,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--max-depth", ra.max_depth, "largest number of scattering events (overrides the scene)");
   render_cmd->add_option("--device", ra.device, "device index or name substring (see `pathcl devices`)");
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
-  render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: automatic)");
+  render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
   render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");

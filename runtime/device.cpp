@@ -131,12 +131,12 @@ ClBuffer& ClBuffer::operator=(ClBuffer&& o) noexcept {
   return *this;
 }
 
-double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group) {
+double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
   size_t global = items;
   if (work_group > 0) global = (items + work_group - 1) / work_group * work_group;
   cl_event event = nullptr;
-  CL_CHECK(clEnqueueNDRangeKernel(cl.queue, kernel, 1, nullptr, &global, work_group > 0 ? &work_group : nullptr,
-                                  0, nullptr, &event));
+  CL_CHECK(clEnqueueNDRangeKernel(cl.queue, kernel, 1, offset > 0 ? &offset : nullptr, &global,
+                                  work_group > 0 ? &work_group : nullptr, 0, nullptr, &event));
   CL_CHECK(clWaitForEvents(1, &event));
   cl_ulong start = 0, end = 0;
   CL_CHECK(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr));

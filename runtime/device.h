@@ -52,6 +52,6 @@ ClBuffer upload(ClContext& cl, const std::vector<T>& data) {
                       : ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * data.size(), data.data());
 }
 
-// Runs a 1-D kernel over `items` work items (rounded up to the work-group size; 0 lets the driver
-// choose) and returns the kernel's time on the device in milliseconds, from profiling events.
-double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0);
+// Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size; 0 lets
+// the driver choose) and returns the kernel's time on the device in milliseconds, from profiling events.
+double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);

@@ -114,8 +114,16 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
                    materials.mem,  lights.mem, cdf.mem,  film.mem,    stats.mem};
   for (cl_uint i = 0; i < 10; ++i) kernel.arg(i, args[i]);
 
+  // Launch sizing. On a GPU, unless the caller fixed pass_spp, the samples and pixels per launch adapt
+  // so that a launch takes 50-100 ms: long enough to amortise it, short enough that a desktop
+  // watchdog never kills it. A CPU device has no watchdog, and PoCL compiles a new work-group function
+  // for every new launch shape, so there a pass covers the whole film with about 2^20 samples. Any
+  // sizing gives the same pixels.
+  const bool adaptive = options.pass_spp == 0 && cl.info.is_gpu;
   uint32_t pass_spp = options.pass_spp;
-  if (pass_spp == 0) pass_spp = uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
+  if (pass_spp == 0)
+    pass_spp = adaptive ? 1 : uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
+  size_t launch_pixels = std::min(pixels, options.max_pixels_per_launch > 0 ? options.max_pixels_per_launch : pixels);
   std::vector<PassStats> pass_stats(pixels);
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   while (done < options.spp) {
@@ -127,7 +135,14 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     }
     kernel.arg(10, done);
     kernel.arg(11, count);
-    result.kernel_ms += run_kernel(cl, kernel.k, pixels, options.work_group);
+    double slowest_launch_ms = 0;
+    for (size_t first = 0; first < pixels; first += launch_pixels) {
+      size_t n = std::min(launch_pixels, pixels - first);
+      double ms = run_kernel(cl, kernel.k, n, options.work_group, first);
+      result.kernel_ms += ms;
+      slowest_launch_ms = std::max(slowest_launch_ms, ms);
+      result.launches++;
+    }
     CL_CHECK(clEnqueueReadBuffer(cl.queue, stats.mem, CL_TRUE, 0, pixels * sizeof(PassStats), pass_stats.data(), 0,
                                  nullptr, nullptr));
     for (const PassStats& s : pass_stats) {
@@ -138,6 +153,12 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     }
     done += count;
     result.passes++;
+    if (adaptive && count == pass_spp) {
+      if (slowest_launch_ms > 100 && pass_spp > 1) pass_spp /= 2;
+      else if (slowest_launch_ms > 100) launch_pixels = std::max<size_t>(launch_pixels / 2 / 1024 * 1024, 1024);
+      else if (slowest_launch_ms < 50 && launch_pixels < pixels) launch_pixels = std::min(pixels, launch_pixels * 2);
+      else if (slowest_launch_ms < 50 && pass_spp < 256) pass_spp *= 2;
+    }
     if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, [&] { return read_film(cl, film, header.width, header.height); }) &&
         done < options.spp) {
       result.stopped_early = true;

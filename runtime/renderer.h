@@ -17,7 +17,8 @@ struct RenderOptions {
   uint32_t seed = 1;
   uint32_t rr_depth = 3;       // Russian roulette only on paths longer than this many scattering events
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
-  uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 picks about 2^20 samples a pass
+  uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 adapts launches to 50-100 ms
+  size_t max_pixels_per_launch = 0;  // 0: the whole film (adaptive sizing may still split it)
   bool power_of_two_passes = false;  // also end a pass at every power of two spp (for convergence rows)
   size_t work_group = 0;       // 0 lets the driver choose
   bool all_features = false;   // build the unspecialised kernel
@@ -50,7 +51,8 @@ struct RenderResult {
   std::string kernel_options;
   double render_seconds = 0;  // wall time of the passes, upload and read-back included
   double kernel_ms = 0;       // device time of the render passes
-  uint32_t passes = 0;
+  uint32_t passes = 0;    // sample ranges, each over every pixel
+  uint32_t launches = 0;  // kernel launches (a pass may be split into pixel ranges)
   bool stopped_early = false; // the observer ended the render before options.spp
 };
 

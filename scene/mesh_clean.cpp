@@ -29,6 +29,7 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Projection_traits_3.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
@@ -75,6 +76,38 @@ std::size_t distinct_count(Polygon polygon) {
   return static_cast<std::size_t>(std::unique(polygon.begin(), polygon.end()) - polygon.begin());
 }
 
+// Whether CGAL 5.5's 2D path of triangulate_hole_polyline (triangulate_hole_polyline_with_cdt) may be
+// used on the polygon `pts`. That path projects the polygon along an average normal into a constrained
+// Delaunay triangulation; when two vertices project onto the same point (a non-planar polygon that still
+// passes its planarity and simplicity checks), the triangulation keeps one of them and CGAL then calls
+// insert_constraint with a null vertex handle (found by fuzz/fuzz_obj_clean). This repeats CGAL's normal
+// computation and its point equality (Triangulation_2::xy_equal under Projection_traits_3) and says no
+// when two vertices would coincide.
+bool cdt_keeps_vertices_apart(const std::vector<Point>& pts) {
+  double x = 0, y = 0, z = 0;
+  int normals = 0;
+  for (std::size_t i = 1; i + 1 < pts.size(); ++i) {
+    if (CGAL::collinear(pts[0], pts[i], pts[i + 1])) continue;
+    const Vector n = CGAL::normal(pts[0], pts[i], pts[i + 1]);
+    if (n.x() > 0 || (n.x() == 0 && n.y() > 0) || (n.x() == 0 && n.y() == 0 && n.z() > 0)) {
+      x += n.x(), y += n.y(), z += n.z();
+    } else {
+      x -= n.x(), y -= n.y(), z -= n.z();
+    }
+    ++normals;
+  }
+  if (normals == 0) return true;  // CGAL skips the 2D path by itself
+  const Vector average(x / normals, y / normals, z / normals);
+  if (average == CGAL::NULL_VECTOR) return true;  // idem
+  const CGAL::Projection_traits_3<Kernel> traits(average);
+  const auto compare_x = traits.compare_x_2_object();
+  const auto compare_y = traits.compare_y_2_object();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i + 1; j < pts.size(); ++j)
+      if (compare_x(pts[i], pts[j]) == CGAL::EQUAL && compare_y(pts[i], pts[j]) == CGAL::EQUAL) return false;
+  return true;
+}
+
 // Splits a polygon with more than 3 vertices into triangles (indices into `points`), keeping the
 // polygon's winding. Appends to `out` and returns how many triangles were added.
 std::size_t triangulate_polygon(const std::vector<Point>& points, const Polygon& polygon,
@@ -87,8 +120,9 @@ std::size_t triangulate_polygon(const std::vector<Point>& points, const Polygon&
   // the polygon's inside; CGAL falls back to its 3D search (min max dihedral angle) for the others.
   // (CGAL 5.5's documentation says this parameter defaults to true, but the code defaults to false.)
   std::vector<CGAL::Triple<int, int, int>> patch;
-  PMP::triangulate_hole_polyline(pts, std::back_inserter(patch),
-                                 CGAL::parameters::use_2d_constrained_delaunay_triangulation(true));
+  PMP::triangulate_hole_polyline(
+      pts, std::back_inserter(patch),
+      CGAL::parameters::use_2d_constrained_delaunay_triangulation(cdt_keeps_vertices_apart(pts)));
 
   std::vector<std::array<std::size_t, 3>> tris;
   if (patch.empty()) {

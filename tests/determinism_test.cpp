@@ -42,7 +42,22 @@ TEST(Determinism, SameSeedGivesIdenticalPixels) {
 TEST(Determinism, PassSplitDoesNotChangePixels) {
   DeviceScene scene = small_cornell();
   std::vector<float> reference = render_with(scene, 9, 12, 0);  // one pass
-  for (uint32_t pass_spp : {1u, 5u, 7u}) EXPECT_TRUE(bitwise_equal(reference, render_with(scene, 9, pass_spp, 0))) << pass_spp;
+  for (uint32_t pass_spp : {0u, 1u, 5u, 7u}) EXPECT_TRUE(bitwise_equal(reference, render_with(scene, 9, pass_spp, 0))) << pass_spp;
+}
+
+TEST(Determinism, SplittingPixelsIntoLaunchesDoesNotChangePixels) {
+  DeviceScene scene = small_cornell();
+  RenderOptions opt;
+  opt.spp = 6;
+  opt.max_depth = 6;
+  opt.seed = 9;
+  opt.pass_spp = 2;
+  RenderResult whole = render(test_device(), scene, opt);
+  opt.max_pixels_per_launch = 333;  // 48 x 40 = 1920 pixels: 6 launches per pass, the last one short
+  RenderResult split = render(test_device(), scene, opt);
+  EXPECT_EQ(split.launches, 3u * 6u);
+  EXPECT_TRUE(bitwise_equal(whole.film.mean, split.film.mean));
+  EXPECT_EQ(whole.rays, split.rays);
 }
 
 TEST(Determinism, WorkGroupSizeDoesNotChangePixels) {
