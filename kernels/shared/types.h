@@ -1,5 +1,5 @@
 /* Structs shared byte for byte by the host (C++) and the kernels (OpenCL C).
- * Rules (../../docs and STYLE.md): only 4-byte scalars, fixed arrays of them and 16-byte vectors;
+ * Rules: only 4-byte scalars, fixed arrays of them and 16-byte vectors;
  * 16-byte members first; explicit padding; every size written down and checked on both sides
  * (static_assert on the host, tests/layout_test.cpp on the device). */
 #ifndef PATHCL_SHARED_TYPES_H
