@@ -172,6 +172,7 @@ int run_render(const RenderArgs& a) {
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
   opt.power_of_two_passes = !a.convergence.empty() || a.target_error.has_value();
+  if (a.time_budget) opt.max_pass_seconds = *a.time_budget / 20;  // overrun the budget by a few percent at most
   if (opt.spp == 0) throw UsageError("--spp: expected at least 1 sample per pixel");
   if (a.time_budget && !(*a.time_budget > 0)) throw UsageError("--time: expected a number of seconds > 0");
   if (a.target_error && !(*a.target_error > 0)) throw UsageError("--target-error: expected a relMSE > 0");

@@ -122,7 +122,7 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   const bool adaptive = options.pass_spp == 0 && cl.info.is_gpu;
   uint32_t pass_spp = options.pass_spp;
   if (pass_spp == 0)
-    pass_spp = adaptive ? 1 : uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
+    pass_spp = adaptive || options.max_pass_seconds > 0 ? 1 : uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
   size_t launch_pixels = std::min(pixels, options.max_pixels_per_launch > 0 ? options.max_pixels_per_launch : pixels);
   std::vector<PassStats> pass_stats(pixels);
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
@@ -135,11 +135,12 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     }
     kernel.arg(10, done);
     kernel.arg(11, count);
-    double slowest_launch_ms = 0;
+    double slowest_launch_ms = 0, pass_ms = 0;
     for (size_t first = 0; first < pixels; first += launch_pixels) {
       size_t n = std::min(launch_pixels, pixels - first);
       double ms = run_kernel(cl, kernel.k, n, options.work_group, first);
       result.kernel_ms += ms;
+      pass_ms += ms;
       slowest_launch_ms = std::max(slowest_launch_ms, ms);
       result.launches++;
     }
@@ -158,6 +159,12 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
       else if (slowest_launch_ms > 100) launch_pixels = std::max<size_t>(launch_pixels / 2 / 1024 * 1024, 1024);
       else if (slowest_launch_ms < 50 && launch_pixels < pixels) launch_pixels = std::min(pixels, launch_pixels * 2);
       else if (slowest_launch_ms < 50 && pass_spp < 256) pass_spp *= 2;
+    }
+    if (options.max_pass_seconds > 0 && count == pass_spp) {  // passes of about half to all of the limit
+      if (pass_ms > 1e3 * options.max_pass_seconds && pass_spp > 1)
+        pass_spp = std::max<uint32_t>(1, uint32_t(pass_spp * 1e3 * options.max_pass_seconds / pass_ms));
+      else if (pass_ms < 0.5e3 * options.max_pass_seconds && pass_spp < 64)
+        pass_spp *= 2;
     }
     if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, [&] { return read_film(cl, film, header.width, header.height); }) &&
         done < options.spp) {

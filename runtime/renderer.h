@@ -18,6 +18,7 @@ struct RenderOptions {
   uint32_t rr_depth = 3;       // Russian roulette only on paths longer than this many scattering events
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
   uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 adapts launches to 50-100 ms
+  double max_pass_seconds = 0;  // > 0: shrink passes that take longer (keeps a time budget's overrun small)
   size_t max_pixels_per_launch = 0;  // 0: the whole film (adaptive sizing may still split it)
   bool power_of_two_passes = false;  // also end a pass at every power of two spp (for convergence rows)
   size_t work_group = 0;       // 0 lets the driver choose

@@ -144,6 +144,7 @@ TEST(Sampler, TimeBudgetStopsAndConvergenceLogHasARowPerPowerOfTwo) {
   nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
   EXPECT_EQ(j["stop_reason"], "time");
   EXPECT_GE(j["render_seconds"].get<double>(), 1.5);
+  EXPECT_LT(j["render_seconds"].get<double>(), 1.5 * 1.3);  // passes shrink to a twentieth of the budget
   Image image = read_exr(out);
   EXPECT_EQ(image.variance.size(), image.rgb.size());
   std::ifstream in(csv);
