@@ -30,6 +30,11 @@ constexpr float kTraversalCost = 1, kIntersectionCost = 1;
 constexpr uint32_t kMaxLeafSize = 16;
 constexpr uint32_t kMedianSplitDepth = kBvhMaxDepth - 24;  // past this, split by count to bound depth
 
+// The bin of a centroid, given (centroid - lo) * scale. Clamped in float before the conversion to int,
+// which is undefined for NaN or out-of-range values: a centroid extent below about 1e-37 makes the scale
+// infinite, and 0 * infinity is NaN (found by fuzz/fuzz_scene_json).
+int bin_index(float scaled) { return scaled >= float(kBins - 1) ? kBins - 1 : scaled > 0 ? int(scaled) : 0; }
+
 struct Builder {
   const std::vector<Aabb>& boxes;
   std::vector<glm::vec3> centroids;
@@ -64,7 +69,7 @@ struct Builder {
         float scale = kBins / extent[axis];
         for (uint32_t i = begin; i < end; ++i) {
           uint32_t p = bvh.prim_order[i];
-          int b = std::min(kBins - 1, int((centroids[p][axis] - centroid_bounds.lo[axis]) * scale));
+          int b = bin_index((centroids[p][axis] - centroid_bounds.lo[axis]) * scale);
           bin_box[b].grow(boxes[p]);
           ++bin_count[b];
         }
@@ -102,7 +107,7 @@ struct Builder {
       float lo = centroid_bounds.lo[best_axis];
       auto first_right = std::partition(
           bvh.prim_order.begin() + begin, bvh.prim_order.begin() + end, [&](uint32_t p) {
-            return std::min(kBins - 1, int((centroids[p][best_axis] - lo) * scale)) < best_plane;
+            return bin_index((centroids[p][best_axis] - lo) * scale) < best_plane;
           });
       mid = uint32_t(first_right - bvh.prim_order.begin());
     } else if (count > kMaxLeafSize) {

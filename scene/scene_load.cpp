@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -50,7 +51,9 @@ struct Node {
   double number() const {
     if (!value.is_number()) fail("expected a number");
     double d = value.get<double>();
-    if (!std::isfinite(d)) fail("expected a finite number");
+    // Every number ends up as a float: 1e39 would become infinity there.
+    if (!std::isfinite(d) || std::abs(d) > double(std::numeric_limits<float>::max()))
+      fail("expected a finite number within float range");
     return d;
   }
   float positive() const {
@@ -225,6 +228,9 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
       n.at("transform").fail("a sphere allows only translation, rotation and uniform scale");
     s.center = glm::vec3(transform * glm::vec4(center, 1.0f));
     s.radius = radius * sx;
+    if (!std::isfinite(s.center.x) || !std::isfinite(s.center.y) || !std::isfinite(s.center.z) ||
+        !std::isfinite(s.radius))
+      (n.has("transform") ? n.at("transform") : n).fail("the transform takes the sphere to infinity");
     return s;
   }
 
@@ -239,7 +245,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   for (glm::vec3& p : soup.positions) {
     p = glm::vec3(transform * glm::vec4(p, 1.0f));
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      n.at("transform").fail("the transform takes a vertex to infinity");
+      (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
   }
   // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
   if (glm::determinant(glm::mat3(transform)) < 0)

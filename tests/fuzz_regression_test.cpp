@@ -1,0 +1,94 @@
+// Inputs that the fuzzers (fuzz/, scripts/fuzz) found to crash or to trip a sanitizer, kept in
+// tests/scenes/fuzz-regressions/: each must load or be rejected with SceneError, never anything else.
+// Scenes go through load_scene and build_device_scene; meshes through load_obj and clean_mesh with every
+// combination of orient and smooth normals (the fuzzer's leading option byte is stripped from them).
+#include <algorithm>
+#include <exception>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "scene/device_scene.h"
+#include "scene/mesh_clean.h"
+#include "scene/scene_description.h"
+#include "scene/scene_error.h"
+#include "test_support.h"
+
+namespace {
+
+std::string regressions() { return std::string(PATHCL_TEST_SCENES) + "/fuzz-regressions"; }
+
+std::vector<std::string> files_ending(const std::string& extension) {
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(regressions()))
+    if (entry.path().extension() == extension) files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// "" if the scene loads and flattens, the SceneError message if it is rejected; fails the test on any
+// other exception.
+std::string scene_outcome(const std::string& path) {
+  try {
+    DeviceScene scene = build_device_scene(load_scene(path));
+    EXPECT_LE(scene.bvh.depth, kBvhMaxDepth) << path;
+  } catch (const SceneError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << path << ": unexpected exception: " << e.what();
+    return "unexpected";
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(FuzzRegression, ScenesLoadOrFailWithSceneError) {
+  const std::vector<std::string> scenes = files_ending(".json");
+  ASSERT_FALSE(scenes.empty());
+  for (const std::string& path : scenes) {
+    SCOPED_TRACE(path);
+    scene_outcome(path);
+  }
+}
+
+TEST(FuzzRegression, MeshesLoadAndCleanOrFailWithSceneError) {
+  const std::vector<std::string> meshes = files_ending(".obj");
+  ASSERT_FALSE(meshes.empty());
+  for (const std::string& path : meshes)
+    for (int bits = 0; bits < 4; ++bits) {
+      SCOPED_TRACE(path + " orient=" + std::to_string(bits & 1) + " smooth=" + std::to_string(bits >> 1));
+      CleanOptions options;
+      options.orient = (bits & 1) != 0;
+      options.smooth_normals = (bits & 2) != 0;
+      try {
+        const PolygonSoup soup = load_obj(path);
+        CleanReport report;
+        const TriangleMesh mesh = clean_mesh(soup, options, report);
+        for (const auto& t : mesh.triangles)
+          for (uint32_t v : t) ASSERT_LT(v, mesh.positions.size());
+      } catch (const SceneError&) {
+        // Rejected: fine.
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "unexpected exception: " << e.what();
+      }
+    }
+}
+
+// The messages of the inputs whose fix was to reject them.
+TEST(FuzzRegression, RejectedWithAMessage) {
+  const std::string dir = regressions();
+  // nlohmann reports a number too large for a double as out_of_range, not parse_error.
+  EXPECT_NE(scene_outcome(dir + "/json-number-overflow.json").find("malformed JSON"), std::string::npos);
+  // A finite double beyond float range used to become an infinite vertex.
+  EXPECT_NE(scene_outcome(dir + "/json-float-overflow-no-transform.json")
+                .find("shapes[0].positions[4][0]: expected a finite number within float range"),
+            std::string::npos);
+  EXPECT_NE(scene_outcome(dir + "/json-sphere-translate-overflow.json")
+                .find("shapes[0].transform: the transform takes the sphere to infinity"),
+            std::string::npos);
+  // Tiny but valid extents load (they used to convert NaN to int in the BVH builder).
+  EXPECT_EQ(scene_outcome(dir + "/json-bvh-tiny-extent.json"), "");
+}
