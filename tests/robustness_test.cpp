@@ -65,7 +65,7 @@ std::vector<uint32_t> spawn(const DeviceScene& scene, const std::vector<float>& 
 TEST(Robustness, PerturbedLatLongSphereIsWatertight) {
   // A closed lat-long sphere, every vertex radius perturbed by up to +-10 %.
   const int rings = 48, segments = 96;
-  std::mt19937 rng(31);
+  std::mt19937 rng(31);  // with seeds 31, 35 and 36 a pbrt-style t bound once made single rays leak here
   std::uniform_real_distribution<double> jitter(0.9, 1.1);
   std::vector<glm::dvec3> v = {{0, jitter(rng), 0}, {0, -jitter(rng), 0}};
   for (int r = 1; r < rings; ++r)
@@ -87,10 +87,16 @@ TEST(Robustness, PerturbedLatLongSphereIsWatertight) {
   ASSERT_EQ(scene.triangle_count, f.size());
 
   std::uniform_real_distribution<float> u(-1, 1), unit(0, 1);
-  auto interior = [&] { return glm::vec3(u(rng), u(rng), u(rng)) * 0.3f; };
+  // Components drawn in separate statements: the order of evaluation of constructor arguments is
+  // unspecified, and the ray set must not depend on the compiler.
+  auto random_vec = [&] {
+    float x = u(rng), y = u(rng), z = u(rng);
+    return glm::vec3(x, y, z);
+  };
+  auto interior = [&] { return random_vec() * 0.3f; };
   std::vector<RayRecord> rays;
   for (int i = 0; i < 100000; ++i) {  // random directions from random interior points
-    glm::vec3 o = interior(), d(u(rng), u(rng), u(rng));
+    glm::vec3 o = interior(), d = random_vec();
     rays.push_back({{o.x, o.y, o.z}, 0, {d.x, d.y, d.z}, INFINITY});
   }
   for (int i = 0; i < 100000; ++i) {  // aimed at vertices and at points of shared edges
@@ -130,7 +136,8 @@ TEST(Robustness, SpawnedRaysNeverReHitTheirSurfaceAtAnyScale) {
       float a = u(rng), b = (i % 4 < 2) ? u(rng) * (1 - a) : (1 - a) * (1 - 1e-6f * u(rng));
       float dir_sign = i % 3 ? -1.0f : 1.0f;  // away from the second quad, mostly
       glm::vec3 n = glm::normalize(glm::cross(glm::vec3(e1), glm::vec3(e2)));
-      glm::vec3 d = glm::normalize(glm::vec3(s(rng), s(rng), s(rng)) * 0.9f + n * dir_sign * 1.1f);
+      float dx = s(rng), dy = s(rng), dz = s(rng);
+      glm::vec3 d = glm::normalize(glm::vec3(dx, dy, dz) * 0.9f + n * dir_sign * 1.1f);
       away.insert(away.end(), {bits(scene.leaf_slot[prim]), a, b, d.x, d.y, d.z, 0, 0});
       uint32_t target = 2 + (i % 2);
       shadows.insert(shadows.end(), {bits(scene.leaf_slot[prim]), a, b, bits(scene.leaf_slot[target]), u(rng) * 0.5f,
