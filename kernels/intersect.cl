@@ -19,6 +19,18 @@ typedef struct {
   float u, v; /* barycentrics of vertices b and c */
 } Hit;
 
+/* A ray of a ray file (pathcl rays). */
+inline Ray ray_from_record(__global const RayRecord* record) {
+  __global const float* r = (__global const float*)record;
+  Ray ray;
+  ray.o = vload3(0, r);
+  ray.tmin = r[3];
+  ray.d = vload3(0, r + 4);
+  ray.tmax = r[7];
+  ray.skip_prim = PC_INVALID;
+  return ray;
+}
+
 /* Per-ray constants of the watertight triangle test (Woop, Benthin, Wald 2013) and the slab test.
  * kz is the dominant axis of the direction, kx and ky the next two. The test does not swap kx and ky
  * for a negative d[kz] as the paper does: that only flips the sign of all three edge functions, and

@@ -51,13 +51,7 @@ __kernel void ray_triangle_test(__global const RayRecord* rays, __global const f
 __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count, __global const RayRecord* rays,
                                 __global HitRecord* hits) {
   uint i = get_global_id(0);
-  __global const float* r = (__global const float*)(rays + i);
-  Ray ray;
-  ray.o = vload3(0, r);
-  ray.tmin = r[3];
-  ray.d = vload3(0, r + 4);
-  ray.tmax = r[7];
-  ray.skip_prim = PC_INVALID;
+  Ray ray = ray_from_record(rays + i);
   RayPrecomp rp = ray_precompute(ray.d);
   Hit hit;
   hit.t = ray.tmax;
@@ -77,20 +71,26 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
  * skipped). queries: 8 floats each: slot (uint bits), u, v, then either a direction (mode 0: closest
  * hit, any hit counts as a self-intersection) or, in mode 1, the slot, u, v of a second point (a
  * shadow ray to it, stopped short like the integrator's). out: scene-order primitive hit, or PC_INVALID. */
-__kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive* prims,
-                         __global const PrimShading* shading, __global const float4* normals,
-                         __global const float* queries, uint mode, __global uint* out) {
-  uint i = get_global_id(0);
-  __global const float* q = queries + 8 * i;
-  Ray dummy;
-  dummy.o = (float3)(0.0f);
-  dummy.d = (float3)(0.0f, 0.0f, 1.0f);
+/* The surface at triangle slot q[0] (uint bits), barycentrics q[1], q[2]. */
+inline Surface query_surface(__global const Primitive* prims, __global const PrimShading* shading,
+                             __global const float4* normals, __global const float* q) {
+  Ray unused; /* surface_at reads the ray only for spheres */
+  unused.o = (float3)(0.0f);
+  unused.d = (float3)(0.0f, 0.0f, 1.0f);
   Hit at;
   at.t = 0.0f;
   at.slot = as_uint(q[0]);
   at.u = q[1];
   at.v = q[2];
-  Surface s = surface_at(prims, shading, normals, &dummy, &at);
+  return surface_at(prims, shading, normals, &unused, &at);
+}
+
+__kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive* prims,
+                         __global const PrimShading* shading, __global const float4* normals,
+                         __global const float* queries, uint mode, __global uint* out) {
+  uint i = get_global_id(0);
+  __global const float* q = queries + 8 * i;
+  Surface s = query_surface(prims, shading, normals, q);
   Ray ray;
   ray.tmin = 0.0f;
   ray.skip_prim = s.prim;
@@ -99,12 +99,7 @@ __kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive
     ray.o = offset_ray_origin(s.p, s.p_err, s.ng, ray.d);
     ray.tmax = INFINITY;
   } else {
-    Hit other;
-    other.t = 0.0f;
-    other.slot = as_uint(q[3]);
-    other.u = q[4];
-    other.v = q[5];
-    Surface target = surface_at(prims, shading, normals, &dummy, &other);
+    Surface target = query_surface(prims, shading, normals, q + 3);
     ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, target.p, target.p_err, target.ng);
   }
   Hit hit;

@@ -7,13 +7,7 @@ __kernel void trace_rays(__global const BvhNode* nodes, __global const Primitive
                          __global const RayRecord* rays, __global HitRecord* hits, uint count) {
   uint i = get_global_id(0);
   if (i >= count) return;
-  __global const float* r = (__global const float*)(rays + i);
-  Ray ray;
-  ray.o = vload3(0, r);
-  ray.tmin = r[3];
-  ray.d = vload3(0, r + 4);
-  ray.tmax = r[7];
-  ray.skip_prim = PC_INVALID;
+  Ray ray = ray_from_record(rays + i);
   Hit hit;
   HitRecord out;
   if (trace_bvh(nodes, prims, &ray, false, &hit)) {
