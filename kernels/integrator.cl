@@ -5,74 +5,117 @@
 #include "rng.cl"
 #include "sampler.cl"
 #include "sampling.cl"
+#include "scene.cl"
 #include "camera.cl"
 #include "intersect.cl"
 #include "surface.cl"
-#include "bsdf_diffuse.cl"
+#include "texture.cl"
+#include "bsdf.cl"
+#include "environment.cl"
 #include "lights.cl"
 
-inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode* nodes,
-                         __global const Primitive* prims, __global const PrimShading* shading,
-                         __global const float4* normals, __global const Material* materials,
-                         __global const Light* lights, __global const float* light_cdf, SampleKey key, uint px,
-                         uint py, uint* rays) {
-  float4 u0 = sample4(h, key, 0);
+/* The material at a surface point, its colour looked up in its texture if it has one. */
+inline Material material_at(const SceneData* sc, uint material, uint prim, const Hit* hit) {
+  Material m = sc->materials[material];
+#ifdef PC_HAS_TEXTURES
+  if (m.color_texture != PC_INVALID) {
+    float4 a = sc->uvs[2 * prim], b = sc->uvs[2 * prim + 1];
+    float2 uv = (1.0f - hit->u - hit->v) * a.xy + hit->u * a.zw + hit->v * b.xy;
+    m.color.xyz = texture_lookup(sc->textures, sc->texels, m.color_texture, uv);
+  }
+#endif
+  return m;
+}
+
+/* Light along a ray that escaped: the environment, weighted against light sampling by MIS. */
+inline float3 escaped_radiance(const SceneData* sc, float3 d, float prev_bsdf_pdf, bool prev_delta) {
+#ifdef PC_HAS_ENVIRONMENT
+  if (sc->h->env_light != PC_INVALID) {
+    Light env = sc->lights[sc->h->env_light];
+    float3 le = env_radiance(env, sc->textures, sc->texels, d);
+    if (prev_delta) return le;
+    return le * power_heuristic(prev_bsdf_pdf, env.select_pdf * env_pdf(env, sc->textures, sc->env_dist, d));
+  }
+#endif
+  return (float3)(0.0f);
+}
+
+inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, uint* rays) {
+  __constant const SceneHeader* h = sc->h;
   Ray ray;
-  ray.o = h->cam_position.xyz;
-  ray.d = camera_direction(h, px, py, u0.xy);
+  camera_ray(h, px, py, sample4(h, key, 0), &ray.o, &ray.d);
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
   float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
   float prev_bsdf_pdf = 0.0f;
+  bool prev_delta = true; /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
   float3 prev_p = ray.o;
   for (uint depth = 0;; ++depth) {
     Hit hit;
     ++*rays;
-    if (!trace_bvh(nodes, prims, &ray, false, &hit)) break;
-    Surface s = surface_at(prims, shading, normals, &ray, &hit);
-    PrimShading sh = shading[s.prim];
+    if (!trace_bvh(sc->nodes, sc->prims, &ray, false, &hit)) {
+      radiance += throughput * escaped_radiance(sc, ray.d, prev_bsdf_pdf, prev_delta);
+      break;
+    }
+    Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
+    PrimShading sh = sc->shading[s.prim];
     float3 wo = -ray.d;
 #ifdef PC_HAS_AREA_LIGHTS
     if (sh.light != PC_INVALID) {
-      float3 le = emitted_towards(lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
-      float w = depth == 0 ? 1.0f : power_heuristic(prev_bsdf_pdf, light_pdf(lights, prims, sh.light, prev_p, s.p, s.ng));
+      float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
+      float w = prev_delta ? 1.0f : power_heuristic(prev_bsdf_pdf, light_pdf(sc->lights, sc->prims, sh.light, prev_p, s.p, s.ng));
       radiance += throughput * le * w;
     }
 #endif
     if (depth >= h->max_depth) break;
 
-    Material m = materials[sh.material];
-    float3 n = dot(s.ns, wo) < 0.0f ? -s.ns : s.ns; /* shading normal on the side of wo */
-    float3 ng = dot(s.ng, wo) < 0.0f ? -s.ng : s.ng;
+    Material m = material_at(sc, sh.material, s.prim, &hit);
+    /* Local shading frame about the front-side shading normal. */
+    float3 t, b;
+    make_frame(s.ns, &t, &b);
+    float3 wo_local = (float3)(dot(wo, t), dot(wo, b), dot(wo, s.ns));
+    float wo_ng = dot(wo, s.ng);
     float4 u_light = sample4(h, key, 1 + 2 * depth);
     float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
 
-#ifdef PC_HAS_AREA_LIGHTS
     /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
     LightSample ls;
-    if (h->light_count > 0 &&
-        sample_light(lights, light_cdf, h->light_count, prims, shading, s.p, u_light.x, u_light.yz, &ls)) {
-      float3 wi = normalize(ls.p - s.p);
-      float3 f = diffuse_eval(m, n, wo, wi);
-      if (dot(wi, ng) > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
-        Ray shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, ls.p, ls.p_err, ls.n);
+    if (h->light_count > 0 && !bsdf_is_delta(m) && sample_light(sc, s.p, u_light.xyz, &ls)) {
+      float3 wi_local = (float3)(dot(ls.wi, t), dot(ls.wi, b), dot(ls.wi, s.ns));
+      float3 f = bsdf_eval(m, wo_local, wi_local);
+      /* Only reflection here (no transmissive material takes light samples): the light must be on
+         wo's side of the geometric surface, so shading normals cannot leak light through it. */
+      if (dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
+        Ray shadow;
+        if (ls.infinite) {
+          shadow.o = offset_ray_origin(s.p, s.p_err, s.ng, ls.wi);
+          shadow.d = ls.wi;
+          shadow.tmin = 0.0f;
+          shadow.tmax = INFINITY;
+          shadow.skip_prim = s.prim;
+        } else {
+          shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, ls.p, ls.p_err, ls.n);
+        }
         Hit blocker;
         ++*rays;
-        if (!trace_bvh(nodes, prims, &shadow, true, &blocker)) {
-          float w = power_heuristic(ls.pdf, diffuse_pdf(n, wo, wi));
-          radiance += throughput * f * ls.Le * (dot(n, wi) * w / ls.pdf);
+        if (!trace_bvh(sc->nodes, sc->prims, &shadow, true, &blocker)) {
+          float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
+          radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
         }
       }
     }
-#endif
 
-    float3 wi, weight;
-    float pdf;
-    if (!diffuse_sample(m, n, wo, u_bsdf.xy, &wi, &weight, &pdf)) break;
-    if (dot(wi, ng) <= 0.0f) break; /* below the geometric surface (shading normals): no light leaks */
-    throughput *= weight;
-    prev_bsdf_pdf = pdf;
+    BsdfSample bs;
+    if (!bsdf_sample(m, wo_local, u_bsdf.xyz, &bs)) break;
+    float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
+    /* Reflection must stay on wo's side of the geometric surface and transmission must cross it:
+       with shading normals the two can disagree, and then the path stops rather than leak light. */
+    bool transmitted = bs.wi.z * wo_local.z < 0.0f;
+    if ((dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) break;
+    throughput *= bs.weight;
+    prev_bsdf_pdf = bs.pdf;
+    prev_delta = bs.delta;
     prev_p = s.p;
     if (depth + 1 > h->rr_depth) {
       /* Russian roulette: survive with probability min(1, max throughput), reweighted to stay unbiased. */
@@ -93,9 +136,12 @@ inline float3 trace_path(__constant const SceneHeader* h, __global const BvhNode
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself. */
 __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNode* nodes,
                           __global const Primitive* prims, __global const PrimShading* shading,
-                          __global const float4* normals, __global const Material* materials,
-                          __global const Light* lights, __global const float* light_cdf, __global float4* film,
+                          __global const float4* normals, __global const float4* uvs,
+                          __global const Material* materials, __global const Light* lights,
+                          __global const float* light_cdf, __global const Texture* textures,
+                          __global const float4* texels, __global const float* env_dist, __global float4* film,
                           __global PassStats* stats, uint sample_begin, uint sample_count) {
+  SceneData sc = {h, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist};
   uint pixel = get_global_id(0);
   if (pixel >= h->width * h->height) return;
   uint px = pixel % h->width, py = pixel / h->width;
@@ -107,7 +153,7 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const BvhNod
   float4 squares = film[3 * pixel + 2];
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
-    float3 L = trace_path(h, nodes, prims, shading, normals, materials, lights, light_cdf, key, px, py, &st.rays);
+    float3 L = trace_path(&sc, key, px, py, &st.rays);
 #ifdef PC_DEBUG_INJECT_HAZARDS
     /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
     if (s % 7u == 3u) L.x = NAN;

@@ -1,26 +1,22 @@
-/* Area lights: choosing one in proportion to power, sampling a point on it, and the matching pdf for
- * multiple importance sampling. Triangles are sampled uniformly by area; spheres by the cone of
- * directions they subtend, or by area from inside. */
+/* Lights: choosing one in proportion to power (one distribution over every type), sampling it from a
+ * shading point, and the matching pdf for multiple importance sampling.
+ * Area lights: triangles sampled uniformly by area, spheres by the cone of directions they subtend (by
+ * area from inside). Point, spot and directional lights are deltas: sampled deterministically, never
+ * hit. The environment is sampled by environment.cl. */
 #ifndef PATHCL_LIGHTS_CL
 #define PATHCL_LIGHTS_CL
 
 typedef struct {
-  float3 p;   /* point on the light */
-  float3 p_err; /* bound on the rounding error of p */
-  float3 n;   /* the light's geometric normal at p */
-  float3 Le;  /* radiance leaving it towards the shading point (0 when its back faces the point) */
-  float pdf;  /* solid-angle density at the shading point, light choice included */
+  float3 p;      /* point on the light (positional lights) */
+  float3 p_err;  /* bound on the rounding error of p */
+  float3 n;      /* the light's geometric normal at p (area lights) */
+  float3 wi;     /* unit direction from the shading point towards the light */
+  float3 Le;     /* radiance arriving along wi; for delta lights the irradiance on a surface facing wi */
+  float pdf;     /* solid-angle density at the shading point, light choice included; for a delta light
+                    the probability of having chosen it */
+  bool delta;    /* point, spot, directional: no MIS, never hit by BSDF rays */
+  bool infinite; /* directional, environment: the shadow ray runs to infinity */
 } LightSample;
-
-/* Index i with cdf[i] <= u < cdf[i + 1]. */
-inline uint choose_light(__global const float* cdf, uint count, float u) {
-  uint lo = 0, hi = count;
-  while (hi - lo > 1) {
-    uint mid = (lo + hi) / 2;
-    if (cdf[mid] <= u) lo = mid; else hi = mid;
-  }
-  return lo;
-}
 
 /* Radiance from light point y with normal ny towards x. */
 inline float3 emitted_towards(float3 emission, uint flags, float3 ny, float3 y, float3 x) {
@@ -94,11 +90,8 @@ inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
   return c + r * (cos_alpha * w + sin_alpha * (cos(phi) * t + sin(phi) * b));
 }
 
-inline bool sample_light(__global const Light* lights, __global const float* cdf, uint light_count,
-                         __global const Primitive* prims, __global const PrimShading* shading, float3 x,
-                         float u_choose, float2 u, LightSample* out) {
-  uint i = choose_light(cdf, light_count, u_choose);
-  Light light = lights[i];
+inline bool sample_area_light(Light light, __global const Primitive* prims, __global const PrimShading* shading,
+                              float3 x, float2 u, LightSample* out) {
   Primitive p = prims[light.slot];
   uint flags = shading[light.prim].flags;
   float pdf;
@@ -127,8 +120,71 @@ inline bool sample_light(__global const Light* lights, __global const float* cdf
     pdf = triangle_light_pdf(light, x, out->p, ny);
   }
   out->n = ny;
+  out->wi = normalize(out->p - x);
   out->pdf = light.select_pdf * pdf;
   out->Le = emitted_towards(light.emission.xyz, flags, ny, out->p, x);
+  return true;
+}
+
+/* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). */
+inline float spot_falloff(Light light, float3 from_light) {
+  float c = dot(light.direction.xyz, from_light);
+  if (c >= light.cos_inner) return 1.0f;
+  if (c <= light.cos_outer) return 0.0f;
+  float t = (c - light.cos_outer) / (light.cos_inner - light.cos_outer);
+  return t * t * (3.0f - 2.0f * t);
+}
+
+/* u: x chooses the light, yz the point on it. */
+inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* out) {
+  Light light = sc->lights[find_interval(sc->light_cdf, sc->h->light_count, u.x)];
+  out->delta = false;
+  out->infinite = false;
+  out->n = (float3)(0.0f);
+  out->p_err = (float3)(0.0f);
+  switch (light.type) {
+#ifdef PC_HAS_AREA_LIGHTS
+    case PC_LIGHT_AREA:
+      sample_area_light(light, sc->prims, sc->shading, x, u.yz, out);
+      break;
+#endif
+#ifdef PC_HAS_POINT_LIGHTS
+    case PC_LIGHT_POINT:
+    case PC_LIGHT_SPOT: {
+      float3 d = light.position.xyz - x;
+      float dist2 = dot(d, d);
+      out->p = light.position.xyz;
+      out->wi = d / sqrt(dist2);
+      out->n = -out->wi;
+      out->Le = light.emission.xyz / dist2;
+      if (light.type == PC_LIGHT_SPOT) out->Le *= spot_falloff(light, -out->wi);
+      out->pdf = light.select_pdf;
+      out->delta = true;
+      break;
+    }
+#endif
+#ifdef PC_HAS_DIRECTIONAL_LIGHTS
+    case PC_LIGHT_DIRECTIONAL:
+      out->wi = -light.direction.xyz;
+      out->Le = light.emission.xyz;
+      out->pdf = light.select_pdf;
+      out->delta = true;
+      out->infinite = true;
+      break;
+#endif
+#ifdef PC_HAS_ENVIRONMENT
+    case PC_LIGHT_ENVIRONMENT: {
+      float pdf;
+      out->wi = env_sample(light, sc->textures, sc->env_dist, u.yz, &pdf);
+      out->Le = env_radiance(light, sc->textures, sc->texels, out->wi);
+      out->pdf = light.select_pdf * pdf;
+      out->infinite = true;
+      break;
+    }
+#endif
+    default:
+      return false;
+  }
   return out->pdf > 0.0f && isfinite(out->pdf) && (out->Le.x > 0.0f || out->Le.y > 0.0f || out->Le.z > 0.0f);
 }
 

@@ -2,11 +2,11 @@
 #ifndef PATHCL_SAMPLING_CL
 #define PATHCL_SAMPLING_CL
 
-/* Cosine-weighted direction about +z (Malley's method via the concentric disk map). */
-inline float3 sample_cosine_hemisphere(float2 u) {
+/* A point on the unit disk, area-preserving (Shirley and Chiu's concentric map). */
+inline float2 sample_concentric_disk(float2 u) {
   float2 o = 2.0f * u - 1.0f;
+  if (o.x == 0.0f && o.y == 0.0f) return (float2)(0.0f);
   float r, phi;
-  if (o.x == 0.0f && o.y == 0.0f) return (float3)(0.0f, 0.0f, 1.0f);
   if (fabs(o.x) > fabs(o.y)) {
     r = o.x;
     phi = (PC_PI / 4.0f) * (o.y / o.x);
@@ -14,8 +14,13 @@ inline float3 sample_cosine_hemisphere(float2 u) {
     r = o.y;
     phi = (PC_PI / 2.0f) - (PC_PI / 4.0f) * (o.x / o.y);
   }
-  float x = r * cos(phi), y = r * sin(phi);
-  return (float3)(x, y, sqrt(fmax(0.0f, 1.0f - x * x - y * y)));
+  return (float2)(r * cos(phi), r * sin(phi));
+}
+
+/* Cosine-weighted direction about +z (Malley's method). */
+inline float3 sample_cosine_hemisphere(float2 u) {
+  float2 d = sample_concentric_disk(u);
+  return (float3)(d.x, d.y, sqrt(fmax(0.0f, 1.0f - d.x * d.x - d.y * d.y)));
 }
 
 inline float3 sample_uniform_sphere(float2 u) {
@@ -29,6 +34,16 @@ inline float3 sample_uniform_sphere(float2 u) {
 inline float2 sample_uniform_triangle(float2 u) {
   float su = sqrt(u.x);
   return (float2)(1.0f - su, u.y * su);
+}
+
+/* Index i with cdf[i] <= u < cdf[i + 1], over count intervals (binary search of a cdf). */
+inline uint find_interval(__global const float* cdf, uint count, float u) {
+  uint lo = 0, hi = count;
+  while (hi - lo > 1) {
+    uint mid = (lo + hi) / 2;
+    if (cdf[mid] <= u) lo = mid; else hi = mid;
+  }
+  return lo;
 }
 
 #endif

@@ -127,11 +127,8 @@ std::string assemble_kernel_source(const std::string& main_file) {
 std::string kernel_options(uint32_t features) {
   // No fast-math options: they break the slab test's infinities and the watertight triangle test.
   std::string options = "-cl-std=CL1.2";
-  if (features & kFeatureTriangles) options += " -DPC_HAS_TRIANGLES";
-  if (features & kFeatureSpheres) options += " -DPC_HAS_SPHERES";
-  if (features & kFeatureSmoothNormals) options += " -DPC_HAS_SMOOTH_NORMALS";
-  if (features & kFeatureAreaLights) options += " -DPC_HAS_AREA_LIGHTS";
-  if (features & kFeatureDiffuse) options += " -DPC_HAS_DIFFUSE";
+  for (uint32_t bit = 0; bit < 16; ++bit)
+    if (features & (1u << bit)) options += std::string(" -D") + kFeatureFlags[bit];
   return options;
 }
 

@@ -80,8 +80,10 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   // Everything the render keeps on the device must fit in its memory.
   size_t scene_bytes = sizeof(SceneHeader) + scene.nodes.size() * sizeof(BvhNode) + scene.prims.size() * sizeof(Primitive) +
                        scene.shading.size() * sizeof(PrimShading) + scene.normals.size() * sizeof(pc_float4) +
-                       scene.materials.size() * sizeof(Material) + scene.lights.size() * sizeof(Light) +
-                       scene.light_cdf.size() * sizeof(float);
+                       scene.uvs.size() * sizeof(pc_float4) + scene.materials.size() * sizeof(Material) +
+                       scene.lights.size() * sizeof(Light) + scene.light_cdf.size() * sizeof(float) +
+                       scene.textures.size() * sizeof(Texture) + scene.texels.size() * sizeof(pc_float4) +
+                       scene.env_dist.size() * sizeof(float);
   size_t film_bytes = pixels * (3 * sizeof(pc_float4) + sizeof(PassStats));
   if (scene_bytes + film_bytes > cl.info.global_memory)
     throw RuntimeFailure("the render needs " + std::to_string((scene_bytes + film_bytes) >> 20) + " MiB on the device (scene " +
@@ -91,8 +93,9 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   auto start = std::chrono::steady_clock::now();
   ClBuffer header_buf(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof header, &header);
   ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
-           normals = upload(cl, scene.normals), materials = upload(cl, scene.materials),
-           lights = upload(cl, scene.lights), cdf = upload(cl, scene.light_cdf);
+           normals = upload(cl, scene.normals), uvs = upload(cl, scene.uvs), materials = upload(cl, scene.materials),
+           lights = upload(cl, scene.lights), cdf = upload(cl, scene.light_cdf), textures = upload(cl, scene.textures),
+           texels = upload(cl, scene.texels), env_dist = upload(cl, scene.env_dist);
   ClBuffer film(cl, CL_MEM_READ_WRITE, 3 * pixels * sizeof(pc_float4));
   ClBuffer stats(cl, CL_MEM_WRITE_ONLY, pixels * sizeof(PassStats));
   uint32_t done = 0;
@@ -110,9 +113,11 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   }
 
   ClKernel kernel(program.kernel("render_pass"));
-  cl_mem args[] = {header_buf.mem, nodes.mem, prims.mem, shading.mem, normals.mem,
-                   materials.mem,  lights.mem, cdf.mem,  film.mem,    stats.mem};
-  for (cl_uint i = 0; i < 10; ++i) kernel.arg(i, args[i]);
+  cl_mem args[] = {header_buf.mem, nodes.mem,    prims.mem,  shading.mem,  normals.mem,
+                   uvs.mem,        materials.mem, lights.mem, cdf.mem,      textures.mem,
+                   texels.mem,     env_dist.mem,  film.mem,   stats.mem};
+  const cl_uint arg_count = sizeof args / sizeof args[0];
+  for (cl_uint i = 0; i < arg_count; ++i) kernel.arg(i, args[i]);
 
   // Launch sizing. On a GPU, unless the caller fixed pass_spp, the samples and pixels per launch adapt
   // so that a launch takes 50-100 ms: long enough to amortise it, short enough that a desktop
@@ -133,8 +138,8 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
       while (next_power <= done) next_power *= 2;
       count = std::min(count, next_power - done);
     }
-    kernel.arg(10, done);
-    kernel.arg(11, count);
+    kernel.arg(arg_count, done);
+    kernel.arg(arg_count + 1, count);
     double slowest_launch_ms = 0, pass_ms = 0;
     for (size_t first = 0; first < pixels; first += launch_pixels) {
       size_t n = std::min(launch_pixels, pixels - first);

@@ -16,8 +16,22 @@ enum : uint32_t {
   kFeatureSmoothNormals = 1u << 2,
   kFeatureAreaLights = 1u << 3,
   kFeatureDiffuse = 1u << 4,
-  kFeatureAll = (1u << 5) - 1,
+  kFeatureOrenNayar = 1u << 5,
+  kFeaturePhong = 1u << 6,
+  kFeatureMirror = 1u << 7,
+  kFeatureDielectric = 1u << 8,
+  kFeatureRoughConductor = 1u << 9,
+  kFeaturePlastic = 1u << 10,
+  kFeatureTextures = 1u << 11,
+  kFeaturePointLights = 1u << 12,  // point and spot
+  kFeatureDirectionalLights = 1u << 13,
+  kFeatureEnvironment = 1u << 14,
+  kFeatureEnvironmentMap = 1u << 15,
+  kFeatureAll = (1u << 16) - 1,
 };
+
+// The -D flag name of each feature bit, in bit order ("PC_HAS_TRIANGLES", ...).
+extern const char* const kFeatureFlags[16];
 
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
@@ -26,9 +40,13 @@ struct DeviceScene {
   std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims
   std::vector<PrimShading> shading;  // scene order (the primitive index of hits and ray files)
   std::vector<pc_float4> normals;    // 3 per primitive in scene order, only for smooth shapes
+  std::vector<pc_float4> uvs;        // 2 per primitive in scene order (kernels/scene.cl), only with textures
   std::vector<Material> materials;
-  std::vector<Light> lights;
+  std::vector<Light> lights;         // area lights first (in primitive order), then the others
   std::vector<float> light_cdf;      // light_count + 1 entries, light_cdf[0] = 0, last = 1
+  std::vector<Texture> textures;
+  std::vector<pc_float4> texels;
+  std::vector<float> env_dist;       // the environment map's sampling distribution (kernels/environment.cl)
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;
   uint32_t skipped_zero_area_emitters = 0;

@@ -16,6 +16,57 @@ float bits_to_float(uint32_t u) {
 }
 float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
+constexpr uint32_t kMaterialFeature[] = {kFeatureDiffuse, kFeatureOrenNayar, kFeaturePhong, kFeatureMirror,
+                                         kFeatureDielectric, kFeatureRoughConductor, kFeaturePlastic};  // by PC_MAT_*
+
+Material device_material(const MaterialDesc& m) {
+  Material mat{};
+  mat.color = f4(m.color);
+  mat.specular = f4(m.specular);
+  mat.k = f4(m.k);
+  mat.type = m.type_id;
+  mat.color_texture = m.color_texture;
+  mat.alpha = m.alpha;
+  mat.sigma = m.sigma;
+  mat.exponent = m.exponent;
+  mat.ior = m.ior;
+  return mat;
+}
+
+// The environment map's sampling distribution, piecewise constant over texels in (u, v) with density
+// proportional to luminance times sin(theta) (layout in kernels/environment.cl). Returns the integral of
+// the luminance over the sphere.
+double build_env_distribution(const TextureImage& map, std::vector<float>& dist) {
+  uint32_t w = map.width, h = map.height;
+  std::vector<double> row_sum(h, 0.0), func(size_t(w) * h);
+  double total = 0, integral = 0;
+  for (uint32_t r = 0; r < h; ++r) {
+    double sin_theta = std::sin(M_PI * (r + 0.5) / h);
+    for (uint32_t c = 0; c < w; ++c) {
+      const glm::vec4& t = map.texels[size_t(r) * w + c];
+      double lum = luminance(glm::vec3(t));
+      func[size_t(r) * w + c] = lum * sin_theta;
+      row_sum[r] += lum * sin_theta;
+      // Solid angle of the texel: (2 pi / w) (cos theta_top - cos theta_bottom).
+      integral += lum * (2 * M_PI / w) * (std::cos(M_PI * r / h) - std::cos(M_PI * (r + 1) / h));
+    }
+    total += row_sum[r];
+  }
+  dist.assign(h + 1 + size_t(h) * (w + 1), 0.0f);
+  // A cdf as floats, its last entry exactly 1; an all-zero function gets a uniform cdf.
+  auto write_cdf = [](const double* f, uint32_t n, double sum, float* cdf) {
+    double running = 0;
+    cdf[0] = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      running += sum > 0 ? f[i] / sum : 1.0 / n;
+      cdf[i + 1] = i + 1 == n ? 1.0f : float(running);
+    }
+  };
+  write_cdf(row_sum.data(), h, total, dist.data());
+  for (uint32_t r = 0; r < h; ++r) write_cdf(&func[size_t(r) * w], w, row_sum[r], &dist[h + 1 + size_t(r) * (w + 1)]);
+  return integral;
+}
+
 SceneHeader camera_header(const CameraDesc& c) {
   SceneHeader h{};
   glm::vec3 forward = glm::normalize(c.look_at - c.position);
@@ -29,10 +80,22 @@ SceneHeader camera_header(const CameraDesc& c) {
   h.cam_forward = f4(forward);
   h.width = c.width;
   h.height = c.height;
+  h.lens_radius = c.aperture_radius;
+  h.focus_distance = c.focus_distance;
+  h.filter = c.filter;
+  h.filter_radius = c.filter == PC_FILTER_BOX ? 0.5f : c.filter_radius;
+  h.filter_sigma = c.filter_sigma;
+  h.env_light = PC_INVALID;
   return h;
 }
 
 }  // namespace
+
+const char* const kFeatureFlags[16] = {
+    "PC_HAS_TRIANGLES",  "PC_HAS_SPHERES",         "PC_HAS_SMOOTH_NORMALS", "PC_HAS_AREA_LIGHTS",
+    "PC_HAS_DIFFUSE",    "PC_HAS_OREN_NAYAR",      "PC_HAS_PHONG",          "PC_HAS_MIRROR",
+    "PC_HAS_DIELECTRIC", "PC_HAS_ROUGH_CONDUCTOR", "PC_HAS_PLASTIC",        "PC_HAS_TEXTURES",
+    "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP"};
 
 Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
@@ -42,11 +105,13 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
   DeviceScene out;
   out.header = camera_header(scene.camera);
   for (const MaterialDesc& m : scene.materials) {
-    Material mat{};
-    mat.reflectance = f4(m.reflectance);
-    mat.type = PC_MAT_DIFFUSE;
-    out.materials.push_back(mat);
-    out.features |= kFeatureDiffuse;
+    out.materials.push_back(device_material(m));
+    out.features |= kMaterialFeature[m.type_id];
+    if (m.color_texture != PC_INVALID) out.features |= kFeatureTextures;
+  }
+  for (const TextureImage& t : scene.textures) {
+    out.textures.push_back({t.width, t.height, uint32_t(out.texels.size()), t.wrap});
+    for (const glm::vec4& texel : t.texels) out.texels.push_back({texel.x, texel.y, texel.z, texel.w});
   }
 
   // Primitives in scene order, with their boxes and (for emitters) light candidates.
@@ -96,29 +161,6 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
 
-  // One distribution over all emitters, proportional to emitted power.
-  double total = 0;
-  std::vector<double> power;
-  for (const Emitter& e : emitters) {
-    power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
-    total += power.back();
-  }
-  out.light_cdf.push_back(0);
-  double running = 0;
-  for (size_t i = 0; i < emitters.size(); ++i) {
-    const Emitter& e = emitters[i];
-    Light light{};
-    light.emission = f4(e.emission);
-    light.prim = e.prim;
-    light.area = e.area;
-    light.select_pdf = float(power[i] / total);
-    out.shading[e.prim].light = uint32_t(out.lights.size());
-    out.lights.push_back(light);
-    running += power[i];
-    out.light_cdf.push_back(i + 1 == emitters.size() ? 1.0f : float(running / total));
-  }
-  if (!out.lights.empty()) out.features |= kFeatureAreaLights;
-
   out.bvh = build_bvh(boxes);
   out.nodes = std::move(out.bvh.nodes);
   out.prims.reserve(prims.size());
@@ -127,7 +169,73 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     out.prims.push_back(prims[out.bvh.prim_order[slot]]);
     out.leaf_slot[out.bvh.prim_order[slot]] = slot;
   }
-  for (Light& light : out.lights) light.slot = out.leaf_slot[light.prim];
+  // The scene's bounding sphere sizes the power of lights at infinity.
+  Aabb bounds;
+  for (const Aabb& box : boxes) bounds.grow(box);
+  double radius = boxes.empty() ? 1.0 : std::max(0.5 * glm::length(glm::dvec3(bounds.hi - bounds.lo)), 1e-6);
+
+  // Every light with its emitted power: area lights first, in primitive order, then the scene's lights.
+  std::vector<double> power;
+  for (const Emitter& e : emitters) {
+    Light light{};
+    light.type = PC_LIGHT_AREA;
+    light.emission = f4(e.emission);
+    light.prim = e.prim;
+    light.area = e.area;
+    out.shading[e.prim].light = uint32_t(out.lights.size());
+    out.lights.push_back(light);
+    power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
+  }
+  for (const LightDesc& l : scene.lights) {
+    Light light{};
+    light.type = l.type;
+    light.emission = f4(l.emission);
+    light.position = f4(l.position);
+    light.direction = f4(l.direction);
+    light.prim = light.slot = PC_INVALID;
+    light.cos_inner = l.cos_inner;
+    light.cos_outer = l.cos_outer;
+    light.texture = l.texture;
+    double lum = luminance(l.emission), p = 0;
+    if (l.type == PC_LIGHT_POINT) {
+      p = 4 * M_PI * lum;
+      out.features |= kFeaturePointLights;
+    } else if (l.type == PC_LIGHT_SPOT) {
+      p = 2 * M_PI * lum * (1 - 0.5 * (double(l.cos_inner) + l.cos_outer));  // pbrt-v4's estimate
+      out.features |= kFeaturePointLights;
+    } else if (l.type == PC_LIGHT_DIRECTIONAL) {
+      p = M_PI * radius * radius * lum;
+      out.features |= kFeatureDirectionalLights;
+    } else if (l.type == PC_LIGHT_ENVIRONMENT) {
+      double integral = 4 * M_PI;  // of the radiance (times emission) over the sphere
+      if (l.texture != PC_INVALID) {
+        integral = build_env_distribution(scene.textures[l.texture], out.env_dist);
+        out.features |= kFeatureEnvironmentMap;
+      }
+      p = M_PI * radius * radius * lum * integral;
+      if (p > 0) {
+        out.header.env_light = uint32_t(out.lights.size());
+        out.features |= kFeatureEnvironment;
+      }
+    }
+    if (!(p > 0)) continue;  // emits nothing: never chosen, never seen
+    out.lights.push_back(light);
+    power.push_back(p);
+  }
+  // One distribution over all lights, proportional to power.
+  double total = 0;
+  for (double p : power) total += p;
+  out.light_cdf.push_back(0);
+  double running = 0;
+  for (size_t i = 0; i < out.lights.size(); ++i) {
+    out.lights[i].select_pdf = float(power[i] / total);
+    running += power[i];
+    out.light_cdf.push_back(i + 1 == out.lights.size() ? 1.0f : float(running / total));
+  }
+  if (!emitters.empty()) out.features |= kFeatureAreaLights;
+
+  for (Light& light : out.lights)
+    if (light.type == PC_LIGHT_AREA) light.slot = out.leaf_slot[light.prim];
   out.header.prim_count = uint32_t(prims.size());
   out.header.light_count = uint32_t(out.lights.size());
   out.header.node_count = uint32_t(out.nodes.size());

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "scene/mesh_clean.h"
 
@@ -13,12 +14,41 @@ struct CameraDesc {
   glm::vec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
   float fov_y_degrees = 40;
   uint32_t width = 512, height = 512;
+  float aperture_radius = 0;  // thin lens; 0 = pinhole
+  float focus_distance = 1;   // thin lens: distance of the plane in focus along the view direction
+  uint32_t filter = 0;        // PC_FILTER_*
+  float filter_radius = 0.5f; // pixels
+  float filter_sigma = 0.5f;  // pixels (Gaussian)
 };
 
+// A material with its parameters as the kernels take them (kernels/shared/types.h, Material); which
+// ones a type uses is written there.
 struct MaterialDesc {
   std::string name;
-  std::string type;  // "diffuse"
-  glm::vec3 reflectance{0.5f};
+  std::string type;               // "diffuse", "oren_nayar", ...
+  uint32_t type_id = 0;           // PC_MAT_*
+  glm::vec3 color{0.5f};          // reflectance, diffuse colour or transmittance
+  uint32_t color_texture = 0xffffffffu;  // index into SceneDescription::textures replacing color
+  glm::vec3 specular{0}, k{0};    // phong specular; rough_conductor eta (in specular) and k
+  float alpha = 0, sigma = 0, exponent = 1, ior = 1.5f;
+};
+
+// An image texture, linear RGB, rows from the top.
+struct TextureImage {
+  std::string file;
+  uint32_t width = 0, height = 0;
+  uint32_t wrap = 0;               // PC_WRAP_*
+  std::vector<glm::vec4> texels;
+};
+
+// A light that is not an emitting shape.
+struct LightDesc {
+  std::string label;              // "lights[2]" for messages
+  uint32_t type = 0;              // PC_LIGHT_*
+  glm::vec3 emission{0};          // intensity, irradiance or radiance (scale of the map)
+  glm::vec3 position{0}, direction{0, -1, 0};
+  float cos_inner = 1, cos_outer = 0;
+  uint32_t texture = 0xffffffffu; // environment map in SceneDescription::textures
 };
 
 struct RenderSettings {
@@ -51,6 +81,8 @@ struct SceneDescription {
   CameraDesc camera;
   std::vector<MaterialDesc> materials;
   std::vector<ShapeDesc> shapes;
+  std::vector<LightDesc> lights;
+  std::vector<TextureImage> textures;
   RenderSettings render;
 };
 

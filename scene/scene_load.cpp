@@ -15,7 +15,9 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/scene_description.h"
+#include "kernels/shared/types.h"
 #include "scene/scene_error.h"
+#include "scene/texture_load.h"
 
 using nlohmann::json;
 
@@ -93,11 +95,33 @@ struct Node {
   }
 };
 
+uint32_t read_filter(const Node& n, CameraDesc& c) {
+  n.expect_object({"type", "radius", "sigma"}, {"type"});
+  std::string type = n.at("type").string();
+  if (type == "box") {
+    if (n.has("radius") || n.has("sigma")) n.fail("a box filter covers its pixel and takes no radius or sigma");
+    return PC_FILTER_BOX;
+  }
+  if (type == "tent") {
+    if (n.has("sigma")) n.at("sigma").fail("a tent filter takes no sigma");
+    c.filter_radius = n.has("radius") ? n.at("radius").positive() : 1.0f;
+    return PC_FILTER_TENT;
+  }
+  if (type == "gaussian") {
+    c.filter_sigma = n.has("sigma") ? n.at("sigma").positive() : 0.5f;
+    c.filter_radius = n.has("radius") ? n.at("radius").positive() : 3 * c.filter_sigma;
+    return PC_FILTER_GAUSSIAN;
+  }
+  n.at("type").fail("unknown filter \"" + type + "\" (expected box, tent or gaussian)");
+}
+
 CameraDesc read_camera(const Node& n) {
-  n.expect_object({"type", "position", "look_at", "up", "fov_y_degrees", "width", "height"},
+  n.expect_object({"type", "position", "look_at", "up", "fov_y_degrees", "width", "height", "aperture_radius",
+                   "focus_distance", "filter"},
                   {"position", "look_at", "width", "height"});
-  if (n.has("type") && n.at("type").string() != "perspective")
-    n.at("type").fail("unknown camera type \"" + n.at("type").string() + "\" (expected \"perspective\")");
+  std::string type = n.has("type") ? n.at("type").string() : "perspective";
+  if (type != "perspective" && type != "thin_lens")
+    n.at("type").fail("unknown camera type \"" + type + "\" (expected perspective or thin_lens)");
   CameraDesc c;
   c.position = n.at("position").vec3();
   c.look_at = n.at("look_at").vec3();
@@ -112,21 +136,171 @@ CameraDesc read_camera(const Node& n) {
   if (glm::length(forward) == 0) n.fail("position and look_at coincide");
   if (glm::length(glm::cross(forward, c.up)) == 0)
     (n.has("up") ? n.at("up") : n).fail("up is parallel to the view direction (set camera.up)");
+  if (type == "thin_lens") {
+    if (!n.has("aperture_radius") || !n.has("focus_distance"))
+      n.fail("a thin_lens camera needs aperture_radius and focus_distance");
+    c.aperture_radius = float(n.at("aperture_radius").number());
+    if (c.aperture_radius < 0) n.at("aperture_radius").fail("expected a number >= 0");
+    c.focus_distance = n.at("focus_distance").positive();
+  } else if (n.has("aperture_radius") || n.has("focus_distance")) {
+    n.fail("aperture_radius and focus_distance need \"type\": \"thin_lens\"");
+  }
+  if (n.has("filter")) c.filter = read_filter(n.at("filter"), c);
   return c;
 }
 
+// A colour in [0, 1] per channel.
+glm::vec3 read_albedo(const Node& n) {
+  glm::vec3 c = n.color();
+  if (c.x > 1 || c.y > 1 || c.z > 1) n.fail("expected values in [0, 1]");
+  return c;
+}
+
+// GGX roughness in [0.01, 1] (0 allowed where smooth is meant); alpha = roughness^2.
+float read_roughness(const Node& n, bool allow_smooth) {
+  double r = n.number();
+  if (allow_smooth && r == 0) return 0;
+  if (!(r >= 0.01 && r <= 1))
+    n.fail(allow_smooth ? "expected 0 (smooth) or a roughness in [0.01, 1]"
+                        : "expected a roughness in [0.01, 1] (a smooth metal is a mirror)");
+  return float(r * r);
+}
+
+float read_ior(const Node& n) {
+  double ior = n.number();
+  if (!(ior > 0 && ior <= 10)) n.fail("expected an index of refraction in (0, 10]");
+  return float(ior);
+}
+
 MaterialDesc read_material(const Node& n, const std::string& name) {
-  n.expect_object({"type", "reflectance"}, {"type"});
+  if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
   MaterialDesc m;
   m.name = name;
   m.type = n.at("type").string();
-  if (m.type != "diffuse") n.at("type").fail("unknown material type \"" + m.type + "\" (expected \"diffuse\")");
-  if (n.has("reflectance")) {
-    m.reflectance = n.at("reflectance").color();
-    if (m.reflectance.x > 1 || m.reflectance.y > 1 || m.reflectance.z > 1)
-      n.at("reflectance").fail("expected values in [0, 1]");
+  if (m.type == "diffuse") {
+    n.expect_object({"type", "reflectance"});
+    m.type_id = PC_MAT_DIFFUSE;
+    if (n.has("reflectance")) m.color = read_albedo(n.at("reflectance"));
+  } else if (m.type == "oren_nayar") {
+    n.expect_object({"type", "reflectance", "sigma_degrees"}, {"sigma_degrees"});
+    m.type_id = PC_MAT_OREN_NAYAR;
+    if (n.has("reflectance")) m.color = read_albedo(n.at("reflectance"));
+    double sigma = n.at("sigma_degrees").number();
+    if (!(sigma >= 0 && sigma <= 90)) n.at("sigma_degrees").fail("expected an angle in [0, 90] degrees");
+    m.sigma = float(sigma * M_PI / 180);
+  } else if (m.type == "phong") {
+    n.expect_object({"type", "diffuse", "specular", "exponent"}, {"exponent"});
+    m.type_id = PC_MAT_PHONG;
+    m.color = n.has("diffuse") ? read_albedo(n.at("diffuse")) : glm::vec3(0);
+    m.specular = n.has("specular") ? read_albedo(n.at("specular")) : glm::vec3(0);
+    double e = n.at("exponent").number();
+    if (!(e > 0 && e <= 1e5)) n.at("exponent").fail("expected an exponent in (0, 100000]");
+    m.exponent = float(e);
+    glm::vec3 sum = m.color + m.specular;
+    if (sum.x > 1 || sum.y > 1 || sum.z > 1) n.fail("diffuse + specular exceeds 1 (the surface would create energy)");
+  } else if (m.type == "mirror") {
+    n.expect_object({"type", "reflectance"});
+    m.type_id = PC_MAT_MIRROR;
+    m.color = n.has("reflectance") ? read_albedo(n.at("reflectance")) : glm::vec3(1);
+  } else if (m.type == "dielectric") {
+    n.expect_object({"type", "ior", "transmittance"}, {"ior"});
+    m.type_id = PC_MAT_DIELECTRIC;
+    m.ior = read_ior(n.at("ior"));
+    m.color = n.has("transmittance") ? read_albedo(n.at("transmittance")) : glm::vec3(1);
+  } else if (m.type == "rough_conductor") {
+    n.expect_object({"type", "roughness", "eta", "k", "specular"}, {"roughness"});
+    m.type_id = PC_MAT_ROUGH_CONDUCTOR;
+    m.alpha = read_roughness(n.at("roughness"), false);
+    if (n.has("specular")) {
+      if (n.has("eta") || n.has("k")) n.fail("give either specular or eta and k");
+      // eta = 1 and k = 2 sqrt(r / (1 - r)) reflect exactly r at normal incidence.
+      glm::vec3 r = glm::min(read_albedo(n.at("specular")), glm::vec3(0.9999f));
+      m.specular = glm::vec3(1);
+      m.k = 2.0f * glm::sqrt(r / (1.0f - r));
+    } else {
+      if (!n.has("eta") || !n.has("k")) n.fail("a rough_conductor needs specular, or eta and k");
+      m.specular = n.at("eta").vec3();
+      m.k = n.at("k").color();
+      if (m.specular.x <= 0 || m.specular.y <= 0 || m.specular.z <= 0) n.at("eta").fail("expected values > 0");
+    }
+  } else if (m.type == "plastic") {
+    n.expect_object({"type", "diffuse", "ior", "roughness"});
+    m.type_id = PC_MAT_PLASTIC;
+    if (n.has("diffuse")) m.color = read_albedo(n.at("diffuse"));
+    if (n.has("ior")) m.ior = read_ior(n.at("ior"));
+    if (n.has("roughness")) m.alpha = read_roughness(n.at("roughness"), true);
+  } else {
+    n.at("type").fail("unknown material type \"" + m.type +
+                      "\" (expected diffuse, oren_nayar, phong, mirror, dielectric, rough_conductor or plastic)");
   }
   return m;
+}
+
+glm::vec3 read_unit_direction(const Node& n) {
+  glm::vec3 d = n.vec3();
+  if (glm::length(d) == 0) n.fail("expected a non-zero direction");
+  return glm::normalize(d);
+}
+
+// Loads the image file named by n (relative to the scene's directory) once per file and wrap mode;
+// returns its index in scene.textures.
+uint32_t add_texture(SceneDescription& scene, const Node& n, const std::filesystem::path& dir, uint32_t wrap) {
+  std::string file = (dir / n.string()).string();
+  for (uint32_t i = 0; i < scene.textures.size(); ++i)
+    if (scene.textures[i].file == file && scene.textures[i].wrap == wrap) return i;
+  try {
+    scene.textures.push_back(load_texture_image(file));
+  } catch (const SceneError& e) {
+    n.fail(e.what());
+  }
+  scene.textures.back().wrap = wrap;
+  return uint32_t(scene.textures.size() - 1);
+}
+
+LightDesc read_light(const Node& n) {
+  if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
+  std::string type = n.at("type").string();
+  LightDesc l;
+  l.label = n.path;
+  if (type == "point") {
+    n.expect_object({"type", "position", "intensity"}, {"position", "intensity"});
+    l.type = PC_LIGHT_POINT;
+    l.position = n.at("position").vec3();
+    l.emission = n.at("intensity").color();
+  } else if (type == "spot") {
+    n.expect_object({"type", "position", "direction", "intensity", "outer_angle_degrees", "inner_angle_degrees"},
+                    {"position", "direction", "intensity", "outer_angle_degrees"});
+    l.type = PC_LIGHT_SPOT;
+    l.position = n.at("position").vec3();
+    l.direction = read_unit_direction(n.at("direction"));
+    l.emission = n.at("intensity").color();
+    double outer = n.at("outer_angle_degrees").number();
+    if (!(outer > 0 && outer <= 180)) n.at("outer_angle_degrees").fail("expected an angle in (0, 180] degrees");
+    double inner = n.has("inner_angle_degrees") ? n.at("inner_angle_degrees").number() : outer;
+    if (!(inner >= 0 && inner <= outer))
+      n.at("inner_angle_degrees").fail("expected an angle in [0, outer_angle_degrees]");
+    l.cos_outer = float(std::cos(outer * M_PI / 180));
+    l.cos_inner = float(std::cos(inner * M_PI / 180));
+  } else if (type == "directional") {
+    n.expect_object({"type", "direction", "irradiance"}, {"direction", "irradiance"});
+    l.type = PC_LIGHT_DIRECTIONAL;
+    l.direction = read_unit_direction(n.at("direction"));
+    l.emission = n.at("irradiance").color();
+  } else if (type == "environment") {
+    n.expect_object({"type", "radiance", "file", "scale"});
+    l.type = PC_LIGHT_ENVIRONMENT;
+    if (n.has("radiance") == n.has("file")) n.fail("an environment light needs either radiance or file");
+    if (n.has("radiance")) {
+      if (n.has("scale")) n.at("scale").fail("scale goes with file");
+      l.emission = n.at("radiance").color();
+    } else {
+      l.emission = glm::vec3(n.has("scale") ? float(n.at("scale").number()) : 1.0f);
+      if (l.emission.x < 0) n.at("scale").fail("expected a number >= 0");
+    }
+  } else {
+    n.at("type").fail("unknown light type \"" + type + "\" (expected point, spot, directional or environment)");
+  }
+  return l;
 }
 
 // Reads "transform": {"matrix": 4x4 rows} or any of {"translate", "rotate", "scale"}, applied as
@@ -292,7 +466,7 @@ SceneDescription load_scene(const std::string& path) {
   SceneDescription scene;
   scene.path = path;
   Node top{path, root, ""};
-  top.expect_object({"camera", "materials", "shapes", "render"}, {"camera", "materials", "shapes"});
+  top.expect_object({"camera", "materials", "shapes", "lights", "render"}, {"camera", "materials", "shapes"});
   scene.camera = read_camera(top.at("camera"));
 
   Node mats = top.at("materials");
@@ -304,6 +478,18 @@ SceneDescription load_scene(const std::string& path) {
   }
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   for (const Node& s : top.at("shapes").array()) scene.shapes.push_back(read_shape(s, dir, by_name));
+  if (top.has("lights")) {
+    bool environment = false;
+    for (const Node& l : top.at("lights").array()) {
+      LightDesc light = read_light(l);
+      if (light.type == PC_LIGHT_ENVIRONMENT) {
+        if (environment) l.fail("a scene has at most one environment light");
+        environment = true;
+        if (l.has("file")) light.texture = add_texture(scene, l.at("file"), dir, PC_WRAP_REPEAT);
+      }
+      scene.lights.push_back(light);
+    }
+  }
 
   if (top.has("render")) {
     Node r = top.at("render");

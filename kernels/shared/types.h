@@ -25,6 +25,29 @@ typedef uint32_t pc_uint;
 
 /* Material types (Material.type). */
 #define PC_MAT_DIFFUSE 0u
+#define PC_MAT_OREN_NAYAR 1u
+#define PC_MAT_PHONG 2u
+#define PC_MAT_MIRROR 3u
+#define PC_MAT_DIELECTRIC 4u
+#define PC_MAT_ROUGH_CONDUCTOR 5u
+#define PC_MAT_PLASTIC 6u
+
+/* Light types (Light.type). */
+#define PC_LIGHT_AREA 0u
+#define PC_LIGHT_POINT 1u
+#define PC_LIGHT_SPOT 2u
+#define PC_LIGHT_DIRECTIONAL 3u
+#define PC_LIGHT_ENVIRONMENT 4u
+
+/* Pixel filters (SceneHeader.filter), sampled by filter importance sampling. */
+#define PC_FILTER_BOX 0u
+#define PC_FILTER_TENT 1u
+#define PC_FILTER_GAUSSIAN 2u
+
+/* Texture wrap modes (Texture.wrap). */
+#define PC_WRAP_REPEAT 0u
+#define PC_WRAP_CLAMP 1u
+#define PC_WRAP_MIRROR 2u
 
 /* Samplers (SceneHeader.sampler): a per-render setting, chosen at run time. */
 #define PC_SAMPLER_INDEPENDENT 0u
@@ -64,24 +87,59 @@ typedef struct {
   pc_uint kind;     /* PC_PRIM_* */
 } PrimShading;
 
-/* reflectance (16) + type (4) + pad (12) = 32 bytes. */
+/* A material; which fields mean something depends on the type:
+ *   color:    diffuse, oren_nayar: reflectance; phong, plastic: diffuse colour; mirror: reflectance;
+ *             dielectric: transmittance
+ *   specular: phong: specular colour; rough_conductor: eta per channel
+ *   k:        rough_conductor: absorption k per channel
+ *   alpha:    rough_conductor, plastic: GGX alpha (roughness squared; 0 = smooth plastic coat)
+ *   sigma:    oren_nayar: standard deviation of facet angles in radians
+ *   exponent: phong: cosine lobe exponent
+ *   ior:      dielectric, plastic: index of refraction inside over outside
+ * color (16) + specular (16) + k (16) + type (4) + color_texture (4) + alpha (4) + sigma (4) + exponent (4)
+ * + ior (4) + pad (8) = 80 bytes. */
 typedef struct {
-  pc_float4 reflectance;
+  pc_float4 color;
+  pc_float4 specular;
+  pc_float4 k;
   pc_uint type;
-  pc_uint pad[3];
+  pc_uint color_texture; /* index into textures replacing color, or PC_INVALID */
+  float alpha;
+  float sigma;
+  float exponent;
+  float ior;
+  pc_uint pad[2];
 } Material;
 
-/* An area light: one emitting triangle or sphere.
- * emission (16) + prim (4) + slot (4) + area (4) + select_pdf (4) = 32 bytes. */
+/* A light. emission is the radiance of an area light, the intensity of a point or spot light, the
+ * irradiance of a directional light (on a surface facing it) and the radiance (or the scale of the map)
+ * of an environment light.
+ * emission (16) + position (16) + direction (16) + type (4) + prim (4) + slot (4) + area (4)
+ * + select_pdf (4) + cos_inner (4) + cos_outer (4) + texture (4) = 80 bytes. */
 typedef struct {
   pc_float4 emission;
-  pc_uint prim;      /* scene-order primitive index */
-  pc_uint slot;      /* the same primitive's index in the leaf-ordered primitive array */
-  float area;
-  float select_pdf;  /* probability of choosing this light, proportional to power */
+  pc_float4 position;  /* point, spot */
+  pc_float4 direction; /* spot: cone axis; directional: the direction light travels in; unit length */
+  pc_uint type;        /* PC_LIGHT_* */
+  pc_uint prim;        /* area: scene-order primitive index */
+  pc_uint slot;        /* area: the same primitive's index in the leaf-ordered primitive array */
+  float area;          /* area: surface area */
+  float select_pdf;    /* probability of choosing this light, proportional to power */
+  float cos_inner;     /* spot: full intensity inside this cone */
+  float cos_outer;     /* spot: none outside this cone */
+  pc_uint texture;     /* environment: lat-long map in textures, or PC_INVALID for a constant */
 } Light;
 
-/* Everything a render pass needs besides the arrays: 4 x 16 + 12 x 4 = 112 bytes. */
+/* An image in the texel array (linear RGB float4 texels, rows top to bottom).
+ * width (4) + height (4) + offset (4) + wrap (4) = 16 bytes. */
+typedef struct {
+  pc_uint width;
+  pc_uint height;
+  pc_uint offset; /* index of the first texel */
+  pc_uint wrap;   /* PC_WRAP_* */
+} Texture;
+
+/* Everything a render pass needs besides the arrays: 4 x 16 + 16 x 4 = 128 bytes. */
 typedef struct {
   pc_float4 cam_position;
   pc_float4 cam_right;   /* image right, scaled by tan(fov_y / 2) * aspect */
@@ -97,7 +155,12 @@ typedef struct {
   pc_uint node_count;
   pc_uint sampler;       /* PC_SAMPLER_* */
   pc_uint spp;           /* samples per pixel of the whole render (the stratified sampler's grid) */
-  pc_uint pad[2];
+  float lens_radius;     /* thin lens aperture radius; 0 = pinhole */
+  float focus_distance;  /* distance along cam_forward of the plane in focus */
+  pc_uint filter;        /* PC_FILTER_* */
+  float filter_radius;   /* in pixels: tent half-width, or the Gaussian's cut-off (box: 0.5) */
+  float filter_sigma;    /* Gaussian standard deviation in pixels */
+  pc_uint env_light;     /* index of the environment light in lights, or PC_INVALID */
 } SceneHeader;
 
 /* Statistics one work item writes per pass (not accumulated, so any split gives the same totals):
@@ -127,15 +190,19 @@ typedef struct {
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(BvhNode) X(Primitive) X(PrimShading) X(Material) X(Light) X(SceneHeader) X(PassStats) X(RayRecord) X(HitRecord)
+  X(BvhNode) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(PassStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(BvhNode, lo) X(BvhNode, left_first) X(BvhNode, hi) X(BvhNode, prim_count) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
-  X(PrimShading, kind) X(Material, reflectance) X(Material, type) X(Light, emission) X(Light, prim)          \
-  X(Light, slot) X(Light, area) X(Light, select_pdf) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
+  X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
+  X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
+  X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
+  X(Light, area) X(Light, select_pdf) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture)           \
+  X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
-  X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(PassStats, rays) X(PassStats, nan_samples)         \
+  X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(SceneHeader, lens_radius) X(SceneHeader, focus_distance) X(SceneHeader, filter)  \
+  X(SceneHeader, filter_radius) X(SceneHeader, filter_sigma) X(SceneHeader, env_light) X(PassStats, rays) X(PassStats, nan_samples)         \
   X(PassStats, inf_samples) X(PassStats, negative_samples) X(RayRecord, org) X(RayRecord, tmin)            \
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
@@ -143,9 +210,10 @@ typedef struct {
 static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
-static_assert(sizeof(Material) == 32, "Material is 32 bytes");
-static_assert(sizeof(Light) == 32, "Light is 32 bytes");
-static_assert(sizeof(SceneHeader) == 112, "SceneHeader is 112 bytes");
+static_assert(sizeof(Material) == 80, "Material is 80 bytes");
+static_assert(sizeof(Light) == 80, "Light is 80 bytes");
+static_assert(sizeof(Texture) == 16, "Texture is 16 bytes");
+static_assert(sizeof(SceneHeader) == 128, "SceneHeader is 128 bytes");
 static_assert(sizeof(PassStats) == 16, "PassStats is 16 bytes");
 static_assert(sizeof(RayRecord) == 32, "RayRecord is 32 bytes");
 static_assert(sizeof(HitRecord) == 16, "HitRecord is 16 bytes");
