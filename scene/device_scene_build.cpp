@@ -197,28 +197,28 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     light.cos_outer = l.cos_outer;
     light.texture = l.texture;
     double lum = luminance(l.emission), p = 0;
+    uint32_t features = 0;
     if (l.type == PC_LIGHT_POINT) {
       p = 4 * M_PI * lum;
-      out.features |= kFeaturePointLights;
+      features = kFeaturePointLights;
     } else if (l.type == PC_LIGHT_SPOT) {
       p = 2 * M_PI * lum * (1 - 0.5 * (double(l.cos_inner) + l.cos_outer));  // pbrt-v4's estimate
-      out.features |= kFeaturePointLights;
+      features = kFeaturePointLights;
     } else if (l.type == PC_LIGHT_DIRECTIONAL) {
       p = M_PI * radius * radius * lum;
-      out.features |= kFeatureDirectionalLights;
+      features = kFeatureDirectionalLights;
     } else if (l.type == PC_LIGHT_ENVIRONMENT) {
       double integral = 4 * M_PI;  // of the radiance (times emission) over the sphere
+      features = kFeatureEnvironment;
       if (l.texture != PC_INVALID) {
         integral = build_env_distribution(scene.textures[l.texture], out.env_dist);
-        out.features |= kFeatureEnvironmentMap;
+        features |= kFeatureEnvironmentMap;
       }
       p = M_PI * radius * radius * lum * integral;
-      if (p > 0) {
-        out.header.env_light = uint32_t(out.lights.size());
-        out.features |= kFeatureEnvironment;
-      }
+      if (p > 0) out.header.env_light = uint32_t(out.lights.size());
     }
-    if (!(p > 0)) continue;  // emits nothing: never chosen, never seen
+    if (!(p > 0)) continue;  // emits nothing: never chosen, never seen, no code for it
+    out.features |= features;
     out.lights.push_back(light);
     power.push_back(p);
   }
