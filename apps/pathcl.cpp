@@ -20,6 +20,7 @@
 #include "runtime/errors.h"
 #include "runtime/image_compare.h"
 #include "runtime/image_io.h"
+#include "runtime/kernel_program.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
 #include "scene/device_scene.h"
@@ -332,8 +333,13 @@ int run_info(const std::string& path) {
                 shape.mesh.normals.empty() ? "" : ", smooth normals");
   }
   const DeviceScene& v = s.device;
-  std::printf("primitives: %u triangles, %u spheres\nlights: %zu area lights (%u zero-area emitters skipped)\n",
-              v.triangle_count, v.sphere_count, v.lights.size(), v.skipped_zero_area_emitters);
+  size_t by_type[5] = {};
+  for (const Light& l : v.lights) by_type[l.type]++;
+  std::printf("primitives: %u triangles, %u spheres\n", v.triangle_count, v.sphere_count);
+  std::printf("lights: %zu area (%u zero-area emitters skipped), %zu point, %zu spot, %zu directional, %zu environment\n",
+              by_type[PC_LIGHT_AREA], v.skipped_zero_area_emitters, by_type[PC_LIGHT_POINT], by_type[PC_LIGHT_SPOT],
+              by_type[PC_LIGHT_DIRECTIONAL], by_type[PC_LIGHT_ENVIRONMENT]);
+  std::printf("kernel options: %s\n", kernel_options(v.features).c_str());
   std::printf("bvh: %zu nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
               v.nodes.size(), v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);
   std::printf("scene load and clean-up: %.1f ms\n", s.load_ms);

@@ -153,6 +153,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
     case PC_LIGHT_SPOT: {
       float3 d = light.position.xyz - x;
       float dist2 = dot(d, d);
+      if (!(dist2 > 0.0f)) return false; /* the shading point is the light's position */
       out->p = light.position.xyz;
       out->wi = d / sqrt(dist2);
       out->n = -out->wi;
