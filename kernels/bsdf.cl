@@ -15,27 +15,53 @@ typedef struct {
 
 #include "fresnel.cl"
 #include "microfacet.cl"
+
+/* One X(type constant, function prefix) per material type compiled in (its PC_HAS_* flag). */
 #ifdef PC_HAS_DIFFUSE
 #include "bsdf_diffuse.cl"
+#define PC_BSDF_DIFFUSE(X) X(PC_MAT_DIFFUSE, diffuse)
+#else
+#define PC_BSDF_DIFFUSE(X)
 #endif
 #ifdef PC_HAS_OREN_NAYAR
 #include "bsdf_oren_nayar.cl"
+#define PC_BSDF_OREN_NAYAR(X) X(PC_MAT_OREN_NAYAR, oren_nayar)
+#else
+#define PC_BSDF_OREN_NAYAR(X)
 #endif
 #ifdef PC_HAS_PHONG
 #include "bsdf_phong.cl"
+#define PC_BSDF_PHONG(X) X(PC_MAT_PHONG, phong)
+#else
+#define PC_BSDF_PHONG(X)
 #endif
 #ifdef PC_HAS_MIRROR
 #include "bsdf_mirror.cl"
+#define PC_BSDF_MIRROR(X) X(PC_MAT_MIRROR, mirror)
+#else
+#define PC_BSDF_MIRROR(X)
 #endif
 #ifdef PC_HAS_DIELECTRIC
 #include "bsdf_dielectric.cl"
+#define PC_BSDF_DIELECTRIC(X) X(PC_MAT_DIELECTRIC, dielectric)
+#else
+#define PC_BSDF_DIELECTRIC(X)
 #endif
 #ifdef PC_HAS_ROUGH_CONDUCTOR
 #include "bsdf_rough_conductor.cl"
+#define PC_BSDF_ROUGH_CONDUCTOR(X) X(PC_MAT_ROUGH_CONDUCTOR, rough_conductor)
+#else
+#define PC_BSDF_ROUGH_CONDUCTOR(X)
 #endif
 #ifdef PC_HAS_PLASTIC
 #include "bsdf_plastic.cl"
+#define PC_BSDF_PLASTIC(X) X(PC_MAT_PLASTIC, plastic)
+#else
+#define PC_BSDF_PLASTIC(X)
 #endif
+#define PC_BSDF_TYPES(X)                                                                                  \
+  PC_BSDF_DIFFUSE(X) PC_BSDF_OREN_NAYAR(X) PC_BSDF_PHONG(X) PC_BSDF_MIRROR(X) PC_BSDF_DIELECTRIC(X)       \
+  PC_BSDF_ROUGH_CONDUCTOR(X) PC_BSDF_PLASTIC(X)
 
 /* Materials whose every lobe is a delta: light sampling is useless there. */
 inline bool bsdf_is_delta(Material m) { return m.type == PC_MAT_MIRROR || m.type == PC_MAT_DIELECTRIC; }
@@ -49,24 +75,12 @@ inline float3 bsdf_eval(Material m, float3 wo, float3 wi) {
     wo = flip_z(wo);
     wi = flip_z(wi);
   }
+#define PC_EVAL_CASE(type, name) case type: return name##_eval(m, wo, wi);
   switch (m.type) {
-#ifdef PC_HAS_DIFFUSE
-    case PC_MAT_DIFFUSE: return diffuse_eval(m, wo, wi);
-#endif
-#ifdef PC_HAS_OREN_NAYAR
-    case PC_MAT_OREN_NAYAR: return oren_nayar_eval(m, wo, wi);
-#endif
-#ifdef PC_HAS_PHONG
-    case PC_MAT_PHONG: return phong_eval(m, wo, wi);
-#endif
-#ifdef PC_HAS_ROUGH_CONDUCTOR
-    case PC_MAT_ROUGH_CONDUCTOR: return rough_conductor_eval(m, wo, wi);
-#endif
-#ifdef PC_HAS_PLASTIC
-    case PC_MAT_PLASTIC: return plastic_eval(m, wo, wi);
-#endif
-    default: return (float3)(0.0f); /* delta-only materials */
+    PC_BSDF_TYPES(PC_EVAL_CASE)
+    default: return (float3)(0.0f);
   }
+#undef PC_EVAL_CASE
 }
 
 inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
@@ -74,24 +88,12 @@ inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
     wo = flip_z(wo);
     wi = flip_z(wi);
   }
+#define PC_PDF_CASE(type, name) case type: return name##_pdf(m, wo, wi);
   switch (m.type) {
-#ifdef PC_HAS_DIFFUSE
-    case PC_MAT_DIFFUSE: return diffuse_pdf(m, wo, wi);
-#endif
-#ifdef PC_HAS_OREN_NAYAR
-    case PC_MAT_OREN_NAYAR: return oren_nayar_pdf(m, wo, wi);
-#endif
-#ifdef PC_HAS_PHONG
-    case PC_MAT_PHONG: return phong_pdf(m, wo, wi);
-#endif
-#ifdef PC_HAS_ROUGH_CONDUCTOR
-    case PC_MAT_ROUGH_CONDUCTOR: return rough_conductor_pdf(m, wo, wi);
-#endif
-#ifdef PC_HAS_PLASTIC
-    case PC_MAT_PLASTIC: return plastic_pdf(m, wo, wi);
-#endif
+    PC_BSDF_TYPES(PC_PDF_CASE)
     default: return 0.0f;
   }
+#undef PC_PDF_CASE
 }
 
 /* u: three numbers, xy for the direction, z to choose a lobe. */
@@ -99,30 +101,12 @@ inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   bool flipped = wo.z < 0.0f && bsdf_is_two_sided(m);
   if (flipped) wo = flip_z(wo);
   bool ok = false;
+#define PC_SAMPLE_CASE(type, name) case type: ok = name##_sample(m, wo, u, s); break;
   switch (m.type) {
-#ifdef PC_HAS_DIFFUSE
-    case PC_MAT_DIFFUSE: ok = diffuse_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_OREN_NAYAR
-    case PC_MAT_OREN_NAYAR: ok = oren_nayar_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_PHONG
-    case PC_MAT_PHONG: ok = phong_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_MIRROR
-    case PC_MAT_MIRROR: ok = mirror_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_DIELECTRIC
-    case PC_MAT_DIELECTRIC: ok = dielectric_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_ROUGH_CONDUCTOR
-    case PC_MAT_ROUGH_CONDUCTOR: ok = rough_conductor_sample(m, wo, u, s); break;
-#endif
-#ifdef PC_HAS_PLASTIC
-    case PC_MAT_PLASTIC: ok = plastic_sample(m, wo, u, s); break;
-#endif
+    PC_BSDF_TYPES(PC_SAMPLE_CASE)
     default: break;
   }
+#undef PC_SAMPLE_CASE
   if (flipped) s->wi = flip_z(s->wi);
   return ok;
 }
