@@ -201,6 +201,7 @@ int run_render(const RenderArgs& a) {
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
   std::string stop_reason = "spp";
   double last_checkpoint = 0;
+  uint32_t checkpoint_spp = 0;  // samples in the checkpoint file written last
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   RenderResult r = render(cl, s.device, opt, [&](const PassInfo& pass, const std::function<Film()>& read_film) {
@@ -209,6 +210,7 @@ int run_render(const RenderArgs& a) {
       make_parent_directory(a.checkpoint);
       write_checkpoint(a.checkpoint, key, read_film());
       last_checkpoint = pass.seconds;
+      checkpoint_spp = pass.spp_done;
     }
     if (g_stop_signal) {
       stop_reason = "interrupted";
@@ -231,7 +233,7 @@ int run_render(const RenderArgs& a) {
     return true;
   });
   if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", stop_reason.c_str(), r.film.spp);
-  if (!a.checkpoint.empty()) write_checkpoint(a.checkpoint, key, r.film);
+  if (!a.checkpoint.empty() && checkpoint_spp != r.film.spp) write_checkpoint(a.checkpoint, key, r.film);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
     log.add(ms_since(started) * 1e-3, s, r.kernel_build_ms, r.render_seconds, r.film);
 

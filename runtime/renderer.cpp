@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include "runtime/kernel_program.h"
 
@@ -130,6 +131,7 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     pass_spp = adaptive || options.max_pass_seconds > 0 ? 1 : uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
   size_t launch_pixels = std::min(pixels, options.max_pixels_per_launch > 0 ? options.max_pixels_per_launch : pixels);
   std::vector<PassStats> pass_stats(pixels);
+  std::optional<Film> last_film;
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   while (done < options.spp) {
     uint32_t count = std::min(pass_spp, options.spp - done);
@@ -171,13 +173,18 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
       else if (pass_ms < 0.5e3 * options.max_pass_seconds && pass_spp < 64)
         pass_spp *= 2;
     }
-    if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, [&] { return read_film(cl, film, header.width, header.height); }) &&
-        done < options.spp) {
+    // The observer may read the film several times in a pass (checkpoint, convergence log); it is read
+    // from the device once, and the last pass's read is also the result.
+    auto film_now = [&] {
+      if (!last_film || last_film->spp != done) last_film = read_film(cl, film, header.width, header.height);
+      return *last_film;
+    };
+    if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, film_now) && done < options.spp) {
       result.stopped_early = true;
       break;
     }
   }
-  result.film = read_film(cl, film, header.width, header.height);
+  result.film = last_film && last_film->spp == done ? std::move(*last_film) : read_film(cl, film, header.width, header.height);
   result.render_seconds = seconds();
   return result;
 }
