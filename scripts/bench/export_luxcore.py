@@ -4,7 +4,10 @@ and OUT/meshes/*.ply.
 Mapping:
 - Camera: `perspective` look-at with `fieldofview` = fov_y and an explicit `screenwindow` of
   [-aspect, aspect, -1, 1], so the vertical field of view is pathcl's whatever the aspect ratio (LuxCore
-  otherwise applies the field of view to one axis chosen by the aspect). Film filter: BOX of width 0.5
+  otherwise applies the field of view to one axis chosen by the aspect). pyluxcore 2.11 shows film row r
+  what the screen window puts at row r - 1 (measured on the Cornell box: the light's lower edge one row
+  lower than in pathcl, Mitsuba and Cycles, columns unchanged), so the window is moved down by one pixel
+  (2 / height in screen units) to compensate (ROW_OFFSET_PIXELS). Film filter: BOX of width 0.5
   (LuxCore's filter width is a radius: one pixel wide in all). Sampler: RANDOM.
 - Depth: LuxCore's `path.pathdepth.total` counts scattering events like pathcl's max_depth (1 = direct
   light only), so it is the same number, as are the diffuse, glossy and specular limits. Russian
@@ -22,6 +25,7 @@ import os
 from scene_model import camera_frame, shape_triangles, write_ply
 
 RR_DEPTH_PATHCL = 3
+ROW_OFFSET_PIXELS = 1
 
 
 def path_depth(pathcl_max_depth):
@@ -41,12 +45,13 @@ def scene_properties(scene):
     cam = scene.camera
     forward, right, up = camera_frame(cam)
     aspect = cam.width / cam.height
+    shift = 2.0 * ROW_OFFSET_PIXELS / cam.height
     lines = ['scene.camera.type = "perspective"',
              'scene.camera.lookat.orig = %s' % _vec(cam.position),
              'scene.camera.lookat.target = %s' % _vec(cam.look_at),
              'scene.camera.up = %s' % _vec(up),
              'scene.camera.fieldofview = %.9g' % cam.fov_y_degrees,
-             'scene.camera.screenwindow = %.9g %.9g -1 1' % (-aspect, aspect),
+             'scene.camera.screenwindow = %.9g %.9g %.9g %.9g' % (-aspect, aspect, -1 - shift, 1 - shift),
              'scene.camera.cliphither = 1e-06',
              'scene.camera.clipyon = 1e+30']
     for m in scene.materials.values():
