@@ -82,7 +82,7 @@ def write(results_path, md_path):
             b = e.get("pathcl_build", {})
             if b:
                 out += ["pathcl set-up: kernel build %.0f ms cold (pathcl's and PoCL's caches off), %.0f ms from the cache;"
-                        " BVH build %.1f ms; scene load and clean-up %.1f ms; device %s." %
+                        " BVH build %.2f ms; scene load and clean-up %.1f ms; device %s." %
                         (b["kernel_build_ms_cold"], b["kernel_build_ms_cached"], b["bvh_build_ms"], b["scene_load_ms"],
                          b["device"]), ""]
             budgets = sorted({k for r in e["renderers"].values() for k in r["budgets"]}, key=float)
@@ -130,7 +130,7 @@ def write(results_path, md_path):
                     "|---|---|---|---|---|---|---|"]
             for name, r in e["rays"].items():
                 p, e1, e2 = (r[k]["rays_per_second"] for k in ("pathcl", "embree-1", "embree-2"))
-                out.append("| %s | %d | %.2f M | %.2f M | %.2f M | %.2f | %.5f |" % (
+                out.append("| %s | %d | %.2f M | %.2f M | %.2f M | %.2f | %.6f |" % (
                     name, r["rays"], p / 1e6, e1 / 1e6, e2 / 1e6, p / e2, r["embree_same_primitive_fraction"]))
             out += [""]
         if e.get("errors"):
