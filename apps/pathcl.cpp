@@ -313,8 +313,42 @@ int run_devices() {
   return 0;
 }
 
-int run_info(const std::string& path) {
+// The cleaned world-space triangles as OBJ, one object per shape named like the scene's JSON place
+// ("o shapes[3]"), faces counter-clockwise = front, in the order that fixes `pathcl rays` primitive
+// indices. A sphere is a comment line "# sphere shapes[i] CX CY CZ RADIUS FLIP" in world space. Other
+// renderers and the peer benchmark's exporters (scripts/bench/) read this file to get the same geometry.
+std::string cleaned_obj(const SceneDescription& d) {
+  std::string text = "# pathcl info --dump-obj: cleaned world-space triangles of " + d.path + "\n";
+  char line[160];
+  size_t base = 1;
+  for (size_t i = 0; i < d.shapes.size(); ++i) {
+    const ShapeDesc& shape = d.shapes[i];
+    if (shape.is_sphere) {
+      std::snprintf(line, sizeof line, "# sphere shapes[%zu] %.9g %.9g %.9g %.9g %d\n", i, shape.center.x,
+                    shape.center.y, shape.center.z, shape.radius, shape.flip_normals ? 1 : 0);
+      text += line;
+      continue;
+    }
+    text += "o shapes[" + std::to_string(i) + "]\n";
+    for (const glm::vec3& p : shape.mesh.positions) {
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
+      text += line;
+    }
+    for (const auto& t : shape.mesh.triangles) {
+      std::snprintf(line, sizeof line, "f %zu %zu %zu\n", base + t[0], base + t[1], base + t[2]);
+      text += line;
+    }
+    base += shape.mesh.positions.size();
+  }
+  return text;
+}
+
+int run_info(const std::string& path, const std::string& dump_obj) {
   LoadedScene s = load(path);
+  if (!dump_obj.empty()) {
+    make_parent_directory(dump_obj);
+    write_text(dump_obj, cleaned_obj(s.description));
+  }
   const SceneDescription& d = s.description;
   std::printf("scene: %s\ncamera: %ux%u, fov_y %.1f degrees\nmaterials: %zu\n", path.c_str(), d.camera.width,
               d.camera.height, d.camera.fov_y_degrees, d.materials.size());
@@ -426,6 +460,8 @@ int main(int argc, char** argv) {
   std::string info_scene;
   CLI::App* info_cmd = app.add_subcommand("info", "show what preprocessing did and the BVH, without rendering");
   info_cmd->add_option("scene", info_scene, "scene file (JSON)")->required();
+  std::string info_dump_obj;
+  info_cmd->add_option("--dump-obj", info_dump_obj, "write the cleaned world-space triangles as OBJ, one object per shape");
 
   RaysArgs ya;
   CLI::App* rays_cmd = app.add_subcommand("rays", "trace a ray file with the renderer's traversal and time it");
@@ -447,7 +483,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (render_cmd->parsed()) return run_render(ra);
-    if (info_cmd->parsed()) return run_info(info_scene);
+    if (info_cmd->parsed()) return run_info(info_scene, info_dump_obj);
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();
     return run_devices();

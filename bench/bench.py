@@ -2,7 +2,7 @@
 """Runs the pathcl speed benchmark and prints a table; writes bench/out/results.json.
 
 Every figure is a median over runs; the device, scene, triangle count and build times are reported
-beside it. Called by scripts/bench after the build.
+beside it. Called by scripts/bench/own after the build.
 """
 import argparse
 import json

@@ -1,4 +1,4 @@
-// Makes the ray sets of the traversal benchmark (scripts/bench) in pathcl's ray-file format:
+// Makes the ray sets of the traversal benchmark (scripts/bench/own) in pathcl's ray-file format:
 //   make_rays camera SCENE.json OUT.rays [SPP]          camera rays, SPP (default 2) jittered per pixel
 //   make_rays bounce SCENE.json CAMERA.rays HITS OUT.rays
 //                                                       one cosine-weighted diffuse bounce from each hit

@@ -101,6 +101,26 @@ TEST(Cli, DevicesInfoAndRays) {
   EXPECT_NE(err.find("multiple of the 32-byte"), std::string::npos) << err;
 }
 
+TEST(Cli, InfoDumpsTheCleanedWorldSpaceTrianglesAsObj) {
+  // tiny.json: the box's 3 quads (6 triangles), an analytic sphere, an inline 2-triangle emitter.
+  std::string obj = temp_dir() + "/dump/tiny.obj", err;
+  ASSERT_EQ(run_pathcl("info " + scene("tiny.json") + " --dump-obj " + obj, &err), 0) << err;
+  std::ifstream in(obj);
+  std::string line;
+  std::vector<std::string> objects, spheres;
+  int vertices = 0, faces = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("o ", 0) == 0) objects.push_back(line);
+    if (line.rfind("# sphere ", 0) == 0) spheres.push_back(line);
+    vertices += line.rfind("v ", 0) == 0;
+    faces += line.rfind("f ", 0) == 0;
+  }
+  EXPECT_EQ(objects, (std::vector<std::string>{"o shapes[0]", "o shapes[2]"}));
+  EXPECT_EQ(spheres, (std::vector<std::string>{"# sphere shapes[1] 0 0.5 0 0.400000006 0"}));
+  EXPECT_EQ(vertices, 8 + 4);
+  EXPECT_EQ(faces, 6 + 2);  // the triangle count of `pathcl rays` without the sphere
+}
+
 TEST(Cli, FilmLargerThanTheDeviceIsAClearRuntimeFailure) {
   std::string scene_file = write_temp_file("huge.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0],
     "width": 16384, "height": 16384}, "materials": {"m": {"type": "diffuse"}},

@@ -1,0 +1,230 @@
+"""A pathcl scene as the peer exporters see it: camera, materials, and world-space shapes.
+
+The geometry comes from `pathcl info SCENE --dump-obj FILE` (the triangles after pathcl's CGAL clean-up
+and transforms, one OBJ object per shape, spheres as comment lines), so every peer gets exactly the
+triangles pathcl renders. Materials, emission and the camera come from the scene JSON. Standard library
+only: the exporters and their tests run without numpy and without the peers.
+"""
+import json
+import math
+import os
+import struct
+import subprocess
+from dataclasses import dataclass, field
+
+
+@dataclass
+class Camera:
+    position: tuple
+    look_at: tuple
+    up: tuple
+    fov_y_degrees: float
+    width: int
+    height: int
+
+
+@dataclass
+class Material:
+    name: str
+    reflectance: tuple
+
+
+@dataclass
+class Shape:
+    name: str              # "shapes[3]", the JSON place
+    material: str
+    emission: tuple
+    two_sided: bool
+    positions: list = field(default_factory=list)   # world space, [(x, y, z)]
+    triangles: list = field(default_factory=list)   # [(i, j, k)] into positions, counter-clockwise = front
+    sphere: tuple = None   # (cx, cy, cz, radius, flip_normals) for an analytic sphere
+
+    @property
+    def is_emitter(self):
+        return any(c > 0 for c in self.emission)
+
+
+@dataclass
+class Scene:
+    path: str
+    camera: Camera
+    materials: dict        # name -> Material
+    shapes: list           # [Shape] in scene order
+    max_depth: int         # pathcl: largest number of scattering events
+    spp: int
+    seed: int
+
+    def triangle_count(self):
+        return sum(len(s.triangles) for s in self.shapes)
+
+
+# --- vectors --------------------------------------------------------------------------------------
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def add(a, b):
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def scale(a, s):
+    return tuple(x * s for x in a)
+
+
+def dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def normalize(a):
+    length = math.sqrt(dot(a, a))
+    return tuple(x / length for x in a)
+
+
+# --- camera ---------------------------------------------------------------------------------------
+
+def camera_frame(cam):
+    """pathcl's right-handed camera frame (scene/device_scene_build.cpp): forward, right, exact up."""
+    forward = normalize(sub(cam.look_at, cam.position))
+    right = normalize(cross(forward, cam.up))
+    up = cross(right, forward)
+    return forward, right, up
+
+
+def pathcl_ray_direction(cam, px, py, jx=0.5, jy=0.5):
+    """The unit direction pathcl's camera gives pixel (px, py) at jitter (jx, jy) (docs/scene-format.md)."""
+    forward, right, up = camera_frame(cam)
+    sx = 2 * (px + jx) / cam.width - 1
+    sy = 1 - 2 * (py + jy) / cam.height
+    t = math.tan(math.radians(cam.fov_y_degrees) / 2)
+    aspect = cam.width / cam.height
+    return normalize(add(add(forward, scale(right, sx * t * aspect)), scale(up, sy * t)))
+
+
+def fov_x_degrees(cam):
+    t = math.tan(math.radians(cam.fov_y_degrees) / 2) * cam.width / cam.height
+    return math.degrees(2 * math.atan(t))
+
+
+# --- loading --------------------------------------------------------------------------------------
+
+def read_dump(path):
+    """Parses `pathcl info --dump-obj` output: {name: (positions, triangles)} and {name: sphere tuple}."""
+    meshes, spheres = {}, {}
+    name, base, positions, triangles = None, 1, None, None
+    with open(path) as f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0] == "o":
+                if name is not None:
+                    base += len(positions)
+                name, positions, triangles = parts[1], [], []
+                meshes[name] = (positions, triangles)
+            elif parts[0] == "v":
+                positions.append(tuple(float(x) for x in parts[1:4]))
+            elif parts[0] == "f":
+                triangles.append(tuple(int(x) - base for x in parts[1:4]))
+            elif parts[:2] == ["#", "sphere"]:
+                cx, cy, cz, r = (float(x) for x in parts[3:7])
+                spheres[parts[2]] = (cx, cy, cz, r, parts[7] == "1")
+    return meshes, spheres
+
+
+def dump_scene_obj(pathcl, scene_path, out_path):
+    """Runs `pathcl info SCENE --dump-obj OUT`."""
+    subprocess.run([pathcl, "info", scene_path, "--dump-obj", out_path], check=True, stdout=subprocess.DEVNULL)
+
+
+def load(scene_path, dump_path):
+    """The scene JSON plus its --dump-obj geometry."""
+    with open(scene_path) as f:
+        j = json.load(f)
+    c = j["camera"]
+    camera = Camera(tuple(c["position"]), tuple(c["look_at"]), tuple(c.get("up", (0, 1, 0))),
+                    float(c.get("fov_y_degrees", 40)), int(c["width"]), int(c["height"]))
+    materials = {}
+    for name, m in j["materials"].items():
+        if m["type"] != "diffuse":
+            raise ValueError("%s: materials.%s: the exporters know only diffuse materials" % (scene_path, name))
+        materials[name] = Material(name, tuple(m.get("reflectance", (0.5, 0.5, 0.5))))
+    meshes, spheres = read_dump(dump_path)
+    shapes = []
+    for i, s in enumerate(j["shapes"]):
+        name = "shapes[%d]" % i
+        shape = Shape(name, s["material"], tuple(s.get("emission", (0, 0, 0))), bool(s.get("two_sided", False)))
+        if s["type"] == "sphere":
+            shape.sphere = spheres[name]
+        elif name in meshes:
+            shape.positions, shape.triangles = meshes[name]
+        shapes.append(shape)
+    r = j.get("render", {})
+    return Scene(os.path.abspath(scene_path), camera, materials, shapes, int(r.get("max_depth", 8)),
+                 int(r.get("spp", 16)), int(r.get("seed", 1)))
+
+
+# --- geometry output shared by the exporters ------------------------------------------------------
+
+def write_ply(path, positions, triangles, flip=False):
+    """Binary little-endian PLY with float32 positions and int32 triangle indices."""
+    with open(path, "wb") as f:
+        f.write(("ply\nformat binary_little_endian 1.0\ncomment written by pathcl scripts/bench\n"
+                 "element vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face %d\nproperty list uchar int vertex_indices\nend_header\n"
+                 % (len(positions), len(triangles))).encode("ascii"))
+        f.write(b"".join(struct.pack("<3f", *p) for p in positions))
+        f.write(b"".join(struct.pack("<B3i", 3, a, c, b) if flip else struct.pack("<B3i", 3, a, b, c)
+                         for a, b, c in triangles))
+
+
+def read_ply(path):
+    """Reads what write_ply writes (for tests)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    nv = int(next(l for l in header if l.startswith("element vertex")).split()[2])
+    nf = int(next(l for l in header if l.startswith("element face")).split()[2])
+    positions = [struct.unpack_from("<3f", data, end + 12 * i) for i in range(nv)]
+    off = end + 12 * nv
+    triangles = [struct.unpack_from("<B3i", data, off + 13 * i)[1:] for i in range(nf)]
+    return positions, triangles
+
+
+def icosphere(center, radius, level, flip=False):
+    """A sphere as triangles (for peers without analytic spheres): positions on the sphere, CCW outward."""
+    t = (1 + math.sqrt(5)) / 2
+    v = [normalize(p) for p in [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+                                (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
+         (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+         (8, 6, 7), (9, 8, 1)]
+    for _ in range(level):
+        mid, nf = {}, []
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                v.append(normalize(scale(add(v[a], v[b]), 0.5)))
+                mid[key] = len(v) - 1
+            return mid[key]
+
+        for a, b, c in f:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = nf
+    positions = [add(center, scale(p, radius)) for p in v]
+    return positions, [(a, c, b) for a, b, c in f] if flip else f
+
+
+def shape_triangles(shape, sphere_level=5):
+    """Positions and triangles of a shape, tessellating an analytic sphere."""
+    if shape.sphere is None:
+        return shape.positions, shape.triangles
+    cx, cy, cz, r, flip = shape.sphere
+    return icosphere((cx, cy, cz), r, sphere_level, flip)
