@@ -144,8 +144,10 @@ struct ConvergenceLog {
   }
 };
 
-// Clean-up that dropped geometry is worth a line: a mesh may not be what its author thinks it is.
+// Clean-up that dropped geometry is worth a line: a mesh may not be what its author thinks it is. So is
+// whatever loading changed or ignored (clamped texels, scaled MTL materials, unused MTL statements).
 void warn_about_clean_up(const LoadedScene& s) {
+  for (const std::string& w : s.description.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   for (const ShapeDesc& shape : s.description.shapes) {
     const CleanReport& c = shape.clean;
     if (c.degenerate_faces + c.duplicate_faces > 0)
@@ -352,16 +354,17 @@ int run_info(const std::string& path, const std::string& dump_obj) {
   const SceneDescription& d = s.description;
   std::printf("scene: %s\ncamera: %ux%u, fov_y %.1f degrees\nmaterials: %zu\n", path.c_str(), d.camera.width,
               d.camera.height, d.camera.fov_y_degrees, d.materials.size());
+  for (const std::string& w : d.warnings) std::printf("warning: %s\n", w.c_str());
   for (const ShapeDesc& shape : d.shapes) {
     if (shape.is_sphere) {
       std::printf("%s: sphere, radius %g%s\n", shape.label.c_str(), shape.radius,
-                  shape.emission != glm::vec3(0) ? ", emitter" : "");
+                  shape_emits(shape) ? ", emitter" : "");
       continue;
     }
     const CleanReport& c = shape.clean;
     std::printf("%s: %zu vertices, %zu polygons in -> %zu vertices, %zu triangles out%s\n", shape.label.c_str(),
                 c.input_vertices, c.input_polygons, shape.mesh.positions.size(), shape.mesh.triangles.size(),
-                shape.emission != glm::vec3(0) ? ", emitter" : "");
+                shape_emits(shape) ? ", emitter" : "");
     std::printf("    merged %zu duplicate vertices, removed %zu isolated vertices, %zu degenerate faces, %zu duplicate "
                 "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s\n",
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,

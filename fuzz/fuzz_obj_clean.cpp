@@ -37,6 +37,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (options.smooth_normals && mesh.normals.size() != mesh.positions.size())
       fuzz::invariant_failed("one normal per vertex");
     if (!options.smooth_normals && !mesh.normals.empty()) fuzz::invariant_failed("normals without smooth_normals");
+    // Per-corner attributes follow the triangles: sources name a real corner at the vertex's position.
+    if (mesh.source_polygon.size() != mesh.triangles.size() || mesh.source_corners.size() != mesh.triangles.size())
+      fuzz::invariant_failed("one source per triangle");
+    if (mesh.uvs.size() != (soup.uvs.empty() ? 0 : mesh.triangles.size())) fuzz::invariant_failed("one uv triple per triangle");
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (mesh.source_polygon[t] >= soup.polygons.size()) fuzz::invariant_failed("source polygon out of range");
+      const auto& polygon = soup.polygons[mesh.source_polygon[t]];
+      for (int j = 0; j < 3; ++j) {
+        if (mesh.source_corners[t][j] >= polygon.size()) fuzz::invariant_failed("source corner out of range");
+        if (soup.positions[polygon[mesh.source_corners[t][j]]] != mesh.positions[mesh.triangles[t][j]])
+          fuzz::invariant_failed("source corner elsewhere than its vertex");
+      }
+    }
   } catch (const SceneError&) {
     // Rejected input: expected.
   }

@@ -14,15 +14,37 @@
 #include "environment.cl"
 #include "lights.cl"
 
-/* The material at a surface point, its colour looked up in its texture if it has one. */
-inline Material material_at(const SceneData* sc, uint material, uint prim, const Hit* hit) {
+#ifdef PC_HAS_TEXTURES
+/* Texture coordinates at a surface point. Triangles interpolate their corners' uvs. A sphere is mapped
+ * lat-long in its own frame (x, y = the pole, z = handedness * cross(x, y): the rotation and mirroring
+ * of its transform): with d the unit direction from the centre in that frame,
+ *   u = phi / (2 pi), phi = atan2(-d.z, d.x) in [0, 2 pi),   v = 1 - theta / pi, theta = acos(d.y),
+ * so v = 1 (the image's top row) is the +y pole, and u grows from +x towards -z: seen from outside
+ * with y up, the image is not mirrored (u grows to the right). The environment map uses the mirror
+ * image of this (phi = atan2(z, x)), as it is seen from inside. */
+inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) {
+  float4 a = sc->uvs[2 * s->prim], b = sc->uvs[2 * s->prim + 1];
+#ifdef PC_HAS_SPHERES
+  if (sc->shading[s->prim].kind == PC_PRIM_SPHERE) {
+    float3 d = normalize(s->p - sc->prims[hit->slot].a.xyz);
+    float3 x = a.xyz, y = b.xyz, z = a.w * cross(x, y);
+    float dx = dot(d, x), dy = dot(d, y), dz = dot(d, z);
+    float u = atan2(-dz, dx) * (0.5f * PC_INV_PI);
+    if (u < 0.0f) u += 1.0f;
+    return (float2)(u, 1.0f - acos(clamp(dy, -1.0f, 1.0f)) * PC_INV_PI);
+  }
+#endif
+  return (1.0f - hit->u - hit->v) * a.xy + hit->u * a.zw + hit->v * b.xy;
+}
+#endif
+
+/* The material at a surface point; a textured colour is the texture's value times the material's
+ * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). */
+inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
   Material m = sc->materials[material];
 #ifdef PC_HAS_TEXTURES
-  if (m.color_texture != PC_INVALID) {
-    float4 a = sc->uvs[2 * prim], b = sc->uvs[2 * prim + 1];
-    float2 uv = (1.0f - hit->u - hit->v) * a.xy + hit->u * a.zw + hit->v * b.xy;
-    m.color.xyz = texture_lookup(sc->textures, sc->texels, m.color_texture, uv);
-  }
+  if (m.color_texture != PC_INVALID)
+    m.color.xyz *= texture_lookup(sc->textures, sc->texels, m.color_texture, surface_uv(sc, s, hit));
 #endif
   return m;
 }
@@ -70,7 +92,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
 #endif
     if (depth >= h->max_depth) break;
 
-    Material m = material_at(sc, sh.material, s.prim, &hit);
+    Material m = material_at(sc, sh.material, &s, &hit);
     /* Local shading frame about the front-side shading normal. */
     float3 t, b;
     make_frame(s.ns, &t, &b);

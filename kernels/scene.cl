@@ -8,7 +8,8 @@ typedef struct {
   __global const Primitive* prims;     /* BVH leaf order */
   __global const PrimShading* shading; /* scene order */
   __global const float4* normals;      /* 3 per primitive (smooth shapes) */
-  __global const float4* uvs;          /* 2 per primitive: (u0, v0, u1, v1), (u2, v2, -, -) (textured shapes) */
+  __global const float4* uvs;          /* 2 per primitive, when textures are used: triangle (u0, v0, u1, v1),
+                                          (u2, v2, -, -); sphere (x axis, handedness), (y axis, -) */
   __global const Material* materials;
   __global const Light* lights;
   __global const float* light_cdf;

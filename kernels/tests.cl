@@ -1,5 +1,5 @@
 /* Kernels that only the test suite builds: struct layout as the kernel compiler sees it, and the
- * intersection routines called one by one. */
+ * intersection routines and texture lookups called one by one. */
 #include "shared/types.h"
 #include "math.cl"
 #include "rng.cl"
@@ -104,4 +104,13 @@ __kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive
   }
   Hit hit;
   out[i] = trace_bvh(nodes, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
+}
+
+#include "texture.cl"
+
+/* Texture lookups: out[i] = texture_lookup(texture `index`, uvs[i]). */
+__kernel void texture_lookup_test(__global const Texture* textures, __global const float4* texels, uint index,
+                                  __global const float2* uvs, __global float4* out) {
+  uint i = get_global_id(0);
+  out[i] = (float4)(texture_lookup(textures, texels, index, uvs[i]), 0.0f);
 }

@@ -32,7 +32,10 @@ uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
   h = hash_vector(scene.prims, h);
   h = hash_vector(scene.shading, h);
   h = hash_vector(scene.normals, h);
+  h = hash_vector(scene.uvs, h);
   h = hash_vector(scene.materials, h);
+  h = hash_vector(scene.textures, h);
+  h = hash_vector(scene.texels, h);
   h = hash_vector(scene.lights, h);
   h = hash_vector(scene.light_cdf, h);
   const uint32_t settings[] = {options.spp, options.max_depth, options.seed, options.rr_depth, options.sampler};

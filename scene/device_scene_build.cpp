@@ -1,9 +1,11 @@
 #include "scene/device_scene.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <glm/trigonometric.hpp>
 
 namespace {
@@ -119,14 +121,22 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
   std::vector<Aabb> boxes;
   struct Emitter { uint32_t prim; glm::vec3 emission; float area; bool two_sided; };
   std::vector<Emitter> emitters;
+  const bool textures = out.features & kFeatureTextures;
   for (const ShapeDesc& s : scene.shapes) {
-    bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
+      bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
       uint32_t index = uint32_t(prims.size());
       prims.push_back({f4(s.center, bits_to_float(index)), {s.radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
       boxes.push_back({s.center - glm::vec3(s.radius), s.center + glm::vec3(s.radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
+      if (textures) {
+        // The sphere's own frame for its lat-long uvs (kernels/integrator.cl, surface_uv): x axis and
+        // handedness, y axis (the pole).
+        float handedness = glm::determinant(s.frame) < 0 ? -1.0f : 1.0f;
+        out.uvs.push_back(f4(s.frame[0], handedness));
+        out.uvs.push_back(f4(s.frame[1]));
+      }
       if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * s.radius * s.radius, s.two_sided});
       out.sphere_count++;
       out.features |= kFeatureSpheres;
@@ -134,7 +144,10 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     }
     bool smooth = !s.mesh.normals.empty();
     if (smooth) out.features |= kFeatureSmoothNormals;
-    for (const auto& t : s.mesh.triangles) {
+    for (size_t ti = 0; ti < s.mesh.triangles.size(); ++ti) {
+      const auto& t = s.mesh.triangles[ti];
+      glm::vec3 emission = triangle_emission(s, ti);
+      bool emits = emission.x > 0 || emission.y > 0 || emission.z > 0;
       uint32_t index = uint32_t(prims.size());
       glm::vec3 a = s.mesh.positions[t[0]], b = s.mesh.positions[t[1]], c = s.mesh.positions[t[2]];
       prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
@@ -143,7 +156,15 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
       box.grow(b);
       box.grow(c);
       boxes.push_back(box);
-      out.shading.push_back({s.material, PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
+      out.shading.push_back(
+          {triangle_material(s, ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
+      if (textures) {
+        // (u0, v0, u1, v1), (u2, v2, 0, 0); a mesh without uvs has no textured material (scene_load.cpp).
+        std::array<glm::vec2, 3> uv{};
+        if (!s.mesh.uvs.empty()) uv = s.mesh.uvs[ti];
+        out.uvs.push_back({uv[0].x, uv[0].y, uv[1].x, uv[1].y});
+        out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
+      }
       if (smooth)
         for (int k = 0; k < 3; ++k) out.normals.push_back(f4(s.mesh.normals[t[k]]));
       else
@@ -151,7 +172,7 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
       float area = 0.5f * glm::length(glm::cross(b - a, c - a));
       if (emits) {
         if (area > 0 && std::isfinite(area))
-          emitters.push_back({index, s.emission, area, s.two_sided});
+          emitters.push_back({index, emission, area, s.two_sided});
         else
           out.skipped_zero_area_emitters++;
       }

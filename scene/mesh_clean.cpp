@@ -12,12 +12,19 @@
 //   * vertex order (kept as the input's, after merging): remove_isolated_points_in_polygon_soup fills
 //     the holes with points from the back, so we run it on a range of original vertex ids instead of
 //     the points themselves, and put the ids back in ascending order afterwards.
+//
+// Per-corner attributes (uvs) follow each triangle through a Source record: its polygon and, per
+// triangle vertex, the polygon corner. Removing repeated corners and triangulating carry the corner
+// ids along; the duplicate-face step uses the same order tags; orienting may reverse, rotate or
+// re-point a triangle at a duplicated vertex, so afterwards each vertex is matched to its corner by
+// position (a surviving triangle is not collinear, so its three positions are distinct).
 #include "scene/mesh_clean.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,10 +72,28 @@ Vector newell_normal(const std::vector<Point>& pts) {
   return Vector(x, y, z);
 }
 
-// Removes consecutive repeats (cyclically): {a, a, b, c, a} -> {a, b, c}.
-void remove_consecutive_duplicates(Polygon& polygon) {
-  polygon.erase(std::unique(polygon.begin(), polygon.end()), polygon.end());
-  while (polygon.size() > 1 && polygon.front() == polygon.back()) polygon.pop_back();
+// Where a triangle came from: its polygon in the soup and, per triangle vertex, the polygon's corner.
+struct Source {
+  std::size_t polygon = 0;
+  std::array<std::size_t, 3> corners{};
+};
+
+// Removes consecutive repeats (cyclically), keeping the first corner of each run, and the same entries
+// of `corners`: {a, a, b, c, a} -> {a, b, c}.
+void remove_consecutive_duplicates(Polygon& polygon, std::vector<std::size_t>& corners) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < polygon.size(); ++i)
+    if (n == 0 || polygon[i] != polygon[n - 1]) {
+      polygon[n] = polygon[i];
+      corners[n] = corners[i];
+      ++n;
+    }
+  polygon.resize(n);
+  corners.resize(n);
+  while (polygon.size() > 1 && polygon.front() == polygon.back()) {
+    polygon.pop_back();
+    corners.pop_back();
+  }
 }
 
 std::size_t distinct_count(Polygon polygon) {
@@ -108,8 +133,8 @@ bool cdt_keeps_vertices_apart(const std::vector<Point>& pts) {
   return true;
 }
 
-// Splits a polygon with more than 3 vertices into triangles (indices into `points`), keeping the
-// polygon's winding. Appends to `out` and returns how many triangles were added.
+// Splits a polygon with more than 3 vertices into triangles, keeping the polygon's winding. Appends them
+// to `out` as positions in `polygon` (not vertex indices) and returns how many were added.
 std::size_t triangulate_polygon(const std::vector<Point>& points, const Polygon& polygon,
                                 std::vector<std::array<std::size_t, 3>>& out) {
   std::vector<Point> pts;
@@ -140,7 +165,7 @@ std::size_t triangulate_polygon(const std::vector<Point>& points, const Polygon&
   for (auto& t : tris) {
     const Vector tn = CGAL::cross_product(pts[t[1]] - pts[t[0]], pts[t[2]] - pts[t[0]]);
     if (tn * n < 0) std::swap(t[1], t[2]);
-    out.push_back({polygon[t[0]], polygon[t[1]], polygon[t[2]]});
+    out.push_back(t);
   }
   return tris.size();
 }
@@ -151,6 +176,20 @@ bool same_winding(const std::array<Point, 3>& a, const std::array<Point, 3>& b) 
   for (int r = 0; r < 3; ++r)
     if (a[0] == b[r] && a[1] == b[(r + 1) % 3] && a[2] == b[(r + 2) % 3]) return true;
   return false;
+}
+
+// The corners of `before` (a triangle with corners `corners`) at the vertices of `after`, the same
+// triangle possibly reversed, rotated or moved to duplicated points, matched by position.
+std::array<std::size_t, 3> follow_corners(const std::vector<Point>& points, const Polygon& before,
+                                          const std::array<std::size_t, 3>& corners, const Polygon& after) {
+  std::array<std::size_t, 3> result{};
+  for (std::size_t j = 0; j < 3; ++j) {
+    std::size_t k = 0;
+    while (k < 3 && points[before[k]] != points[after[j]]) ++k;
+    if (k == 3) throw std::logic_error("clean_mesh: orienting moved a triangle vertex");
+    result[j] = corners[k];
+  }
+  return result;
 }
 
 bool is_closed_soup(const std::vector<Polygon>& triangles) {
@@ -192,6 +231,22 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
                          " out of range");
     polygons.emplace_back(soup.polygons[i].begin(), soup.polygons[i].end());
   }
+  if (!soup.uvs.empty()) {
+    if (soup.uvs.size() != soup.polygons.size())
+      throw SceneError(std::to_string(soup.uvs.size()) + " polygons with texture coordinates for " +
+                       std::to_string(soup.polygons.size()) + " polygons");
+    for (std::size_t i = 0; i < soup.uvs.size(); ++i) {
+      if (!soup.uvs[i].empty() && soup.uvs[i].size() != soup.polygons[i].size())
+        throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(soup.uvs[i].size()) +
+                         " texture coordinates for " + std::to_string(soup.polygons[i].size()) + " corners");
+      for (const glm::vec2& uv : soup.uvs[i])
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+          throw SceneError("polygon " + std::to_string(i) + ": texture coordinate is not finite");
+    }
+  }
+  if (!soup.materials.empty() && soup.materials.size() != soup.polygons.size())
+    throw SceneError(std::to_string(soup.materials.size()) + " material ids for " +
+                     std::to_string(soup.polygons.size()) + " polygons");
 
   // 2. Merge duplicate points (keeps the first occurrence, in input order). Polygons left with fewer
   // than 3 distinct vertices are dropped in the loop below.
@@ -199,26 +254,38 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
 
   // 3. Triangulate, keeping the polygon order: a polygon's triangles replace it in place.
   std::vector<std::array<std::size_t, 3>> triangles;
+  std::vector<Source> sources;  // per entry of triangles
   triangles.reserve(polygons.size());
-  for (Polygon& polygon : polygons) {
-    remove_consecutive_duplicates(polygon);
+  std::vector<std::array<std::size_t, 3>> pieces;
+  for (std::size_t p = 0; p < polygons.size(); ++p) {
+    Polygon& polygon = polygons[p];
+    std::vector<std::size_t> corners(polygon.size());
+    for (std::size_t k = 0; k < corners.size(); ++k) corners[k] = k;
+    remove_consecutive_duplicates(polygon, corners);
     if (distinct_count(polygon) < 3) {
       ++report.degenerate_faces;
       continue;
     }
+    pieces.clear();
     if (polygon.size() == 3) {
-      triangles.push_back({polygon[0], polygon[1], polygon[2]});
-      continue;
+      pieces.push_back({0, 1, 2});
+    } else {
+      ++report.polygons_triangulated;
+      report.triangles_from_polygons += triangulate_polygon(points, polygon, pieces);
     }
-    ++report.polygons_triangulated;
-    report.triangles_from_polygons += triangulate_polygon(points, polygon, triangles);
+    for (const auto& t : pieces) {
+      triangles.push_back({polygon[t[0]], polygon[t[1]], polygon[t[2]]});
+      sources.push_back({p, {corners[t[0]], corners[t[1]], corners[t[2]]}});
+    }
   }
 
   // 4. Degenerate triangles: exact collinearity test on the coordinates as given (also catches a
   // repeated vertex).
   std::vector<TaggedTriangle> tagged;
+  std::vector<Source> tagged_sources;  // by order tag
   tagged.reserve(triangles.size());
-  for (const auto& t : triangles) {
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    const auto& t = triangles[i];
     if (CGAL::collinear(points[t[0]], points[t[1]], points[t[2]])) {
       ++report.degenerate_faces;
       continue;
@@ -227,6 +294,7 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
     static_cast<std::array<std::size_t, 3>&>(tt) = t;
     tt.order = tagged.size();
     tagged.push_back(tt);
+    tagged_sources.push_back(sources[i]);
   }
 
   // 5. Duplicate faces, in either orientation. CGAL keeps one face of each group (in 5.5 the earliest:
@@ -238,7 +306,11 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
 
   std::vector<Polygon> tris;
   tris.reserve(tagged.size());
-  for (const auto& t : tagged) tris.push_back({t[0], t[1], t[2]});
+  sources.clear();
+  for (const auto& t : tagged) {
+    tris.push_back({t[0], t[1], t[2]});
+    sources.push_back(tagged_sources[t.order]);
+  }
 
   // 6. Isolated points. Run on the vertex ids rather than the points: CGAL only moves the range's
   // elements around and renumbers the polygons, so afterwards ids[k] is the old index of new vertex k.
@@ -310,6 +382,7 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
       const Polygon& b = tris[i];
       if (!same_winding({points[a[0]], points[a[1]], points[a[2]]}, {points[b[0]], points[b[1]], points[b[2]]}))
         ++report.faces_flipped;
+      sources[i].corners = follow_corners(points, a, sources[i].corners, b);
     }
   }
 
@@ -326,6 +399,19 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
   if (options.smooth_normals) {
     normals.resize(result.positions.size());  // empty mesh: no normals to compute
     result.normals = std::move(normals);
+  }
+  for (const Source& s : sources) {
+    result.source_polygon.push_back(static_cast<uint32_t>(s.polygon));
+    result.source_corners.push_back(
+        {static_cast<uint32_t>(s.corners[0]), static_cast<uint32_t>(s.corners[1]), static_cast<uint32_t>(s.corners[2])});
+    if (!soup.uvs.empty()) {
+      const std::vector<glm::vec2>& uvs = soup.uvs[s.polygon];
+      std::array<glm::vec2, 3> corner_uvs{};
+      if (!uvs.empty())
+        for (int k = 0; k < 3; ++k) corner_uvs[k] = uvs[s.corners[k]];
+      result.uvs.push_back(corner_uvs);
+    }
+    if (!soup.materials.empty()) result.materials.push_back(soup.materials[s.polygon]);
   }
   return result;
 }

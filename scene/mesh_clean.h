@@ -7,12 +7,20 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
-// Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list.
+// Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list, with optional
+// attributes that belong to polygons and their corners rather than to vertices (an OBJ vertex may have
+// different texture coordinates in the faces around it, e.g. on a seam).
 struct PolygonSoup {
   std::vector<glm::vec3> positions;
   std::vector<std::vector<uint32_t>> polygons;
+  // Texture coordinates: empty (none at all), or one entry per polygon holding either one uv per corner
+  // of that polygon or nothing (that polygon has none).
+  std::vector<std::vector<glm::vec2>> uvs;
+  // Material ids in the caller's numbering: empty, or one per polygon.
+  std::vector<uint32_t> materials;
 };
 
 struct CleanOptions {
@@ -37,8 +45,19 @@ struct TriangleMesh {
   std::vector<glm::vec3> positions;
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
   std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals
+  // Where each triangle came from, whatever merging, triangulation and orienting did to it: the index
+  // of its soup polygon, and for each of its three vertices (in the triangle's final order) the corner
+  // of that polygon it is.
+  std::vector<uint32_t> source_polygon;
+  std::vector<std::array<uint32_t, 3>> source_corners;
+  // The soup's attributes carried through by those sources: per triangle, the uvs of its three
+  // vertices when the soup has uvs ((0, 0) for a polygon without), and the material id when the soup
+  // has material ids.
+  std::vector<std::array<glm::vec2, 3>> uvs;
+  std::vector<uint32_t> materials;
 };
 
 // Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place
-// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh).
+// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh) or its
+// attributes do not match its polygons.
 TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -28,7 +29,8 @@ struct MaterialDesc {
   std::string type;               // "diffuse", "oren_nayar", ...
   uint32_t type_id = 0;           // PC_MAT_*
   glm::vec3 color{0.5f};          // reflectance, diffuse colour or transmittance
-  uint32_t color_texture = 0xffffffffu;  // index into SceneDescription::textures replacing color
+  uint32_t color_texture = 0xffffffffu;  // index into SceneDescription::textures; its value times color
+                                         // is the colour (color is 1 for a texture from JSON)
   glm::vec3 specular{0}, k{0};    // phong specular; rough_conductor eta (in specular) and k
   float alpha = 0, sigma = 0, exponent = 1, ior = 1.5f;
 };
@@ -38,6 +40,7 @@ struct TextureImage {
   std::string file;
   uint32_t width = 0, height = 0;
   uint32_t wrap = 0;               // PC_WRAP_*
+  bool reflectance = false;        // a material colour: texels clamped to [0, 1] (an environment map is not)
   std::vector<glm::vec4> texels;
 };
 
@@ -71,10 +74,28 @@ struct ShapeDesc {
   glm::vec3 center{0};
   float radius = 0;
   bool flip_normals = false;  // sphere: normals point inwards (meshes are flipped by winding at load)
+  glm::mat3 frame{1.0f};      // sphere: its own x, y, z axes in world space (unit columns), for its uvs
   uint32_t material = 0;      // index into SceneDescription::materials
   glm::vec3 emission{0};
   bool two_sided = false;
+  // Meshes whose faces differ ("material": "from_mtl"): per triangle of mesh, the material index and
+  // the emission; empty when every triangle has `material` and `emission`.
+  std::vector<uint32_t> triangle_materials;
+  std::vector<glm::vec3> triangle_emission;
 };
+
+inline uint32_t triangle_material(const ShapeDesc& s, size_t t) {
+  return s.triangle_materials.empty() ? s.material : s.triangle_materials[t];
+}
+inline glm::vec3 triangle_emission(const ShapeDesc& s, size_t t) {
+  return s.triangle_emission.empty() ? s.emission : s.triangle_emission[t];
+}
+// Whether any part of the shape emits.
+inline bool shape_emits(const ShapeDesc& s) {
+  for (const glm::vec3& e : s.triangle_emission)
+    if (e != glm::vec3(0)) return true;
+  return s.emission != glm::vec3(0);
+}
 
 struct SceneDescription {
   std::string path;  // the scene file, for messages
@@ -84,6 +105,7 @@ struct SceneDescription {
   std::vector<LightDesc> lights;
   std::vector<TextureImage> textures;
   RenderSettings render;
+  std::vector<std::string> warnings;  // things loading changed or ignored, each naming its place
 };
 
 // Reads and validates a scene file; throws SceneError naming the file and JSON path on bad input.

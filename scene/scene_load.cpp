@@ -16,6 +16,8 @@
 
 #include "scene/scene_description.h"
 #include "kernels/shared/types.h"
+#include "scene/mtl_load.h"
+#include "scene/obj_load.h"
 #include "scene/scene_error.h"
 #include "scene/texture_load.h"
 
@@ -29,9 +31,9 @@ struct Node {
   const json& value;
   std::string path;
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw SceneError(file + ": " + (path.empty() ? "(top level)" : path) + ": " + what);
-  }
+  // "FILE: JSON.PATH", the start of every message about this value.
+  std::string place() const { return file + ": " + (path.empty() ? "(top level)" : path); }
+  [[noreturn]] void fail(const std::string& what) const { throw SceneError(place() + ": " + what); }
   Node at(const std::string& key) const {
     return {file, value.at(key), path.empty() ? key : path + "." + key};
   }
@@ -172,7 +174,76 @@ float read_ior(const Node& n) {
   return float(ior);
 }
 
-MaterialDesc read_material(const Node& n, const std::string& name) {
+// Loads an image file once per file, wrap mode and use; returns its index in scene.textures. A
+// reflectance texture (a material colour) has its texels clamped to [0, 1], with a warning when that
+// changes any: a surface reflecting more than it receives would create energy. `where` starts messages.
+uint32_t add_texture_file(SceneDescription& scene, const std::string& file, const std::string& where, uint32_t wrap,
+                          bool reflectance) {
+  for (uint32_t i = 0; i < scene.textures.size(); ++i) {
+    const TextureImage& t = scene.textures[i];
+    if (t.file == file && t.wrap == wrap && t.reflectance == reflectance) return i;
+  }
+  TextureImage image;
+  try {
+    image = load_texture_image(file);
+  } catch (const SceneError& e) {
+    throw SceneError(where + ": " + e.what());
+  }
+  image.wrap = wrap;
+  image.reflectance = reflectance;
+  if (reflectance) {
+    size_t clamped = 0;
+    for (glm::vec4& t : image.texels) {
+      if (t.x > 1 || t.y > 1 || t.z > 1) ++clamped;
+      t = glm::vec4(glm::min(glm::vec3(t), glm::vec3(1)), t.w);
+    }
+    if (clamped > 0)
+      scene.warnings.push_back(where + ": " + file + ": " + std::to_string(clamped) +
+                               " texels above 1 clamped to 1 (a reflectance above 1 would create energy)");
+  }
+  scene.textures.push_back(std::move(image));
+  return uint32_t(scene.textures.size() - 1);
+}
+
+// Loads the image file named by n (relative to the scene's directory).
+uint32_t add_texture(SceneDescription& scene, const Node& n, const std::filesystem::path& dir, uint32_t wrap,
+                     bool reflectance) {
+  return add_texture_file(scene, (dir / n.string()).string(), n.place(), wrap, reflectance);
+}
+
+// The largest texel value per channel.
+glm::vec3 texture_max(const TextureImage& t) {
+  glm::vec3 m(0);
+  for (const glm::vec4& texel : t.texels) m = glm::max(m, glm::vec3(texel));
+  return m;
+}
+
+// A material colour: [r, g, b] in [0, 1], or {"texture": FILE, "wrap": "repeat" | "clamp" | "mirror"}.
+// Sets m.color (1 for a texture, which the colour then is) and m.color_texture.
+void read_albedo_or_texture(const Node& n, SceneDescription& scene, const std::filesystem::path& dir,
+                            MaterialDesc& m) {
+  if (n.value.is_array()) {
+    m.color = read_albedo(n);
+    return;
+  }
+  if (!n.value.is_object()) n.fail("expected an array of 3 numbers or {\"texture\": FILE}");
+  n.expect_object({"texture", "wrap"}, {"texture"});
+  uint32_t wrap = PC_WRAP_REPEAT;
+  if (n.has("wrap")) {
+    std::string w = n.at("wrap").string();
+    if (w == "clamp")
+      wrap = PC_WRAP_CLAMP;
+    else if (w == "mirror")
+      wrap = PC_WRAP_MIRROR;
+    else if (w != "repeat")
+      n.at("wrap").fail("unknown wrap mode \"" + w + "\" (expected repeat, clamp or mirror)");
+  }
+  m.color = glm::vec3(1);
+  m.color_texture = add_texture(scene, n.at("texture"), dir, wrap, true);
+}
+
+MaterialDesc read_material(const Node& n, const std::string& name, SceneDescription& scene,
+                           const std::filesystem::path& dir) {
   if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
   MaterialDesc m;
   m.name = name;
@@ -180,33 +251,39 @@ MaterialDesc read_material(const Node& n, const std::string& name) {
   if (m.type == "diffuse") {
     n.expect_object({"type", "reflectance"});
     m.type_id = PC_MAT_DIFFUSE;
-    if (n.has("reflectance")) m.color = read_albedo(n.at("reflectance"));
+    if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
   } else if (m.type == "oren_nayar") {
     n.expect_object({"type", "reflectance", "sigma_degrees"}, {"sigma_degrees"});
     m.type_id = PC_MAT_OREN_NAYAR;
-    if (n.has("reflectance")) m.color = read_albedo(n.at("reflectance"));
+    if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
     double sigma = n.at("sigma_degrees").number();
     if (!(sigma >= 0 && sigma <= 90)) n.at("sigma_degrees").fail("expected an angle in [0, 90] degrees");
     m.sigma = float(sigma * M_PI / 180);
   } else if (m.type == "phong") {
     n.expect_object({"type", "diffuse", "specular", "exponent"}, {"exponent"});
     m.type_id = PC_MAT_PHONG;
-    m.color = n.has("diffuse") ? read_albedo(n.at("diffuse")) : glm::vec3(0);
+    m.color = glm::vec3(0);
+    if (n.has("diffuse")) read_albedo_or_texture(n.at("diffuse"), scene, dir, m);
     m.specular = n.has("specular") ? read_albedo(n.at("specular")) : glm::vec3(0);
     double e = n.at("exponent").number();
     if (!(e > 0 && e <= 1e5)) n.at("exponent").fail("expected an exponent in (0, 100000]");
     m.exponent = float(e);
-    glm::vec3 sum = m.color + m.specular;
-    if (sum.x > 1 || sum.y > 1 || sum.z > 1) n.fail("diffuse + specular exceeds 1 (the surface would create energy)");
+    bool textured = m.color_texture != PC_INVALID;
+    glm::vec3 sum = (textured ? texture_max(scene.textures[m.color_texture]) : m.color) + m.specular;
+    if (sum.x > 1 || sum.y > 1 || sum.z > 1)
+      n.fail(std::string(textured ? "the diffuse texture's largest value" : "diffuse") +
+             " + specular exceeds 1 (the surface would create energy)");
   } else if (m.type == "mirror") {
     n.expect_object({"type", "reflectance"});
     m.type_id = PC_MAT_MIRROR;
-    m.color = n.has("reflectance") ? read_albedo(n.at("reflectance")) : glm::vec3(1);
+    m.color = glm::vec3(1);
+    if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
   } else if (m.type == "dielectric") {
     n.expect_object({"type", "ior", "transmittance"}, {"ior"});
     m.type_id = PC_MAT_DIELECTRIC;
     m.ior = read_ior(n.at("ior"));
-    m.color = n.has("transmittance") ? read_albedo(n.at("transmittance")) : glm::vec3(1);
+    m.color = glm::vec3(1);
+    if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
   } else if (m.type == "rough_conductor") {
     n.expect_object({"type", "roughness", "eta", "k", "specular"}, {"roughness"});
     m.type_id = PC_MAT_ROUGH_CONDUCTOR;
@@ -226,7 +303,7 @@ MaterialDesc read_material(const Node& n, const std::string& name) {
   } else if (m.type == "plastic") {
     n.expect_object({"type", "diffuse", "ior", "roughness"});
     m.type_id = PC_MAT_PLASTIC;
-    if (n.has("diffuse")) m.color = read_albedo(n.at("diffuse"));
+    if (n.has("diffuse")) read_albedo_or_texture(n.at("diffuse"), scene, dir, m);
     if (n.has("ior")) m.ior = read_ior(n.at("ior"));
     if (n.has("roughness")) m.alpha = read_roughness(n.at("roughness"), true);
   } else {
@@ -240,21 +317,6 @@ glm::vec3 read_unit_direction(const Node& n) {
   glm::vec3 d = n.vec3();
   if (glm::length(d) == 0) n.fail("expected a non-zero direction");
   return glm::normalize(d);
-}
-
-// Loads the image file named by n (relative to the scene's directory) once per file and wrap mode;
-// returns its index in scene.textures.
-uint32_t add_texture(SceneDescription& scene, const Node& n, const std::filesystem::path& dir, uint32_t wrap) {
-  std::string file = (dir / n.string()).string();
-  for (uint32_t i = 0; i < scene.textures.size(); ++i)
-    if (scene.textures[i].file == file && scene.textures[i].wrap == wrap) return i;
-  try {
-    scene.textures.push_back(load_texture_image(file));
-  } catch (const SceneError& e) {
-    n.fail(e.what());
-  }
-  scene.textures.back().wrap = wrap;
-  return uint32_t(scene.textures.size() - 1);
 }
 
 LightDesc read_light(const Node& n) {
@@ -341,9 +403,20 @@ glm::mat4 read_transform(const Node& n) {
   return t;
 }
 
-// Validates the soup's indices and coordinates (OBJ files are checked line by line in load_obj).
-void check_inline_triangles(const Node& positions, const Node& indices, PolygonSoup& soup) {
+// Validates the soup's indices and coordinates (OBJ files are checked line by line in load_obj). `uvs`
+// (optional): one [u, v] per position, which every corner at that position gets.
+void check_inline_triangles(const Node& positions, const Node& indices, const Node* uvs, PolygonSoup& soup) {
   for (const Node& p : positions.array()) soup.positions.push_back(p.vec3());
+  std::vector<glm::vec2> vertex_uvs;
+  if (uvs) {
+    for (const Node& uv : uvs->array()) {
+      if (!uv.value.is_array() || uv.value.size() != 2) uv.fail("expected an array of 2 numbers");
+      vertex_uvs.push_back({float(uv.at(0).number()), float(uv.at(1).number())});
+    }
+    if (vertex_uvs.size() != soup.positions.size())
+      uvs->fail("expected one [u, v] per position (" + std::to_string(soup.positions.size()) + "), got " +
+                std::to_string(vertex_uvs.size()));
+  }
   for (const Node& f : indices.array()) {
     if (!f.value.is_array() || f.value.size() != 3) f.fail("expected 3 vertex indices");
     std::vector<uint32_t> poly;
@@ -356,12 +429,35 @@ void check_inline_triangles(const Node& positions, const Node& indices, PolygonS
                std::to_string(soup.positions.size()) + " positions)");
       poly.push_back(uint32_t(idx));
     }
+    if (uvs) soup.uvs.push_back({vertex_uvs[poly[0]], vertex_uvs[poly[1]], vertex_uvs[poly[2]]});
     soup.polygons.push_back(poly);
   }
 }
 
+// "material": "from_mtl": the OBJ's MTL materials with ids in `used` become scene materials (in the
+// order of first use); returns the scene material and the emission per MTL material id.
+void add_mtl_materials(const ObjFile& obj, const std::vector<uint32_t>& used, SceneDescription& scene,
+                       std::vector<uint32_t>& scene_material, std::vector<glm::vec3>& emission) {
+  scene_material.assign(obj.materials.size(), PC_INVALID);
+  emission.assign(obj.materials.size(), glm::vec3(0));
+  for (uint32_t id : used) {
+    if (scene_material[id] != PC_INVALID) continue;
+    const MtlMaterial& mtl = obj.materials[id];
+    MaterialDesc m = mtl.material;
+    glm::vec3 diffuse_max = m.color;
+    if (!mtl.texture.empty()) {
+      m.color_texture = add_texture_file(scene, mtl.texture, mtl.texture_where + ": map_Kd", mtl.texture_wrap, true);
+      diffuse_max *= texture_max(scene.textures[m.color_texture]);
+    }
+    if (m.type_id == PC_MAT_PHONG) limit_phong_energy(m, diffuse_max, mtl.where, scene.warnings);
+    scene_material[id] = uint32_t(scene.materials.size());
+    emission[id] = mtl.emission;
+    scene.materials.push_back(m);
+  }
+}
+
 ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
-                     const std::map<std::string, uint32_t>& materials) {
+                     const std::map<std::string, uint32_t>& materials, SceneDescription& scene) {
   if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
   std::string type = n.at("type").string();
   ShapeDesc s;
@@ -369,7 +465,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth"},
                     {"file", "material"});
   else if (type == "triangles")
-    n.expect_object({"type", "positions", "indices", "material", "emission", "two_sided", "transform",
+    n.expect_object({"type", "positions", "indices", "uvs", "material", "emission", "two_sided", "transform",
                      "orient", "smooth"},
                     {"positions", "indices", "material"});
   else if (type == "sphere")
@@ -380,9 +476,15 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     n.at("type").fail("unknown shape type \"" + type + "\" (expected mesh, triangles or sphere)");
 
   std::string material = n.at("material").string();
-  auto it = materials.find(material);
-  if (it == materials.end()) n.at("material").fail("unknown material \"" + material + "\"");
-  s.material = it->second;
+  const bool from_mtl = material == "from_mtl";
+  if (from_mtl) {
+    if (type != "mesh") n.at("material").fail("\"from_mtl\" needs a mesh shape (an OBJ file with mtllib)");
+    if (n.has("emission")) n.at("emission").fail("with \"from_mtl\" the emission comes from the MTL files (Ke)");
+  } else {
+    auto it = materials.find(material);
+    if (it == materials.end()) n.at("material").fail("unknown material \"" + material + "\"");
+    s.material = it->second;
+  }
   if (n.has("emission")) s.emission = n.at("emission").color();
   if (n.has("two_sided")) s.two_sided = n.at("two_sided").boolean();
   glm::mat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::mat4(1.0f);
@@ -402,19 +504,22 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
       n.at("transform").fail("a sphere allows only translation, rotation and uniform scale");
     s.center = glm::vec3(transform * glm::vec4(center, 1.0f));
     s.radius = radius * sx;
+    s.frame = l / sx;
     if (!std::isfinite(s.center.x) || !std::isfinite(s.center.y) || !std::isfinite(s.center.z) ||
         !std::isfinite(s.radius))
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes the sphere to infinity");
     return s;
   }
 
-  PolygonSoup soup;
+  ObjFile obj;
+  PolygonSoup& soup = obj.soup;
   if (type == "mesh") {
     std::filesystem::path file = dir / n.at("file").string();
     s.label += " (" + n.at("file").string() + ")";
-    soup = load_obj(file.string());
+    obj = load_obj_file(file.string(), from_mtl, scene.warnings);
   } else {
-    check_inline_triangles(n.at("positions"), n.at("indices"), soup);
+    Node uvs = n.has("uvs") ? n.at("uvs") : n;
+    check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
   }
   for (glm::vec3& p : soup.positions) {
     p = glm::vec3(transform * glm::vec4(p, 1.0f));
@@ -422,8 +527,10 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
   }
   // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
-  if (glm::determinant(glm::mat3(transform)) < 0)
+  if (glm::determinant(glm::mat3(transform)) < 0) {
     for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
+    for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
+  }
   CleanOptions options;
   if (n.has("orient")) options.orient = n.at("orient").boolean();
   if (n.has("smooth")) options.smooth_normals = n.at("smooth").boolean();
@@ -431,6 +538,25 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     s.mesh = clean_mesh(soup, options, s.clean);
   } catch (const SceneError& e) {
     n.fail(e.what());
+  }
+  if (from_mtl) {
+    std::vector<uint32_t> scene_material;
+    std::vector<glm::vec3> emission;
+    add_mtl_materials(obj, s.mesh.materials, scene, scene_material, emission);
+    for (uint32_t id : s.mesh.materials) {
+      s.triangle_materials.push_back(scene_material[id]);
+      s.triangle_emission.push_back(emission[id]);
+    }
+  }
+  // A texture needs texture coordinates: refuse rather than stretch one texel over a face.
+  for (size_t t = 0; t < s.mesh.triangles.size(); ++t) {
+    const MaterialDesc& m = scene.materials[triangle_material(s, t)];
+    uint32_t polygon = s.mesh.source_polygon[t];
+    if (m.color_texture == PC_INVALID || (!soup.uvs.empty() && !soup.uvs[polygon].empty())) continue;
+    if (type == "mesh")
+      n.fail((dir / n.at("file").string()).string() + ":" + std::to_string(obj.face_lines[polygon]) +
+             ": face without texture coordinates (vt), but its material \"" + m.name + "\" has a texture");
+    n.fail("material \"" + m.name + "\" has a texture, but the shape has no \"uvs\"");
   }
   return s;
 }
@@ -472,12 +598,13 @@ SceneDescription load_scene(const std::string& path) {
   Node mats = top.at("materials");
   if (!mats.value.is_object()) mats.fail("expected an object of named materials");
   std::map<std::string, uint32_t> by_name;
-  for (auto& [name, _] : mats.value.items()) {
-    by_name[name] = uint32_t(scene.materials.size());
-    scene.materials.push_back(read_material(mats.at(name), name));
-  }
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  for (const Node& s : top.at("shapes").array()) scene.shapes.push_back(read_shape(s, dir, by_name));
+  for (auto& [name, _] : mats.value.items()) {
+    if (name == "from_mtl") mats.at(name).fail("the name \"from_mtl\" is reserved (a mesh's materials from its MTL files)");
+    by_name[name] = uint32_t(scene.materials.size());
+    scene.materials.push_back(read_material(mats.at(name), name, scene, dir));
+  }
+  for (const Node& s : top.at("shapes").array()) scene.shapes.push_back(read_shape(s, dir, by_name, scene));
   if (top.has("lights")) {
     bool environment = false;
     for (const Node& l : top.at("lights").array()) {
@@ -485,7 +612,7 @@ SceneDescription load_scene(const std::string& path) {
       if (light.type == PC_LIGHT_ENVIRONMENT) {
         if (environment) l.fail("a scene has at most one environment light");
         environment = true;
-        if (l.has("file")) light.texture = add_texture(scene, l.at("file"), dir, PC_WRAP_REPEAT);
+        if (l.has("file")) light.texture = add_texture(scene, l.at("file"), dir, PC_WRAP_REPEAT, false);
       }
       scene.lights.push_back(light);
     }

@@ -128,3 +128,28 @@ TEST(Furnace, HazardCountersCountForcedHazardsAndKeepThemOffTheFilm) {
   double kept = double(opt.spp - nan - inf - negative) / opt.spp;
   EXPECT_NEAR(r.film.mean[0], furnace_value(2) * kept, 1e-4);
 }
+
+TEST(Furnace, ClosedObjWithEmissionPerFaceFromMtl) {
+  // An octahedron whose faces alternate between two MTL materials, both Kd = rho and Ke = Le, facing
+  // inwards: the faces become lights one by one (there is no shape emission) and the furnace holds.
+  write_temp_file("furnace-mtl/walls.mtl", "newmtl a\nKd 0.5\nKe 0.5 0.5 0.5\nnewmtl b\nKd 0.5 0.5 0.5\nKe 0.5\n");
+  write_temp_file("furnace-mtl/octahedron.obj",
+                  "mtllib walls.mtl\nv 2 0 0\nv -2 0 0\nv 0 2 0\nv 0 -2 0\nv 0 0 2\nv 0 0 -2\n"
+                  "usemtl a\nf 5 3 1\nusemtl b\nf 5 2 3\nusemtl a\nf 5 4 2\nusemtl b\nf 5 1 4\n"
+                  "usemtl a\nf 6 1 3\nusemtl b\nf 6 3 2\nusemtl a\nf 6 2 4\nusemtl b\nf 6 4 1\n");
+  std::string scene_json = R"({"camera": {"position": [0.1, -0.2, 0.3], "look_at": [0.5, 0.4, -1], "fov_y_degrees": 100,
+    "width": 32, "height": 32}, "materials": {},
+    "shapes": [{"type": "mesh", "file": "furnace-mtl/octahedron.obj", "material": "from_mtl"}]})";
+  DeviceScene scene = load_device_scene(write_temp_file("furnace-mtl.json", scene_json));
+  ASSERT_EQ(scene.lights.size(), 8u);
+  ASSERT_EQ(scene.materials.size(), 2u);
+  RenderResult direct = render_scene(scene, 4, 0);
+  expect_clean(direct);
+  for (float v : direct.film.mean) ASSERT_NEAR(v, kLe, 1e-6);  // every face emits towards the camera
+  RenderResult r = render_scene(scene, 16, 2, 9);
+  expect_clean(r);
+  std::vector<double> pixels;
+  for (size_t i = 0; i < r.film.mean.size(); i += 3) pixels.push_back(r.film.mean[i]);
+  MeanStd m = mean_and_error(pixels);
+  EXPECT_NEAR(m.mean, furnace_value(2), 4 * m.std_error + 1e-6);
+}

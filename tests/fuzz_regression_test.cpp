@@ -69,6 +69,15 @@ TEST(FuzzRegression, MeshesLoadAndCleanOrFailWithSceneError) {
         const TriangleMesh mesh = clean_mesh(soup, options, report);
         for (const auto& t : mesh.triangles)
           for (uint32_t v : t) ASSERT_LT(v, mesh.positions.size());
+        // Every triangle names its source polygon and corners, at the same positions.
+        ASSERT_EQ(mesh.source_polygon.size(), mesh.triangles.size());
+        ASSERT_EQ(mesh.source_corners.size(), mesh.triangles.size());
+        ASSERT_EQ(mesh.uvs.size(), soup.uvs.empty() ? 0 : mesh.triangles.size());
+        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+          const auto& polygon = soup.polygons.at(mesh.source_polygon[t]);
+          for (int j = 0; j < 3; ++j)
+            ASSERT_EQ(soup.positions[polygon.at(mesh.source_corners[t][j])], mesh.positions[mesh.triangles[t][j]]);
+        }
       } catch (const SceneError&) {
         // Rejected: fine.
       } catch (const std::exception& e) {

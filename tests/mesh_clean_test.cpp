@@ -418,4 +418,163 @@ TEST(MeshClean, EmptyAndFullyDegenerateInput) {
   EXPECT_EQ(r.removed_isolated_vertices, 3u);
 }
 
+// Per-corner attributes. Every corner gets a uv that names its position and its polygon, so that a uv
+// that stayed with the wrong vertex, or came from another polygon, shows.
+glm::vec2 uv_of(const vec3& p, std::size_t polygon) {
+  return {p.x + 2 * p.z + 10 * float(polygon), p.y + 4 * p.z};
+}
+
+void add_position_uvs(PolygonSoup& s) {
+  s.uvs.clear();
+  for (std::size_t p = 0; p < s.polygons.size(); ++p) {
+    std::vector<glm::vec2> uvs;
+    for (uint32_t v : s.polygons[p]) uvs.push_back(uv_of(s.positions[v], p));
+    s.uvs.push_back(uvs);
+  }
+}
+
+// Each triangle vertex carries the uv of its source corner, which is at the vertex's position.
+void expect_uvs_follow_vertices(const PolygonSoup& s, const TriangleMesh& m) {
+  ASSERT_EQ(m.uvs.size(), m.triangles.size());
+  ASSERT_EQ(m.source_polygon.size(), m.triangles.size());
+  ASSERT_EQ(m.source_corners.size(), m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const uint32_t p = m.source_polygon[t];
+    ASSERT_LT(p, s.polygons.size());
+    for (int j = 0; j < 3; ++j) {
+      const vec3 at = m.positions[m.triangles[t][j]];
+      ASSERT_LT(m.source_corners[t][j], s.polygons[p].size());
+      EXPECT_EQ(s.positions[s.polygons[p][m.source_corners[t][j]]], at) << "triangle " << t << " vertex " << j;
+      EXPECT_EQ(m.uvs[t][j], uv_of(at, p)) << "triangle " << t << " vertex " << j;
+    }
+  }
+}
+
+TEST(MeshCleanAttributes, UvsFollowTriangulatedQuad) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2, 3}};
+  add_position_uvs(s);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(r.polygons_triangulated, 1u);
+  expect_uvs_follow_vertices(s, m);
+  for (uint32_t p : m.source_polygon) EXPECT_EQ(p, 0u);
+}
+
+TEST(MeshCleanAttributes, UvsFollowTriangulatedNonConvexPolygonFromEveryStart) {
+  for (uint32_t start = 0; start < 6; ++start) {
+    PolygonSoup s = l_shape();
+    std::rotate(s.polygons[0].begin(), s.polygons[0].begin() + start, s.polygons[0].end());
+    add_position_uvs(s);
+    CleanReport r;
+    TriangleMesh m = clean_mesh(s, {}, r);
+    ASSERT_EQ(m.triangles.size(), 4u) << "start " << start;
+    expect_uvs_follow_vertices(s, m);
+  }
+}
+
+TEST(MeshCleanAttributes, RepeatedCornersKeepTheFirstCornersUv) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  s.polygons = {{0, 0, 1, 2, 0}};  // corners 1 and 4 repeat corner 0
+  s.uvs = {{{0.5f, 0.5f}, {9, 9}, {1, 0}, {0, 1}, {8, 8}}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(m.source_corners[0], (std::array<uint32_t, 3>{0, 2, 3}));
+  EXPECT_EQ(m.uvs[0][0], glm::vec2(0.5f, 0.5f));
+  EXPECT_EQ(m.uvs[0][1], glm::vec2(1, 0));
+  EXPECT_EQ(m.uvs[0][2], glm::vec2(0, 1));
+}
+
+TEST(MeshCleanAttributes, MergedVerticesKeepTheirCornersUvs) {
+  // Two triangles of a square with separate vertices on their shared edge and different uvs there (a
+  // texture seam): the positions merge, the uvs stay with their corners.
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2}, {3, 4, 5}};
+  add_position_uvs(s);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  EXPECT_EQ(r.merged_vertices, 2u);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.triangles[0][0], m.triangles[1][0]);  // (0, 0, 0) is one vertex now
+  EXPECT_NE(m.uvs[0][0], m.uvs[1][0]);             // with two uvs
+  expect_uvs_follow_vertices(s, m);
+}
+
+TEST(MeshCleanAttributes, UvsFollowFacesThatOrientFlips) {
+  PolygonSoup s = cube_quads();
+  std::reverse(s.polygons[3].begin(), s.polygons[3].end());
+  add_position_uvs(s);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true}, r);
+  ASSERT_EQ(m.triangles.size(), 12u);
+  EXPECT_EQ(r.faces_flipped, 2u);
+  expect_uvs_follow_vertices(s, m);
+  // The flipped triangles (of the y = 1 quad) list their corners in an order the quad did not.
+  for (int t : {6, 7}) {
+    EXPECT_EQ(m.source_polygon[t], 3u);
+    EXPECT_GT(tri_normal(m, m.triangles[t]).y, 0.0);
+  }
+
+  PolygonSoup inside_out = cube_quads();
+  for (auto& p : inside_out.polygons) std::reverse(p.begin(), p.end());
+  add_position_uvs(inside_out);
+  m = clean_mesh(inside_out, {.orient = true, .smooth_normals = true}, r);
+  EXPECT_EQ(r.faces_flipped, 12u);
+  expect_uvs_follow_vertices(inside_out, m);
+}
+
+TEST(MeshCleanAttributes, UvsFollowVerticesThatOrientDuplicates) {
+  PolygonSoup s = three_fins();
+  add_position_uvs(s);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true}, r);
+  ASSERT_EQ(m.triangles.size(), 3u);
+  EXPECT_GT(m.positions.size(), 5u);
+  expect_uvs_follow_vertices(s, m);
+}
+
+TEST(MeshCleanAttributes, MaterialsFollowSurvivingFaces) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {2, 0, 0},
+                 {0, 0, 5}, {1, 0, 5}, {1, 1, 5}, {0, 1, 5}};
+  s.polygons = {{0, 1, 4},      // collinear: removed
+                {0, 2, 1},      // kept
+                {1, 2, 0},      // duplicate of the previous: removed
+                {5, 6, 7, 8},   // quad: two triangles
+                {0, 1, 3}};     // kept
+  s.materials = {10, 11, 12, 13, 14};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  EXPECT_TRUE(m.uvs.empty());
+  EXPECT_EQ(m.source_polygon, (std::vector<uint32_t>{1, 3, 3, 4}));
+  EXPECT_EQ(m.materials, (std::vector<uint32_t>{11, 13, 13, 14}));
+}
+
+TEST(MeshCleanAttributes, PolygonsWithoutUvsGetZeroAndMismatchesThrow) {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  s.polygons = {{0, 1, 2}, {0, 1, 3}};
+  s.uvs = {{}, {{0.1f, 0.2f}, {0.3f, 0.4f}, {0.5f, 0.6f}}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.uvs.size(), 2u);
+  EXPECT_EQ(m.uvs[0][1], glm::vec2(0));
+  EXPECT_EQ(m.uvs[1][2], glm::vec2(0.5f, 0.6f));
+
+  PolygonSoup bad = s;
+  bad.uvs[1].pop_back();
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
+  bad = s;
+  bad.uvs.pop_back();
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
+  bad = s;
+  bad.materials = {1};
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
+}
+
 }  // namespace

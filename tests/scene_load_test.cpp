@@ -229,3 +229,285 @@ TEST(SceneLoad, LightSelectionIsProportionalToPowerAcrossTypes) {
   EXPECT_NEAR(d.lights[1].select_pdf, spot / (point + spot), 1e-6);
   EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
 }
+
+// ---- Textures, texture coordinates and materials from MTL files -----------------------------------------
+
+namespace {
+
+std::string textured_scene(const std::string& materials, const std::string& shape) {
+  return R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": )" + materials + R"(, "shapes": [)" + shape + "]}";
+}
+
+const char* const kTexturedTriangle =
+    R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "t")";
+
+}  // namespace
+
+TEST(SceneLoadTextures, BadTexturesAreClearErrors) {
+  write_temp_png("tex/grey.png", 2, 1, {128, 128, 128, 255, 255, 255});
+  struct Case {
+    std::string materials, shape, expected;
+  } cases[] = {
+      {R"({"t": {"type": "diffuse", "reflectance": {"texture": "tex/none.png"}}})", "",
+       "materials.t.reflectance.texture: " + temp_dir() + "/tex/none.png: cannot open the image file"},
+      {R"({"t": {"type": "diffuse", "reflectance": {"texture": "tex/grey.png", "wrap": "tile"}}})", "",
+       "materials.t.reflectance.wrap: unknown wrap mode \"tile\" (expected repeat, clamp or mirror)"},
+      {R"({"t": {"type": "mirror", "reflectance": {"texture": "tex/grey.png", "scale": 2}}})", "",
+       "materials.t.reflectance: unknown key \"scale\""},
+      {R"({"t": {"type": "dielectric", "ior": 1.5, "transmittance": {"wrap": "clamp"}}})", "",
+       "materials.t.transmittance: missing key \"texture\""},
+      {R"({"t": {"type": "diffuse", "reflectance": "tex/grey.png"}})", "",
+       "materials.t.reflectance: expected an array of 3 numbers or {\"texture\": FILE}"},
+      {R"({"t": {"type": "phong", "diffuse": {"texture": "tex/grey.png"}, "specular": [0.1, 0.1, 0.1], "exponent": 10}})",
+       "", "materials.t: the diffuse texture's largest value + specular exceeds 1"},
+      {R"({"from_mtl": {"type": "diffuse"}})", "", "materials.from_mtl: the name \"from_mtl\" is reserved"},
+      {R"({"t": {"type": "diffuse", "reflectance": {"texture": "tex/grey.png"}}})", std::string(kTexturedTriangle) + "}",
+       "shapes[0]: material \"t\" has a texture, but the shape has no \"uvs\""},
+      {R"({"t": {"type": "diffuse"}})", std::string(kTexturedTriangle) + R"(, "uvs": [[0, 0], [1, 0]]})",
+       "shapes[0].uvs: expected one [u, v] per position (3), got 2"},
+      {R"({"t": {"type": "diffuse"}})", std::string(kTexturedTriangle) + R"(, "uvs": [[0, 0], [1, 0], [0]]})",
+       "shapes[0].uvs[2]: expected an array of 2 numbers"},
+      {R"({"t": {"type": "diffuse"}})", R"({"type": "sphere", "radius": 1, "material": "from_mtl"})",
+       "shapes[0].material: \"from_mtl\" needs a mesh shape"},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("textures.json", textured_scene(c.materials, c.shape));
+    std::string error = load_error(path);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.materials << c.shape << "\n  gave: " << error;
+    EXPECT_EQ(error.rfind(path, 0), 0u) << "the message starts with the file: " << error;
+  }
+}
+
+TEST(SceneLoadTextures, InlineUvsBelongToPositionsAndTexturesAreShared) {
+  write_temp_png("tex/grey.png", 2, 1, {128, 128, 128, 255, 255, 255});
+  std::string scene = textured_scene(
+      R"({"t": {"type": "diffuse", "reflectance": {"texture": "tex/grey.png"}},
+          "u": {"type": "plastic", "diffuse": {"texture": "tex/grey.png", "wrap": "repeat"}},
+          "v": {"type": "oren_nayar", "sigma_degrees": 10, "reflectance": {"texture": "tex/grey.png", "wrap": "mirror"}}})",
+      R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[1,1,0],[0,1,0]], "indices": [[0,1,2],[2,3,0]],
+          "uvs": [[0.1, 0.2], [0.3, 0.4], [0.5, 0.6], [0.7, 0.8]], "material": "t"})");
+  DeviceScene d = load_device_scene(write_temp_file("inline-uvs.json", scene));
+  ASSERT_TRUE(d.features & kFeatureTextures);
+  ASSERT_EQ(d.textures.size(), 2u);  // one image, two wrap modes
+  EXPECT_EQ(d.materials[0].color_texture, d.materials[1].color_texture);
+  EXPECT_EQ(d.textures[d.materials[2].color_texture].wrap, PC_WRAP_MIRROR);
+  ASSERT_EQ(d.uvs.size(), 4u);
+  auto expect_uv = [](const pc_float4& got, float a, float b, float c, float e) {
+    EXPECT_FLOAT_EQ(got.x, a);
+    EXPECT_FLOAT_EQ(got.y, b);
+    EXPECT_FLOAT_EQ(got.z, c);
+    EXPECT_FLOAT_EQ(got.w, e);
+  };
+  expect_uv(d.uvs[0], 0.1f, 0.2f, 0.3f, 0.4f);  // triangle 0: corners 0, 1 ...
+  expect_uv(d.uvs[1], 0.5f, 0.6f, 0, 0);        // ... and 2
+  expect_uv(d.uvs[2], 0.5f, 0.6f, 0.7f, 0.8f);  // triangle 1: corners 2, 3 ...
+  expect_uv(d.uvs[3], 0.1f, 0.2f, 0, 0);        // ... and 0
+}
+
+TEST(SceneLoadTextures, ObjTexcoordErrorsNameTheLine) {
+  struct Case {
+    std::string obj, expected;
+  } cases[] = {
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/9 3/1\n", "vt.obj:5: texture coordinate index 9 out of range (1 texture"},
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2 3/1\n", "vt.obj:5: a face needs texture coordinates at all of its corners or at none"},
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 0\nf 1/1 2/1 3/1\n", "vt.obj:4: expected 1 to 3 finite texture coordinates"},
+  };
+  for (const Case& c : cases) {
+    write_temp_file("vt.obj", c.obj);
+    std::string path = write_temp_file(
+        "vt.json", scene_with_shape(R"({"type": "mesh", "file": "vt.obj", "material": "m"})"));
+    std::string error = load_error(path);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.obj << "\n  gave: " << error;
+  }
+}
+
+namespace {
+
+const char* const kMtl = R"(# a test library
+newmtl matte
+Kd 0.8 0.6 0.4
+Ka 0.1 0.1 0.1
+illum 2
+
+newmtl shiny
+Kd 0.7
+Ks 0.5 0.5 0.5
+Ns 50
+
+newmtl glass
+Kd 1 1 1
+Ni 1.33
+d 0.5
+Tf 0.9 0.95 1
+
+newmtl lamp
+Kd 0 0 0
+Ke 4 3 2
+
+newmtl wood
+Kd 0.5 1 1
+map_Kd -clamp on textures/wood.png
+
+newmtl varnish
+Kd 0.9 0.9 0.9
+Ks 0.2 0.2 0.2
+Ns 10
+map_Kd textures/wood.png
+
+newmtl unused
+Kd 0.1 0.1 0.1
+)";
+
+// Seven faces: triangles 0-5 in a row on the plane z = 0, then a quad at z = 1; materials by usemtl.
+const char* const kObj = R"(mtllib lib/materials.mtl
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 1 1 0
+v 2 0 0
+v 2 1 0
+v 3 0 0
+v 3 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+vt 0 0
+vt 1 0
+vt 0 1
+vt 1 1
+usemtl matte
+f 1 2 3
+usemtl lamp
+f 2 4 3
+usemtl shiny
+f 2 5 4
+usemtl glass
+f 5 6 4
+usemtl wood
+f 5/1 7/2 6/3
+usemtl matte
+f 7 8 6
+usemtl varnish
+f 9/1 10/2 11/4 12/3
+)";
+
+// Writes the OBJ, its MTL library and the texture; returns the scene path.
+std::string write_mtl_scene(const std::string& obj, const std::string& mtl, const std::string& shape_extra = "") {
+  write_temp_file("mtl/lib/materials.mtl", mtl);
+  write_temp_png("mtl/lib/textures/wood.png", 2, 1, {255, 128, 64, 64, 64, 64});
+  write_temp_file("mtl/model.obj", obj);
+  return write_temp_file("mtl-scene.json", textured_scene(R"({"m": {"type": "diffuse"}})",
+                                                           R"({"type": "mesh", "file": "mtl/model.obj", "material": "from_mtl")" +
+                                                               shape_extra + "}"));
+}
+
+}  // namespace
+
+TEST(SceneLoadMtl, MaterialsEmissionAndTexturesPerFace) {
+  SceneDescription scene = load_scene(write_mtl_scene(kObj, kMtl));
+  // "m" from the scene file, then the MTL materials in the order the faces first use them; "unused" is not
+  // there.
+  ASSERT_EQ(scene.materials.size(), 7u);
+  const char* names[] = {"m", "matte", "lamp", "shiny", "glass", "wood", "varnish"};
+  for (size_t i = 0; i < 7; ++i) EXPECT_EQ(scene.materials[i].name, names[i]);
+
+  const MaterialDesc &matte = scene.materials[1], &lamp = scene.materials[2], &shiny = scene.materials[3],
+                     &glass = scene.materials[4], &wood = scene.materials[5], &varnish = scene.materials[6];
+  EXPECT_EQ(matte.type_id, PC_MAT_DIFFUSE);
+  EXPECT_EQ(matte.color, glm::vec3(0.8f, 0.6f, 0.4f));
+  EXPECT_EQ(lamp.type_id, PC_MAT_DIFFUSE);
+  EXPECT_EQ(lamp.color, glm::vec3(0));
+  // Kd + Ks = 1.2: both scaled by 1 / 1.2.
+  EXPECT_EQ(shiny.type_id, PC_MAT_PHONG);
+  EXPECT_NEAR(shiny.color.x, 0.7f / 1.2f, 1e-6f);
+  EXPECT_NEAR(shiny.specular.x, 0.5f / 1.2f, 1e-6f);
+  EXPECT_FLOAT_EQ(shiny.exponent, 50.0f);
+  EXPECT_EQ(glass.type_id, PC_MAT_DIELECTRIC);
+  EXPECT_FLOAT_EQ(glass.ior, 1.33f);
+  EXPECT_EQ(glass.color, glm::vec3(0.9f, 0.95f, 1.0f));
+  // map_Kd: the texture (relative to the MTL file) times Kd.
+  EXPECT_EQ(wood.type_id, PC_MAT_DIFFUSE);
+  EXPECT_EQ(wood.color, glm::vec3(0.5f, 1, 1));
+  ASSERT_NE(wood.color_texture, PC_INVALID);
+  const TextureImage& texture = scene.textures[wood.color_texture];
+  EXPECT_EQ(texture.file, temp_dir() + "/mtl/lib/textures/wood.png");
+  EXPECT_EQ(texture.wrap, PC_WRAP_CLAMP);
+  // Phong with a texture: the largest diffuse value is Kd times the largest texel, 0.9 in red (byte 255);
+  // 0.9 + 0.2 = 1.1, so both are scaled by 1 / 1.1. The texture is loaded again for the other wrap mode.
+  EXPECT_EQ(varnish.type_id, PC_MAT_PHONG);
+  EXPECT_NEAR(varnish.color.x, 0.9f / 1.1f, 1e-6f);
+  EXPECT_NEAR(varnish.specular.x, 0.2f / 1.1f, 1e-6f);
+  EXPECT_EQ(scene.textures[varnish.color_texture].wrap, PC_WRAP_REPEAT);
+
+  // Warnings: the ignored Ka and illum-less statements, and the two scaled phong materials.
+  std::string warnings;
+  for (const std::string& w : scene.warnings) warnings += w + "\n";
+  EXPECT_NE(warnings.find("materials.mtl: ignored statements (not used by pathcl): Ka"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("materials.mtl:7: material \"shiny\": Kd + Ks reaches 1.2"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("material \"varnish\": Kd + Ks reaches 1.1"), std::string::npos) << warnings;
+
+  // Per face: the material and the emission; the quad became two triangles.
+  const ShapeDesc& shape = scene.shapes[0];
+  EXPECT_EQ(shape.triangle_materials, (std::vector<uint32_t>{1, 2, 3, 4, 5, 1, 6, 6}));
+  ASSERT_EQ(shape.triangle_emission.size(), 8u);
+  for (size_t t = 0; t < 8; ++t)
+    EXPECT_EQ(shape.triangle_emission[t], t == 1 ? glm::vec3(4, 3, 2) : glm::vec3(0)) << t;
+
+  DeviceScene d = build_device_scene(scene);
+  ASSERT_EQ(d.triangle_count, 8u);
+  for (uint32_t t = 0; t < 8; ++t) EXPECT_EQ(d.shading[t].material, shape.triangle_materials[t]) << t;
+  // One light: the lamp face, area 0.5, emission Ke.
+  ASSERT_EQ(d.lights.size(), 1u);
+  EXPECT_EQ(d.lights[0].prim, 1u);
+  EXPECT_EQ(d.shading[1].light, 0u);
+  EXPECT_FLOAT_EQ(d.lights[0].area, 0.5f);
+  EXPECT_FLOAT_EQ(d.lights[0].emission.x, 4.0f);
+  EXPECT_FLOAT_EQ(d.lights[0].emission.z, 2.0f);
+  EXPECT_TRUE(d.features & kFeatureAreaLights);
+  EXPECT_TRUE(d.features & kFeaturePhong);
+  EXPECT_TRUE(d.features & kFeatureDielectric);
+  EXPECT_TRUE(d.features & kFeatureTextures);
+  // The wood face's uvs from its vt.
+  ASSERT_EQ(d.uvs.size(), 16u);
+  EXPECT_EQ(d.uvs[8].x, 0.0f);  // corner 0: vt 1 = (0, 0)
+  EXPECT_EQ(d.uvs[8].z, 1.0f);  // corner 1: vt 2 = (1, 0)
+  EXPECT_EQ(d.uvs[9].y, 1.0f);  // corner 2: vt 3 = (0, 1)
+}
+
+TEST(SceneLoadMtl, ErrorsNameTheObjOrMtlLine) {
+  std::string obj_path = temp_dir() + "/mtl/model.obj", mtl_path = temp_dir() + "/mtl/lib/materials.mtl";
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  struct Case {
+    std::string obj, mtl, shape_extra, expected;
+  } cases[] = {
+      {"mtllib lib/nothere.mtl\n" + tri + "usemtl matte\nf 1 2 3\n", kMtl, "",
+       obj_path + ":1: cannot open the material file " + temp_dir() + "/mtl/lib/nothere.mtl"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl marble\nf 1 2 3\n", kMtl, "",
+       obj_path + ":5: unknown material \"marble\" (not in its mtllib files)"},
+      {tri + "usemtl matte\nf 1 2 3\n", kMtl, "", obj_path + ":4: unknown material \"matte\" (the file has no mtllib)"},
+      {"mtllib lib/materials.mtl\n" + tri + "f 1 2 3\n", kMtl, "", obj_path + ":5: face without a material"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "newmtl m\nKd 0.5 0.5\n", "",
+       mtl_path + ":2: Kd: expected 1 or 3 numbers"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "newmtl m\n\nKs 1.5 0 0\n", "",
+       mtl_path + ":3: Ks: expected values in [0, 1]"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "Kd 1 1 1\n", "",
+       mtl_path + ":1: Kd before any newmtl"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "newmtl m\nnewmtl m\n", "",
+       mtl_path + ":2: material \"m\" defined twice"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "newmtl m\nmap_Kd -s 2 2 1 wood.png\n", "",
+       mtl_path + ":2: map_Kd option -s is not supported"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl m\nf 1 2 3\n", "newmtl m\nmap_Kd textures/none.png\n", "",
+       mtl_path + ":2: map_Kd: " + temp_dir() + "/mtl/lib/textures/none.png: cannot open the image file"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl wood\nf 1 2 3\n", kMtl, "",
+       "shapes[0]: " + obj_path + ":6: face without texture coordinates (vt), but its material \"wood\" has a texture"},
+      {"mtllib lib/materials.mtl\n" + tri + "usemtl matte\nf 1 2 3\n", kMtl, R"(, "emission": [1, 1, 1])",
+       "shapes[0].emission: with \"from_mtl\" the emission comes from the MTL files (Ke)"},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_mtl_scene(c.obj, c.mtl, c.shape_extra);
+    std::string error = load_error(path);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.obj << c.mtl << "\n  gave: " << error;
+  }
+}

@@ -8,9 +8,11 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <stb_image_write.h>
 
 namespace fs = std::filesystem;
 
@@ -37,6 +39,14 @@ std::string write_temp_file(const std::string& name, const std::string& text) {
   std::string path = temp_dir() + "/" + name;
   fs::create_directories(fs::path(path).parent_path());
   std::ofstream(path) << text;
+  return path;
+}
+
+std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb) {
+  std::string path = temp_dir() + "/" + name;
+  fs::create_directories(fs::path(path).parent_path());
+  if (rgb.size() != size_t(width) * height * 3 || !stbi_write_png(path.c_str(), width, height, 3, rgb.data(), width * 3))
+    throw std::runtime_error("cannot write the test image " + path);
   return path;
 }
 

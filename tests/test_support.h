@@ -18,6 +18,9 @@ std::string temp_dir();
 // Writes text to a file in temp_dir() and returns its path.
 std::string write_temp_file(const std::string& name, const std::string& text);
 
+// Writes an 8-bit RGB PNG (rows from the top, 3 bytes per pixel) in temp_dir() and returns its path.
+std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb);
+
 // Loads and flattens a scene file.
 DeviceScene load_device_scene(const std::string& path);
 

@@ -1,0 +1,337 @@
+// Image textures: bilinear lookup and wrap modes on the device, sRGB decoding, reflectance clamping, and
+// textured surfaces rendered under a uniform sky, where a diffuse surface that sees only the sky
+// reflects exactly its reflectance times the sky's radiance.
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "runtime/image_io.h"
+#include "scene/texture_load.h"
+#include "test_support.h"
+
+namespace {
+
+// The sRGB transfer function (IEC 61966-2-1), decoding an 8-bit value to linear.
+double srgb_decode(int byte) {
+  double c = byte / 255.0;
+  return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+
+// ---- Device lookups ----------------------------------------------------------------------------------
+
+struct HostTexture {
+  uint32_t width, height, wrap;
+  std::vector<glm::vec3> texels;  // rows from the top
+  glm::vec3 at(int x, int y) const { return texels[size_t(y) * width + x]; }
+};
+
+// Runs texture_lookup on the device for texture `index` of `textures` at each uv.
+std::vector<glm::vec3> device_lookups(const std::vector<HostTexture>& textures, uint32_t index,
+                                      const std::vector<glm::vec2>& uvs) {
+  ClContext& cl = test_device();
+  static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
+  std::vector<Texture> headers;
+  std::vector<pc_float4> texels;
+  for (const HostTexture& t : textures) {
+    headers.push_back({t.width, t.height, uint32_t(texels.size()), t.wrap});
+    for (const glm::vec3& c : t.texels) texels.push_back({c.x, c.y, c.z, 1});
+  }
+  std::vector<float> flat;
+  for (const glm::vec2& uv : uvs) flat.insert(flat.end(), {uv.x, uv.y});
+  ClBuffer tb = upload(cl, headers), xb = upload(cl, texels), ub = upload(cl, flat);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, uvs.size() * sizeof(pc_float4));
+  ClKernel k(program.kernel("texture_lookup_test"));
+  k.arg(0, tb.mem);
+  k.arg(1, xb.mem);
+  k.arg(2, index);
+  k.arg(3, ub.mem);
+  k.arg(4, out.mem);
+  run_kernel(cl, k.k, uvs.size());
+  std::vector<pc_float4> values(uvs.size());
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, values.size() * sizeof(pc_float4), values.data(), 0,
+                               nullptr, nullptr));
+  std::vector<glm::vec3> result;
+  for (const pc_float4& v : values) result.push_back({v.x, v.y, v.z});
+  return result;
+}
+
+// A 4 x 3 texture whose texels all differ: (column, row, 1 + column * row).
+HostTexture grid_texture(uint32_t wrap) {
+  HostTexture t{4, 3, wrap, {}};
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) t.texels.push_back({float(x), float(y), float(1 + x * y)});
+  return t;
+}
+
+// The uv of the centre of texel (x, y), row y counted from the top (v = 0 is the bottom row).
+glm::vec2 centre_uv(const HostTexture& t, double x, double y) {
+  return {float((x + 0.5) / t.width), float(1.0 - (y + 0.5) / t.height)};
+}
+
+void expect_near(const glm::vec3& got, const glm::vec3& want, float tol, const std::string& what) {
+  EXPECT_NEAR(got.x, want.x, tol) << what;
+  EXPECT_NEAR(got.y, want.y, tol) << what;
+  EXPECT_NEAR(got.z, want.z, tol) << what;
+}
+
+TEST(TextureLookup, TexelCentresGiveTexelsAndBilinearBetweenThem) {
+  HostTexture t = grid_texture(PC_WRAP_CLAMP);
+  std::vector<glm::vec2> uvs;
+  std::vector<glm::vec3> want;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      uvs.push_back(centre_uv(t, x, y));
+      want.push_back(t.at(x, y));
+    }
+  // Between two centres along u, along v, and a quarter of the way in both (bilinear weights).
+  uvs.push_back(centre_uv(t, 1.5, 1));
+  want.push_back(0.5f * (t.at(1, 1) + t.at(2, 1)));
+  uvs.push_back(centre_uv(t, 2, 0.5));
+  want.push_back(0.5f * (t.at(2, 0) + t.at(2, 1)));
+  uvs.push_back(centre_uv(t, 0.25, 1.75));
+  want.push_back(0.75f * 0.25f * t.at(0, 1) + 0.25f * 0.25f * t.at(1, 1) + 0.75f * 0.75f * t.at(0, 2) +
+                 0.25f * 0.75f * t.at(1, 2));
+  std::vector<glm::vec3> got = device_lookups({t}, 0, uvs);
+  for (size_t i = 0; i < uvs.size(); ++i)
+    expect_near(got[i], want[i], 1e-5f, "uv (" + std::to_string(uvs[i].x) + ", " + std::to_string(uvs[i].y) + ")");
+}
+
+TEST(TextureLookup, WrapModesOutsideTheUnitSquare) {
+  // Three textures in one texel array, so offsets are exercised too.
+  std::vector<HostTexture> textures = {grid_texture(PC_WRAP_REPEAT), grid_texture(PC_WRAP_CLAMP),
+                                       grid_texture(PC_WRAP_MIRROR)};
+  const HostTexture& t = textures[0];
+  struct Case {
+    glm::vec2 uv;
+    glm::vec3 repeat, clamp, mirror;
+  };
+  glm::vec2 c12 = centre_uv(t, 1, 2);  // texel (1, 2)
+  std::vector<Case> cases = {
+      // One period to the right and two up: the same texel when repeating; clamped to the edge column
+      // / row; mirrored across u = 1: column 3 - 1 = 2, and across v = 1 twice (the same row).
+      {c12 + glm::vec2(1, 2), t.at(1, 2), t.at(3, 0), t.at(2, 2)},
+      // Reflected through u = 0 and v = 0: the next period when repeating, the corner texel when
+      // clamping, the same texel when mirroring.
+      {glm::vec2(-c12.x, -c12.y), t.at(2, 0), t.at(0, 2), t.at(1, 2)},
+      // Far away: 1000 periods to the left.
+      {c12 - glm::vec2(1000, 0), t.at(1, 2), t.at(0, 2), t.at(1, 2)},
+      // Half a texel beyond the right edge: repeat blends the last column with the first, clamp and
+      // mirror give the last column.
+      {glm::vec2(1.0f, c12.y), 0.5f * (t.at(3, 2) + t.at(0, 2)), t.at(3, 2), t.at(3, 2)},
+  };
+  std::vector<glm::vec2> uvs;
+  for (const Case& c : cases) uvs.push_back(c.uv);
+  std::vector<glm::vec3> repeat = device_lookups(textures, 0, uvs), clamp = device_lookups(textures, 1, uvs),
+                         mirror = device_lookups(textures, 2, uvs);
+  for (size_t i = 0; i < cases.size(); ++i) {
+    std::string where = "case " + std::to_string(i);
+    // 1000 periods away the uv itself is only good to about 6e-5, a few thousandths of a texel.
+    float tol = i == 2 ? 2e-2f : 1e-4f;
+    expect_near(repeat[i], cases[i].repeat, tol, where + " repeat");
+    expect_near(clamp[i], cases[i].clamp, tol, where + " clamp");
+    expect_near(mirror[i], cases[i].mirror, tol, where + " mirror");
+  }
+}
+
+// ---- Image files --------------------------------------------------------------------------------------
+
+TEST(TextureFile, PngIsDecodedWithTheSrgbCurveRowsFromTheTop) {
+  std::vector<unsigned char> rgb;
+  for (int row = 0; row < 2; ++row)
+    for (int i = 0; i < 256; ++i) {
+      int r = row == 0 ? i : 255 - i;
+      rgb.insert(rgb.end(), {(unsigned char)r, (unsigned char)(255 - r), (unsigned char)((37 * i) % 256)});
+    }
+  TextureImage image = load_texture_image(write_temp_png("srgb.png", 256, 2, rgb));
+  ASSERT_EQ(image.width, 256u);
+  ASSERT_EQ(image.height, 2u);
+  for (size_t i = 0; i < image.texels.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      double want = srgb_decode(rgb[3 * i + c]);
+      ASSERT_NEAR(image.texels[i][c], want, 1e-6 * want + 1e-9) << "texel " << i << " channel " << c;
+    }
+}
+
+const char* const kQuad = R"({"type": "triangles", "positions": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
+      "indices": [[0, 1, 2], [0, 2, 3]], "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]], "material": "m"})";
+
+TEST(TextureFile, ExrReflectanceAboveOneIsClampedWithAWarningButAnEnvironmentMapIsNot) {
+  Image exr;
+  exr.width = 2;
+  exr.height = 1;
+  exr.rgb = {2.0f, 0.5f, 1.0f, 0.25f, 3.0f, 0.0f};
+  std::string file = temp_dir() + "/bright.exr";
+  write_exr(file, exr);
+  // The same file as a reflectance texture and as an environment map.
+  std::string text = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "width": 4, "height": 4},
+    "materials": {"m": {"type": "diffuse", "reflectance": {"texture": "bright.exr", "wrap": "clamp"}}},
+    "shapes": [)" + std::string(kQuad) + R"(], "lights": [{"type": "environment", "file": "bright.exr"}]})";
+  SceneDescription scene = load_scene(write_temp_file("bright.json", text));
+  ASSERT_EQ(scene.textures.size(), 2u);
+  const TextureImage& reflectance = scene.textures[scene.materials[0].color_texture];
+  EXPECT_TRUE(reflectance.reflectance);
+  EXPECT_EQ(reflectance.wrap, PC_WRAP_CLAMP);
+  EXPECT_EQ(reflectance.texels[0], glm::vec4(1.0f, 0.5f, 1.0f, 1.0f));
+  EXPECT_EQ(reflectance.texels[1], glm::vec4(0.25f, 1.0f, 0.0f, 1.0f));
+  const TextureImage& env = scene.textures[scene.lights[0].texture];
+  EXPECT_FALSE(env.reflectance);
+  EXPECT_EQ(env.texels[0].x, 2.0f);
+  ASSERT_EQ(scene.warnings.size(), 1u);
+  EXPECT_NE(scene.warnings[0].find("materials.m.reflectance.texture"), std::string::npos) << scene.warnings[0];
+  EXPECT_NE(scene.warnings[0].find("2 texels above 1 clamped to 1"), std::string::npos) << scene.warnings[0];
+  EXPECT_EQ(scene.materials[0].color, glm::vec3(1));
+}
+
+// ---- Rendering -------------------------------------------------------------------------------------
+
+// A 4 x 4 texture of 2 x 2 blocks, four colours given as sRGB bytes; block (column, row from the top).
+const unsigned char kBlockBytes[2][2][3] = {{{200, 40, 40}, {40, 40, 200}}, {{40, 200, 40}, {230, 220, 60}}};
+
+std::string write_block_png() {
+  std::vector<unsigned char> rgb;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 3; ++c) rgb.push_back(kBlockBytes[x / 2][y / 2][c]);
+  return write_temp_png("blocks.png", 4, 4, rgb);
+}
+
+// The mean over [a, b] of the weight of the second block along one axis of the block texture under
+// bilinear filtering with clamping: 0 up to the first block's last texel centre (0.375), 1 from the
+// second block's first centre (0.625), linear between.
+double mean_ramp(double a, double b) {
+  const double c0 = 0.375, c1 = 0.625, len = c1 - c0;
+  auto integral = [&](double u) {  // of the ramp from 0 to u
+    if (u <= c0) return 0.0;
+    if (u <= c1) return (u - c0) * (u - c0) / (2 * len);
+    return len / 2 + (u - c1);
+  };
+  return (integral(b) - integral(a)) / (b - a);
+}
+
+// Renders a head-on view of the square [-1, 1]^2 at z = 0 that exactly fills a width x width film,
+// with the square's material textured by the block texture, under a sky of radiance 1 with one
+// scattering event, and checks every pixel against the texture's mean over the pixel's footprint.
+// mirrored_u: the texture appears mirrored left to right.
+void expect_textured_square(const std::string& shape_json, bool mirrored_u, const std::string& name) {
+  const int width = 16;
+  const double distance = 1.0 / std::tan(20.0 * M_PI / 180.0);  // fov 40 degrees covers [-1, 1]
+  std::ostringstream scene;
+  scene.precision(17);
+  scene << R"({"camera": {"position": [0, 0, )" << distance << R"(], "look_at": [0, 0, 0], "fov_y_degrees": 40,
+    "width": )" << width << R"(, "height": )" << width << R"(},
+    "materials": {"m": {"type": "diffuse", "reflectance": {"texture": "blocks.png", "wrap": "clamp"}}},
+    "shapes": [)" << shape_json << R"(], "lights": [{"type": "environment", "radiance": [1, 1, 1]}]})";
+  write_block_png();
+  DeviceScene d = load_device_scene(write_temp_file(name + ".json", scene.str()));
+  ASSERT_TRUE(d.features & kFeatureTextures);
+  RenderOptions opt;
+  opt.spp = 256;
+  opt.max_depth = 1;
+  opt.seed = 7;
+  RenderResult r = render(test_device(), d, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+
+  double sum_diff = 0, sum_var = 0;
+  int beyond_3 = 0;
+  for (int py = 0; py < width; ++py)
+    for (int px = 0; px < width; ++px) {
+      double u0 = double(px) / width, u1 = double(px + 1) / width;
+      if (mirrored_u) std::tie(u0, u1) = std::make_pair(1 - u1, 1 - u0);
+      double right = mean_ramp(u0, u1);                                      // weight of block column 1
+      double top = mean_ramp(1 - double(py + 1) / width, 1 - double(py) / width);  // weight of block row 0
+      for (int c = 0; c < 3; ++c) {
+        double want = 0;
+        for (int bx = 0; bx < 2; ++bx)
+          for (int by = 0; by < 2; ++by)
+            want += (bx ? right : 1 - right) * (by ? 1 - top : top) * srgb_decode(kBlockBytes[bx][by][c]);
+        size_t i = 3 * (size_t(py) * width + px) + c;
+        double got = r.film.mean[i], var = r.film.variance[i];
+        ASSERT_GT(var, 0) << name << " pixel " << px << "," << py;
+        double z = (got - want) / std::sqrt(var);
+        EXPECT_LT(std::abs(z), 5.0) << name << " pixel " << px << "," << py << " channel " << c << ": " << got
+                                    << " expected " << want;
+        beyond_3 += std::abs(z) > 3;
+        sum_diff += got - want;
+        sum_var += var;
+      }
+    }
+  // All pixels together: within 4 standard errors, and no more pixels beyond 3 than chance allows
+  // (0.27% of 768, about 2).
+  EXPECT_LT(std::abs(sum_diff) / std::sqrt(sum_var), 4.0) << name;
+  EXPECT_LE(beyond_3, 10) << name;
+}
+
+TEST(TextureRender, InlineTrianglesWithUvsReflectTheTextureTimesTheSky) {
+  expect_textured_square(kQuad, false, "square-inline");
+}
+
+TEST(TextureRender, ObjQuadWithTexcoordsReflectsTheTextureTimesTheSky) {
+  // The vt order differs from the v order; the quad is triangulated by the clean-up.
+  write_temp_file("square.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 1 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                "f 1/2 2/3 3/1 4/4\n");
+  expect_textured_square(R"({"type": "mesh", "file": "square.obj", "material": "m"})", false, "square-obj");
+}
+
+TEST(TextureRender, MirroringTransformMirrorsTheTexture) {
+  // Mirrored in x, the corner with uv (0, 0) is at (1, -1): the image shows the texture mirrored. The
+  // loader reverses the winding, and the uvs must go with their corners.
+  std::string mirrored = std::string(kQuad);
+  mirrored.insert(mirrored.size() - 1, R"(, "transform": {"scale": [-1, 1, 1]})");
+  expect_textured_square(mirrored, true, "square-mirrored");
+}
+
+// A sphere seen from above the equator (latitude 45 degrees, direction (-0.5, 0.707, 0.5) from its
+// centre) through a narrow field of view: every pixel sees one block of an 8 x 4 texture of 2 x 2
+// blocks, block (u column, v row from the top) of the lat-long mapping (kernels/integrator.cl):
+// u = atan2(-z, x) / (2 pi) = 0.625 -> column 2, v = 1 - 45/180 = 0.75 -> row 0 (a block's middle, so
+// that bilinear filtering within the footprint only sees that block). A convex surface under a
+// uniform sky reflects its reflectance times the sky: every pixel's mean is the block's colour.
+const unsigned char kSphereBlocks[4][2][3] = {{{250, 10, 10}, {10, 250, 10}},
+                                              {{10, 10, 250}, {250, 250, 10}},
+                                              {{10, 250, 250}, {250, 10, 250}},
+                                              {{120, 120, 120}, {250, 250, 250}}};
+
+void expect_sphere_view(const std::string& transform_json, int block_column, int block_row) {
+  std::vector<unsigned char> rgb;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) rgb.push_back(kSphereBlocks[x / 2][y / 2][c]);
+  write_temp_png("sphere-blocks.png", 8, 4, rgb);
+  std::string scene = R"({"camera": {"position": [-2.5, 3.5355339, 2.5], "look_at": [0, 0, 0], "fov_y_degrees": 2,
+      "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse", "reflectance": {"texture": "sphere-blocks.png"}}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "m")" + transform_json + R"(}],
+    "lights": [{"type": "environment", "radiance": [1, 1, 1]}]})";
+  DeviceScene d = load_device_scene(write_temp_file("sphere-texture.json", scene));
+  RenderOptions opt;
+  opt.spp = 64;
+  opt.max_depth = 1;
+  opt.seed = 3;
+  RenderResult r = render(test_device(), d, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+  const size_t pixels = r.film.mean.size() / 3;
+  for (int c = 0; c < 3; ++c) {
+    const double want = srgb_decode(kSphereBlocks[block_column][block_row][c]);
+    double sum_diff = 0, sum_var = 0;
+    for (size_t p = 0; p < pixels; ++p) {
+      double got = r.film.mean[3 * p + c], var = r.film.variance[3 * p + c];
+      EXPECT_LT(std::abs(got - want), 5 * std::sqrt(var)) << transform_json << " pixel " << p << " channel " << c
+                                                          << ": " << got << " expected " << want;
+      sum_diff += got - want;
+      sum_var += var;
+    }
+    EXPECT_LT(std::abs(sum_diff), 4 * std::sqrt(sum_var)) << transform_json << " channel " << c;
+  }
+}
+
+TEST(TextureRender, SphereLatLongUvsInItsOwnFrame) {
+  expect_sphere_view("", 2, 0);
+  // Rotated 90 degrees about y, the same view sees local direction (-0.5, 0.707, -0.5): u = 0.375.
+  expect_sphere_view(R"(, "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 90}})", 1, 0);
+  // Scaled by -1 (a point reflection), it sees local direction (0.5, -0.707, -0.5): u = 0.125, v = 0.25.
+  expect_sphere_view(R"(, "transform": {"scale": -1})", 0, 1);
+}
+
+}  // namespace
