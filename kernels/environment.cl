@@ -14,10 +14,12 @@ inline float3 env_direction(float2 uv) {
   return (float3)(s * cos(phi), cos(theta), s * sin(phi));
 }
 
+/* theta from atan2, not acos(d.y): near a pole a float d.y keeps few digits of theta (within 0.05 degrees
+ * of it, sin(theta) and with it env_pdf came out 1 % off), while d.x and d.z keep sin(theta) exactly. */
 inline float2 env_uv(float3 d) {
   float u = atan2(d.z, d.x) * (0.5f * PC_INV_PI);
   if (u < 0.0f) u += 1.0f;
-  return (float2)(fmin(u, 1.0f), acos(clamp(d.y, -1.0f, 1.0f)) * PC_INV_PI);
+  return (float2)(fmin(u, 1.0f), atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
 }
 
 inline uint2 env_texel(Texture t, float2 uv) {
