@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 #include <gtest/gtest.h>
 
 #include "chi2.h"
@@ -259,8 +261,7 @@ TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
 namespace {
 
 // A 32 x 16 map: a smooth background with a dark row, a dark block and single dark texels (all exactly
-// 0) and one bright texel; colours differ per channel so that luminance is not one channel. Values are
-// multiples of 1/1024 below 64, exact in the loader's half floats.
+// 0) and one bright texel; colours differ per channel so that luminance is not one channel.
 Image synthetic_env_map() {
   Image img;
   img.width = 32;
@@ -268,7 +269,7 @@ Image synthetic_env_map() {
   img.rgb.resize(size_t(img.width) * img.height * 3);
   for (uint32_t r = 0; r < img.height; ++r)
     for (uint32_t c = 0; c < img.width; ++c) {
-      float v = std::round(1024 * (0.3f + 0.2f * std::sin(0.4f * c) * std::cos(0.7f * r))) / 1024;
+      float v = 0.3f + 0.2f * std::sin(0.4f * c) * std::cos(0.7f * r);
       bool dark = r == 4 || (r >= 9 && r <= 11 && c >= 3 && c <= 8) || (r * 7 + c * 3) % 23 == 0;
       float* t = &img.rgb[3 * (size_t(r) * img.width + c)];
       t[0] = dark ? 0 : v;
@@ -281,14 +282,27 @@ Image synthetic_env_map() {
 
 double luminance(const float* t) { return 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]; }
 
-// The texel a direction falls in under environment.cl's documented convention: +y up, v = theta / pi
-// from +y (row 0 at the top), u = phi / (2 pi) with phi = atan2(z, x).
-void env_texel(const Image& img, const glm::dvec3& d, uint32_t* row, uint32_t* col) {
+// Image coordinates in texels (x from the left, y from the top) of a direction under environment.cl's
+// documented convention: +y up, v = theta / pi from +y (row 0 at the top), u = phi / (2 pi) with
+// phi = atan2(z, x).
+glm::dvec2 env_texel_coordinates(const Image& img, const glm::dvec3& d) {
   double u = std::atan2(d.z, d.x) / (2 * M_PI);
   if (u < 0) u += 1;
   double v = std::atan2(std::hypot(d.x, d.z), d.y) / M_PI;
-  *col = std::min(uint32_t(u * img.width), img.width - 1);
-  *row = std::min(uint32_t(v * img.height), img.height - 1);
+  return {u * img.width, v * img.height};
+}
+
+// The texel a direction falls in.
+void env_texel(const Image& img, const glm::dvec3& d, uint32_t* row, uint32_t* col) {
+  glm::dvec2 p = env_texel_coordinates(img, d);
+  *col = std::min(uint32_t(p.x), img.width - 1);
+  *row = std::min(uint32_t(p.y), img.height - 1);
+}
+
+// Within eps texels of a texel edge, where a float direction may round into either texel.
+bool near_texel_edge(const Image& img, const glm::dvec3& d, double eps = 1e-4) {
+  glm::dvec2 p = env_texel_coordinates(img, d);
+  return std::abs(p.x - std::round(p.x)) < eps || std::abs(p.y - std::round(p.y)) < eps;
 }
 
 DeviceScene env_scene(const Image& img, double scale) {
@@ -349,6 +363,8 @@ TEST(LightChi2, EnvironmentMap) {
       uint32_t r, col;
       env_texel(img, wi, &r, &col);
       const float* t = &img.rgb[3 * (r * img.width + col)];
+      // At a texel edge the sample's texel is ambiguous (the test below checks those samples).
+      if (near_texel_edge(img, wi)) continue;
       dark_hits += luminance(t) == 0;
       // Radiance = scale x texel under the documented convention; the pdf as sampled = env_pdf = the
       // density computed here from the texels.
@@ -384,6 +400,68 @@ TEST(LightChi2, EnvironmentMap) {
     EXPECT_EQ(mismatches, 0u) << first;
     EXPECT_NEAR(pdf_total, 1, 5e-4);
   }
+}
+
+TEST(LightSampling, EnvironmentSampleRadianceAndDensityComeFromOneTexel) {
+  // A 256 x 128 map of texels spread over six decades, a tenth of them black: a sample's radiance and
+  // its density must belong to the same texel (a radiance from one texel over the density of a dimmer
+  // neighbour is a firefly), which must be the texel its direction lies in, or, within 1e-4 texels of
+  // an edge, one of the texels meeting there.
+  Image img;
+  img.width = 256;
+  img.height = 128;
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> decade(-3, 3), unit(0, 1);
+  for (size_t i = 0; i < size_t(img.width) * img.height; ++i) {
+    float v = unit(rng) < 0.1f ? 0 : std::pow(10.0f, decade(rng));
+    img.rgb.insert(img.rgb.end(), {v, 0.8f * v, 1.2f * v});
+  }
+  const double scale = 1;
+  SceneBuffers sb(env_scene(img, scale));
+  // Each texel's probability: its row's, times its own within the row, from luminance x sin(theta).
+  std::vector<double> row_sum(img.height, 0);
+  double total = 0;
+  for (uint32_t r = 0; r < img.height; ++r) {
+    for (uint32_t c = 0; c < img.width; ++c)
+      row_sum[r] += luminance(&img.rgb[3 * (r * img.width + c)]) * std::sin(M_PI * (r + 0.5) / img.height);
+    total += row_sum[r];
+  }
+  LightSamples s = sample_lights(sb, {0, 0, 0}, 21, kChi2Samples);
+  size_t inconsistent = 0, near_edges = 0;
+  std::string first;
+  for (size_t i = 0; i < s.n; ++i) {
+    ASSERT_EQ(s.status(i), 1);
+    glm::dvec3 d = s.wi(i);
+    glm::dvec2 p = env_texel_coordinates(img, d);
+    double sin_theta = std::hypot(d.x, d.z) / glm::length(d);
+    std::vector<std::pair<uint32_t, uint32_t>> candidates;
+    for (double du : {-1e-4, 1e-4})
+      for (double dv : {-1e-4, 1e-4}) {
+        uint32_t c = uint32_t(std::floor(p.x + du) + img.width) % img.width;
+        uint32_t r = uint32_t(std::clamp(std::floor(p.y + dv), 0.0, img.height - 1.0));
+        if (std::find(candidates.begin(), candidates.end(), std::pair{r, c}) == candidates.end()) candidates.push_back({r, c});
+      }
+    near_edges += candidates.size() > 1;
+    bool ok = false;
+    for (auto [r, c] : candidates) {
+      const float* t = &img.rgb[3 * (r * img.width + c)];
+      double p_row = row_sum[r] / total, p_col = luminance(t) * std::sin(M_PI * (r + 0.5) / img.height) / row_sum[r];
+      double pdf = p_row * p_col * img.width * img.height / (2 * M_PI * M_PI * sin_theta);
+      // The device takes each probability as the difference of two float cdf entries, each within
+      // 3e-8 of its exact value.
+      double tol = 1e-4 + 6e-8 / p_row + 6e-8 / p_col;
+      ok = ok || (close_rel(s.le(i).x, scale * t[0], 1e-6) && close_rel(s.le(i).z, scale * t[2], 1e-6) &&
+                  close_rel(s.pdf(i), pdf, tol));
+    }
+    if (!ok && !inconsistent++) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf, "sample %zu: wi (%.9g %.9g %.9g) at texel coordinates (%.9f, %.9f): Le %g, pdf %g", i,
+                    d.x, d.y, d.z, p.x, p.y, s.le(i).x, s.pdf(i));
+      first = buf;
+    }
+  }
+  std::printf("  %zu of %zu samples within 1e-4 texels of an edge\n", near_edges, s.n);
+  EXPECT_EQ(inconsistent, 0u) << first;
 }
 
 // ---- Delta lights, exactly ----
