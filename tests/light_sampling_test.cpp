@@ -256,6 +256,15 @@ TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
   }
 }
 
+TEST(LightChi2, ConstantEnvironment) {
+  // Uniform over the sphere; a constant environment needs no map.
+  std::vector<LightCase> cases = {{"constant environment",
+                                   load_device_scene(write_temp_file(
+                                       "sky.json", scene_json("", R"({"type": "environment", "radiance": [0.7, 0.7, 0.7]})"))),
+                                   {0.5, -2, 1}, SphereBinning(), 0.7}};
+  expect_light_family(cases, 5500);
+}
+
 // ---- The environment map ----
 
 namespace {
@@ -509,6 +518,20 @@ TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
         EXPECT_NEAR(s.distance(i), glm::length(d), 1e-5 * glm::length(d));
       }
     }
+}
+
+TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
+  SceneBuffers sb(load_device_scene(write_temp_file(
+      "sun.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
+                             R"({"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [3, 2, 1]})"))));
+  glm::dvec3 towards_light = -glm::normalize(glm::dvec3(0.3, -1, 0.2));
+  for (glm::dvec3 x : {glm::dvec3(0, 0, 0), glm::dvec3(-10, 4, 20)}) {
+    LightSamples s = sample_lights(sb, x, 1, 1);
+    ASSERT_EQ(s.status(0), 2);
+    EXPECT_NEAR(glm::length(s.wi(0) - towards_light), 0, 1e-6);
+    EXPECT_EQ(s.le(0), glm::dvec3(3, 2, 1));
+    EXPECT_TRUE(std::isinf(s.distance(0)));
+  }
 }
 
 TEST(LightSampling, PointLightFollowsTheInverseSquareLaw) {
