@@ -272,6 +272,7 @@ TEST(BsdfChi2, RoughConductor) {
     for (double theta : {10.0, 45.0, 80.0})
       cases.push_back({"rough_conductor r " + std::to_string(r).substr(0, 3) + " wo " + std::to_string(int(theta)),
                        conductor(r), direction(theta, -70)});
+  cases.push_back({"rough_conductor r 0.4 wo 0 (normal)", conductor(0.4), glm::dvec3(0, 0, 1)});
   cases.push_back({"rough_conductor r 0.3 wo 135 (back side)", conductor(0.3), direction(135, 10)});
   expect_chi2_family(cases, 3000);
 }
@@ -437,46 +438,51 @@ TEST(BsdfExact, MirrorReflectsExactly) {
 }
 
 TEST(BsdfExact, DielectricReflectsWithFresnelProbabilityAndRefractsBySnell) {
-  const double ior = 1.5, critical = std::asin(1 / ior) / kDeg;
   const size_t grid = 4096;
   std::vector<pc_float4> u = lobe_choice_grid(grid);
   const glm::dvec3 tint(0.9, 0.8, 0.7);
-  for (double theta : {0.0, 20.0, 45.0, 70.0, 88.0, 100.0, 120.0, 135.0, 180 - critical + 0.1, 150.0, 178.0}) {
-    SCOPED_TRACE("theta " + std::to_string(theta));
-    glm::dvec3 wo = direction(theta, 40);
-    glm::vec3 wof(wo);
-    bool inside = wo.z < 0;
-    double cos_i = std::abs(double(wof.z));
-    double fr = inside ? fresnel_reference(cos_i, ior, 1) : fresnel_reference(cos_i, 1, ior);
-    double eta = inside ? 1 / ior : ior;  // n_t / n_i
-    double tol = fresnel_tolerance(cos_i, eta);
-    Samples s = sample_bsdf(dielectric(float(ior), f4(tint.x, tint.y, tint.z)), wo, 0, grid, u);
-    size_t reflected = 0;
-    for (size_t i = 0; i < s.n; ++i) {
-      ASSERT_EQ(s.status(i), 2);
-      glm::dvec3 wi = s.wi(i);
-      EXPECT_NEAR(glm::length(wi), 1, 2e-7);
-      if (wi.z * wo.z > 0) {  // reflection: the mirror direction, chosen with probability F
-        ++reflected;
-        EXPECT_EQ(wi, glm::dvec3(-wof.x, -wof.y, wof.z));
-        EXPECT_NEAR(s.pdf(i), fr, tol);
-        EXPECT_NEAR(s.weight(i).x, 1, 1e-6);  // F / F
-        EXPECT_NEAR(s.weight(i).z, 1, 1e-6);
-      } else {  // refraction: opposite azimuth, sin_t = sin_i / eta, weight T / eta^2 (radiance scaling)
-        double sin_i = std::sqrt(1 - cos_i * cos_i), sin_t = std::hypot(wi.x, wi.y);
-        EXPECT_NEAR(sin_t, sin_i / eta, 1e-6);
-        if (sin_i > 1e-6) {  // in the plane of incidence, on the far side of the normal
-          double along = -(wi.x * wo.x + wi.y * wo.y) / (sin_t * std::hypot(wo.x, wo.y));
-          EXPECT_NEAR(along, 1, 1e-6);
+  // Glass, and an ior below 1 (a bubble) where total internal reflection happens from the outside.
+  for (double ior : {1.5, 0.75}) {
+    double critical = std::asin(std::min(ior, 1 / ior)) / kDeg;
+    double tir_theta = ior > 1 ? 180 - critical - 0.1 : critical + 0.1, edge_theta = ior > 1 ? 180 - critical + 0.1 : critical - 0.1;
+    for (double theta : {0.0, 20.0, 45.0, 70.0, 88.0, 100.0, 120.0, 135.0, 150.0, 178.0, tir_theta, edge_theta}) {
+      SCOPED_TRACE("ior " + std::to_string(ior) + " theta " + std::to_string(theta));
+      glm::dvec3 wo = direction(theta, 40);
+      glm::vec3 wof(wo);
+      bool inside = wo.z < 0;
+      double cos_i = std::abs(double(wof.z));
+      double fr = inside ? fresnel_reference(cos_i, ior, 1) : fresnel_reference(cos_i, 1, ior);
+      double eta = inside ? 1 / ior : ior;  // n_t / n_i
+      double tol = fresnel_tolerance(cos_i, eta);
+      Samples s = sample_bsdf(dielectric(float(ior), f4(tint.x, tint.y, tint.z)), wo, 0, grid, u);
+      size_t reflected = 0;
+      for (size_t i = 0; i < s.n; ++i) {
+        ASSERT_EQ(s.status(i), 2);
+        glm::dvec3 wi = s.wi(i);
+        EXPECT_NEAR(glm::length(wi), 1, 2e-7);
+        if (wi.z * wo.z > 0) {  // reflection: the mirror direction, chosen with probability F
+          ++reflected;
+          EXPECT_EQ(wi, glm::dvec3(-wof.x, -wof.y, wof.z));
+          EXPECT_NEAR(s.pdf(i), fr, tol);
+          EXPECT_NEAR(s.weight(i).x, 1, 1e-6);  // F / F
+          EXPECT_NEAR(s.weight(i).z, 1, 1e-6);
+        } else {  // refraction: opposite azimuth, sin_t = sin_i / eta, weight T / eta^2 (radiance scaling)
+          double sin_i = std::sqrt(1 - cos_i * cos_i), sin_t = std::hypot(wi.x, wi.y);
+          EXPECT_NEAR(sin_t, sin_i / eta, 1e-6);
+          if (sin_i > 1e-6) {  // in the plane of incidence, on the far side of the normal
+            double along = -(wi.x * wo.x + wi.y * wo.y) / (sin_t * std::hypot(wo.x, wo.y));
+            EXPECT_NEAR(along, 1, 1e-6);
+          }
+          EXPECT_NEAR(s.pdf(i), 1 - fr, tol);
+          for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight(i)[c], tint[c] / (eta * eta), 1e-6);
         }
-        EXPECT_NEAR(s.pdf(i), 1 - fr, tol);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight(i)[c], tint[c] / (eta * eta), 1e-6);
       }
-    }
-    // The lobe is chosen by u.z < F: over the grid the reflected fraction is F to within one grid step.
-    EXPECT_NEAR(double(reflected) / grid, fr, 1.0 / grid) << "F " << fr;
-    if (inside && std::asin(std::sqrt(1 - cos_i * cos_i)) / kDeg > critical) {
-      EXPECT_EQ(reflected, grid);
+      // The lobe is chosen by u.z < F: over the grid the reflected fraction is F to within one grid step.
+      EXPECT_NEAR(double(reflected) / grid, fr, 1.0 / grid) << "F " << fr;
+      if (std::sqrt(1 - cos_i * cos_i) / eta >= 1) {  // total internal reflection
+        EXPECT_EQ(fr, 1.0);
+        EXPECT_EQ(reflected, grid);
+      }
     }
   }
 }
