@@ -14,10 +14,12 @@ inline float3 env_direction(float2 uv) {
   return (float3)(s * cos(phi), cos(theta), s * sin(phi));
 }
 
+/* theta from atan2, not acos(d.y): near a pole a float d.y keeps few digits of theta (within 0.05 degrees
+ * of it, sin(theta) and with it env_pdf came out 1 % off), while d.x and d.z keep sin(theta) exactly. */
 inline float2 env_uv(float3 d) {
   float u = atan2(d.z, d.x) * (0.5f * PC_INV_PI);
   if (u < 0.0f) u += 1.0f;
-  return (float2)(fmin(u, 1.0f), acos(clamp(d.y, -1.0f, 1.0f)) * PC_INV_PI);
+  return (float2)(fmin(u, 1.0f), atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
 }
 
 inline uint2 env_texel(Texture t, float2 uv) {
@@ -52,7 +54,12 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
   return 0.25f * PC_INV_PI;
 }
 
-inline float3 env_sample(Light light, __global const Texture* textures, __global const float* dist, float2 u, float* pdf) {
+/* A direction drawn from the map's distribution: *pdf its density and *le its radiance, both of the texel
+ * it was drawn from. The radiance is not looked up again from the direction: the float direction of a
+ * sample at a texel's edge may lie in the neighbouring texel, and a radiance from one texel over the
+ * density of a dimmer one would be a firefly (next to a sun, a very bright one). */
+inline float3 env_sample(Light light, __global const Texture* textures, __global const float4* texels,
+                         __global const float* dist, float2 u, float* pdf, float3* le) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
@@ -69,10 +76,12 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
     float3 d = env_direction((float2)(uu, v));
     float sin_theta = sin(PC_PI * v);
     *pdf = sin_theta > 0.0f ? dr * dc * (float)(t.width * t.height) / (2.0f * PC_PI * PC_PI * sin_theta) : 0.0f;
+    *le = light.emission.xyz * texels[t.offset + r * t.width + c].xyz;
     return d;
   }
 #endif
   *pdf = 0.25f * PC_INV_PI;
+  *le = light.emission.xyz;
   return sample_uniform_sphere(u);
 }
 

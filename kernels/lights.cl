@@ -176,8 +176,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
 #ifdef PC_HAS_ENVIRONMENT
     case PC_LIGHT_ENVIRONMENT: {
       float pdf;
-      out->wi = env_sample(light, sc->textures, sc->env_dist, u.yz, &pdf);
-      out->Le = env_radiance(light, sc->textures, sc->texels, out->wi);
+      out->wi = env_sample(light, sc->textures, sc->texels, sc->env_dist, u.yz, &pdf, &out->Le);
       out->pdf = light.select_pdf * pdf;
       out->infinite = true;
       break;

@@ -3,8 +3,13 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 #include <ImfArray.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfRgbaFile.h>
 #include <stb_image.h>
 
@@ -14,18 +19,38 @@ namespace {
 
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
+// RGB files are read as 32-bit floats (missing channels read as 0); only files without R, G and B
+// (luminance / chroma) go through the RGBA interface, which converts them but rounds to half floats.
 TextureImage load_exr(const std::string& path) {
   TextureImage image;
   try {
-    Imf::RgbaInputFile file(path.c_str());
-    Imath::Box2i dw = file.dataWindow();
+    Imf::InputFile file(path.c_str());
+    Imath::Box2i dw = file.header().dataWindow();
     long width = dw.max.x - dw.min.x + 1, height = dw.max.y - dw.min.y + 1;
     if (width <= 0 || height <= 0 || width * height > (1l << 28)) throw SceneError(path + ": unsupported image size");
-    Imf::Array2D<Imf::Rgba> pixels(height, width);
-    file.setFrameBuffer(&pixels[0][0] - dw.min.x - dw.min.y * width, 1, width);
-    file.readPixels(dw.min.y, dw.max.y);
     image.width = uint32_t(width);
     image.height = uint32_t(height);
+    image.texels.reserve(size_t(width) * height);
+    const Imf::ChannelList& channels = file.header().channels();
+    if (channels.findChannel("R") || channels.findChannel("G") || channels.findChannel("B")) {
+      std::vector<float> rgb(size_t(width) * height * 3);
+      // The frame buffer is addressed by data-window coordinates.
+      char* base = reinterpret_cast<char*>(rgb.data()) - (dw.min.x + long(dw.min.y) * width) * 3 * long(sizeof(float));
+      size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
+      Imf::FrameBuffer fb;
+      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      file.setFrameBuffer(fb);
+      file.readPixels(dw.min.y, dw.max.y);
+      for (size_t i = 0; i < size_t(width) * height; ++i)
+        image.texels.push_back({rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2], 1.0f});
+      return image;
+    }
+    Imf::RgbaInputFile rgba(path.c_str());
+    Imf::Array2D<Imf::Rgba> pixels(height, width);
+    rgba.setFrameBuffer(&pixels[0][0] - dw.min.x - dw.min.y * width, 1, width);
+    rgba.readPixels(dw.min.y, dw.max.y);
     for (long y = 0; y < height; ++y)
       for (long x = 0; x < width; ++x) {
         const Imf::Rgba& p = pixels[y][x];

@@ -4,7 +4,9 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "runtime/image_io.h"
 #include "scene/scene_error.h"
+#include "scene/texture_load.h"
 #include "test_support.h"
 
 namespace {
@@ -509,5 +511,24 @@ TEST(SceneLoadMtl, ErrorsNameTheObjOrMtlLine) {
     std::string path = write_mtl_scene(c.obj, c.mtl, c.shape_extra);
     std::string error = load_error(path);
     EXPECT_NE(error.find(c.expected), std::string::npos) << c.obj << c.mtl << "\n  gave: " << error;
+  }
+}
+
+TEST(SceneLoad, FloatExrTexelsKeepFullPrecisionAndRange) {
+  // A 32-bit float EXR (an HDR environment with a sun far above half's 65504, and values half rounds).
+  Image img;
+  img.width = 3;
+  img.height = 2;
+  img.rgb = {1.0e5f, 2.5e6f, 0.1234567f, 1.0f / 3, 0.7071068f, 3.0e-6f, 0, 1, 2, 4.2e4f, 1.000123f, 0.5f,
+             1e-3f, 123.456f, 7.0f, 65519.0f, 0.0f, 99999.0f};
+  std::string path = temp_dir() + "/float.exr";
+  write_exr(path, img);
+  TextureImage t = load_texture_image(path);
+  ASSERT_EQ(t.width, 3u);
+  ASSERT_EQ(t.height, 2u);
+  for (size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(t.texels[i].x, img.rgb[3 * i]) << "texel " << i;
+    EXPECT_EQ(t.texels[i].y, img.rgb[3 * i + 1]) << "texel " << i;
+    EXPECT_EQ(t.texels[i].z, img.rgb[3 * i + 2]) << "texel " << i;
   }
 }

@@ -25,6 +25,11 @@ ClContext& test_device() {
   return *cl;
 }
 
+const KernelProgram& sampling_test_program() {
+  static KernelProgram program = build_kernel_program(test_device(), "tests_sampling.cl", kernel_options(kFeatureAll));
+  return program;
+}
+
 std::string temp_dir() {
   static std::string dir;
   if (dir.empty()) {

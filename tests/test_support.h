@@ -12,6 +12,17 @@
 // The device named by $PATHCL_TEST_DEVICE (default: pathcl's own default), one per test process.
 ClContext& test_device();
 
+// The test kernels of kernels/tests_sampling.cl, all features on, built once per process.
+const KernelProgram& sampling_test_program();
+
+// Reads n elements of a device buffer.
+template <class T>
+std::vector<T> read_buffer(ClContext& cl, const ClBuffer& buffer, size_t n) {
+  std::vector<T> out(n);
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, buffer.mem, CL_TRUE, 0, n * sizeof(T), out.data(), 0, nullptr, nullptr));
+  return out;
+}
+
 // A fresh temporary directory for this test, removed at exit.
 std::string temp_dir();
 

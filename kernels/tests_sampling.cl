@@ -1,0 +1,223 @@
+/* Kernels that only the sampling tests build (tests/bsdf_test.cpp, tests/light_sampling_test.cpp):
+ * BSDF, light and camera sampling routines run one sample per work item, and the densities they claim
+ * integrated over bins of directions for the chi-square tests.
+ * Directions are binned in a frame (binning[0..2]: its x, y, z axes) by theta from z in [0, theta_max] and
+ * phi = atan2(y, x) in [0, 2 pi), with binning[3] = (theta_max, theta_bins, phi_bins, -); bin
+ * t * phi_bins + p covers [t, t + 1) theta_max / theta_bins x [p, p + 1) 2 pi / phi_bins.
+ * Random numbers: pcg4d of (item, seed, two constants), as the samplers hash. */
+#include "shared/types.h"
+#include "math.cl"
+#include "rng.cl"
+#include "sampling.cl"
+#include "scene.cl"
+#include "camera.cl"
+#include "intersect.cl"
+#include "surface.cl"
+#include "bsdf.cl"
+#include "environment.cl"
+#include "lights.cl"
+
+inline float4 test_random4(uint item, uint seed) {
+  uint4 v = pcg4d((uint4)(item, seed, 0x9e3779b9u, 0x85ebca6bu));
+  return convert_float4(v >> 8u) * 0x1.0p-24f;
+}
+
+/* Quadrature node (i, j) of bin `bin` with Gauss-Legendre nodes/weights on [0, 1]: the direction, and
+ * in *w the node's weight times the Jacobian sin(theta) dtheta dphi. */
+inline float3 bin_node(__global const float4* binning, uint bin, __global const float* nodes,
+                       __global const float* weights, uint i, uint j, float* w) {
+  uint theta_bins = (uint)binning[3].y, phi_bins = (uint)binning[3].z;
+  float dt = binning[3].x / (float)theta_bins, dp = 2.0f * PC_PI / (float)phi_bins;
+  float theta = ((float)(bin / phi_bins) + nodes[i]) * dt;
+  float phi = ((float)(bin % phi_bins) + nodes[j]) * dp;
+  float s = sin(theta);
+  *w = weights[i] * weights[j] * s * dt * dp;
+  return s * cos(phi) * binning[0].xyz + s * sin(phi) * binning[1].xyz + cos(theta) * binning[2].xyz;
+}
+
+/* ---- BSDFs ---- */
+
+/* One bsdf_sample per item, u from the hash (or from u_in when use_u_in). out: 12 floats per item:
+ * wi (3), status (0 failed, 1 sampled, 2 sampled from a delta lobe), pdf as sampled, bsdf_pdf(wo, wi),
+ * weight (3), bsdf_eval(wo, wi) (3). A failed sample writes zeros. */
+__kernel void bsdf_sample_test(__global const Material* material, float4 wo4, uint seed,
+                               __global const float4* u_in, uint use_u_in, __global float* out) {
+  uint i = get_global_id(0);
+  Material m = material[0];
+  float3 wo = wo4.xyz;
+  float4 u = use_u_in ? u_in[i] : test_random4(i, seed);
+  BsdfSample s;
+  bool ok = bsdf_sample(m, wo, u.xyz, &s);
+  __global float* o = out + 12 * i;
+  for (int k = 0; k < 12; ++k) o[k] = 0.0f;
+  if (!ok) return;
+  vstore3(s.wi, 0, o);
+  o[3] = s.delta ? 2.0f : 1.0f;
+  o[4] = s.pdf;
+  o[5] = bsdf_pdf(m, wo, s.wi);
+  vstore3(s.weight, 0, o + 6);
+  vstore3(bsdf_eval(m, wo, s.wi), 0, o + 9);
+}
+
+/* Integral of bsdf_pdf(wo, .) over each listed bin by order x order Gauss-Legendre. out: 2 floats per
+ * bin, the integral and 1 where the density is 0 at some nodes and not at others (an edge in the bin). */
+__kernel void bsdf_pdf_bins(__global const Material* material, float4 wo4, __global const float4* binning,
+                            __global const uint* bins, uint order, __global const float* nodes,
+                            __global const float* weights, __global float* out) {
+  uint b = get_global_id(0);
+  Material m = material[0];
+  float sum = 0.0f;
+  uint zeros = 0;
+  for (uint i = 0; i < order; ++i) {
+    float row = 0.0f;
+    for (uint j = 0; j < order; ++j) {
+      float w;
+      float3 wi = bin_node(binning, bins[b], nodes, weights, i, j, &w);
+      float p = bsdf_pdf(m, wo4.xyz, wi);
+      zeros += p == 0.0f;
+      row += w * p;
+    }
+    sum += row;
+  }
+  out[2 * b] = sum;
+  out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
+}
+
+/* fresnel_dielectric per (cos_i, eta) pair. */
+__kernel void fresnel_dielectric_test(__global const float2* in, __global float* out) {
+  uint i = get_global_id(0);
+  out[i] = fresnel_dielectric(in[i].x, in[i].y);
+}
+
+/* fresnel_conductor per cos_i, for one (eta, k). */
+__kernel void fresnel_conductor_test(__global const float* cos_i, float4 eta, float4 k, __global float4* out) {
+  uint i = get_global_id(0);
+  out[i] = (float4)(fresnel_conductor(cos_i[i], eta.xyz, k.xyz), 0.0f);
+}
+
+/* ---- Lights ---- */
+
+#define PC_SCENE_PARAMS                                                                                     \
+  __constant const SceneHeader *h, __global const BvhNode *nodes, __global const Primitive *prims,           \
+      __global const PrimShading *shading, __global const float4 *normals, __global const float4 *uvs,       \
+      __global const Material *materials, __global const Light *lights, __global const float *light_cdf,     \
+      __global const Texture *textures, __global const float4 *texels, __global const float *env_dist
+
+inline SceneData test_scene(PC_SCENE_PARAMS) {
+  SceneData sc;
+  sc.h = h;
+  sc.nodes = nodes;
+  sc.prims = prims;
+  sc.shading = shading;
+  sc.normals = normals;
+  sc.uvs = uvs;
+  sc.materials = materials;
+  sc.lights = lights;
+  sc.light_cdf = light_cdf;
+  sc.textures = textures;
+  sc.texels = texels;
+  sc.env_dist = env_dist;
+  return sc;
+}
+#define PC_SCENE_ARGS h, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist
+
+/* The density with which light sampling from x produces direction d, found the way a BSDF-sampled ray
+ * finds it (as the integrator's MIS does): trace the ray; an emitter hit gives light_pdf there, an
+ * escape gives the environment's pdf. *le: the radiance seen along d (first channel). */
+inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float* le) {
+  Ray ray;
+  ray.o = x;
+  ray.d = d;
+  ray.tmin = 0.0f;
+  ray.tmax = INFINITY;
+  ray.skip_prim = PC_INVALID;
+  Hit hit;
+  *le = 0.0f;
+  if (trace_bvh(sc->nodes, sc->prims, &ray, false, &hit)) {
+    Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
+    PrimShading sh = sc->shading[s.prim];
+    if (sh.light == PC_INVALID) return 0.0f;
+    *le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, x).x;
+    return light_pdf(sc->lights, sc->prims, sh.light, x, s.p, s.ng);
+  }
+  if (sc->h->env_light == PC_INVALID) return 0.0f;
+  Light env = sc->lights[sc->h->env_light];
+  *le = env_radiance(env, sc->textures, sc->texels, d).x;
+  return env.select_pdf * env_pdf(env, sc->textures, sc->env_dist, d);
+}
+
+/* One sample_light from x per item. out: 12 floats per item: wi (3), status (0 failed, 1 sampled,
+ * 2 delta), pdf, direction_light_pdf(wi), Le (3), radiance seen along wi (first channel), distance to
+ * the sampled point p, distance to the first hit along wi (+inf for none). */
+__kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  SceneData sc = test_scene(PC_SCENE_ARGS);
+  float3 x = x4.xyz;
+  float4 u = test_random4(i, seed);
+  LightSample ls;
+  bool ok = sample_light(&sc, x, u.xyz, &ls);
+  __global float* o = out + 12 * i;
+  for (int k = 0; k < 12; ++k) o[k] = 0.0f;
+  if (!ok) return;
+  vstore3(ls.wi, 0, o);
+  o[3] = ls.delta ? 2.0f : 1.0f;
+  o[4] = ls.pdf;
+  float le;
+  o[5] = ls.delta ? 0.0f : direction_light_pdf(&sc, x, ls.wi, &le);
+  vstore3(ls.Le, 0, o + 6);
+  o[9] = ls.delta ? 0.0f : le;
+  o[10] = ls.infinite ? INFINITY : length(ls.p - x);
+  Ray ray;
+  ray.o = x;
+  ray.d = ls.wi;
+  ray.tmin = 0.0f;
+  ray.tmax = INFINITY;
+  ray.skip_prim = PC_INVALID;
+  Hit hit;
+  o[11] = trace_bvh(nodes, prims, &ray, false, &hit) ? hit.t : INFINITY;
+}
+
+/* Integral of direction_light_pdf(x, .) over each listed bin by order x order Gauss-Legendre; out as
+ * bsdf_pdf_bins writes it. */
+__kernel void light_pdf_bins(PC_SCENE_PARAMS, float4 x4, __global const float4* binning, __global const uint* bins,
+                             uint order, __global const float* gl_nodes, __global const float* gl_weights,
+                             __global float* out) {
+  uint b = get_global_id(0);
+  SceneData sc = test_scene(PC_SCENE_ARGS);
+  float sum = 0.0f;
+  uint zeros = 0;
+  for (uint i = 0; i < order; ++i) {
+    float row = 0.0f;
+    for (uint j = 0; j < order; ++j) {
+      float w, le;
+      float3 d = bin_node(binning, bins[b], gl_nodes, gl_weights, i, j, &w);
+      float p = direction_light_pdf(&sc, x4.xyz, d, &le);
+      zeros += p == 0.0f;
+      row += w * p;
+    }
+    sum += row;
+  }
+  out[2 * b] = sum;
+  out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
+}
+
+/* ---- Camera ---- */
+
+/* sample_filter_1d per item, u from the hash. */
+__kernel void filter_sample_test(__constant const SceneHeader* h, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  out[i] = sample_filter_1d(h, test_random4(i, seed).x);
+}
+
+/* camera_ray for pixel (px, py) with the pixel position u.xy fixed and the lens position hashed, or
+ * with everything hashed when u_pixel.x < 0. out: origin (3), direction (3) per item. */
+__kernel void camera_ray_test(__constant const SceneHeader* h, uint px, uint py, float2 u_pixel, uint seed,
+                              __global float* out) {
+  uint i = get_global_id(0);
+  float4 u = test_random4(i, seed);
+  if (u_pixel.x >= 0.0f) u.xy = u_pixel;
+  float3 o, d;
+  camera_ray(h, px, py, u, &o, &d);
+  vstore3(o, 0, out + 6 * i);
+  vstore3(d, 0, out + 6 * i + 3);
+}

@@ -1,0 +1,180 @@
+// Camera sampling (kernels/camera.cl): the pixel filters' 1-D distributions (filter importance sampling)
+// against their own CDFs by chi-square, and the thin lens's geometry.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "chi2.h"
+#include "test_support.h"
+
+namespace {
+
+constexpr size_t kSamples = 1000000;
+
+std::vector<float> sample_filter(const SceneHeader& h, uint32_t seed, size_t n) {
+  ClContext& cl = test_device();
+  ClBuffer header = upload(cl, std::vector<SceneHeader>{h}), out(cl, CL_MEM_WRITE_ONLY, n * sizeof(float));
+  ClKernel k(sampling_test_program().kernel("filter_sample_test"));
+  k.arg(0, header.mem);
+  k.arg(1, cl_uint(seed));
+  k.arg(2, out.mem);
+  run_kernel(cl, k.k, n);
+  return read_buffer<float>(cl, out, n);
+}
+
+SceneHeader filter_header(uint32_t filter, float radius, float sigma = 0) {
+  SceneHeader h{};
+  h.filter = filter;
+  h.filter_radius = radius;
+  h.filter_sigma = sigma;
+  return h;
+}
+
+struct FilterCase {
+  std::string name;
+  SceneHeader h;
+  std::function<double(double)> cdf;  // of the offset, on [-radius, radius]
+};
+
+}  // namespace
+
+TEST(FilterChi2, OffsetsFollowTheFiltersCdf) {
+  auto tent = [](double r) {
+    return [r](double x) { return x < 0 ? (x + r) * (x + r) / (2 * r * r) : 1 - (r - x) * (r - x) / (2 * r * r); };
+  };
+  auto gaussian = [](double r, double sigma) {  // truncated to [-r, r]
+    return [r, sigma](double x) {
+      double e = std::erf(r / (sigma * M_SQRT2));
+      return (std::erf(x / (sigma * M_SQRT2)) + e) / (2 * e);
+    };
+  };
+  std::vector<FilterCase> cases = {
+      {"box", filter_header(PC_FILTER_BOX, 0.5f), [](double x) { return x + 0.5; }},
+      {"tent radius 1", filter_header(PC_FILTER_TENT, 1), tent(1)},
+      {"tent radius 2.5", filter_header(PC_FILTER_TENT, 2.5f), tent(2.5)},
+      {"gaussian sigma 0.5 radius 1.5", filter_header(PC_FILTER_GAUSSIAN, 1.5f, 0.5f), gaussian(1.5, 0.5)},
+      {"gaussian sigma 1 radius 1 (truncated hard)", filter_header(PC_FILTER_GAUSSIAN, 1, 1), gaussian(1, 1)},
+      {"gaussian sigma 0.3 radius 2 (far tails)", filter_header(PC_FILTER_GAUSSIAN, 2, 0.3f), gaussian(2, 0.3)},
+  };
+  const int bins = 100;
+  const double alpha = sidak_alpha(0.01, int(cases.size()));
+  double min_p = 1;
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const FilterCase& c = cases[k];
+    SCOPED_TRACE(c.name);
+    double r = c.h.filter_radius;
+    std::vector<float> x = sample_filter(c.h, 100 + uint32_t(k), kSamples);
+    std::vector<double> observed(bins + 1, 0), expected(bins + 1, 0);  // the last cell: outside [-r, r]
+    float lo = INFINITY, hi = -INFINITY;
+    for (float v : x) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      if (!(v >= -r && v <= r)) {
+        observed[bins] += 1;
+        continue;
+      }
+      observed[std::min(int((v + r) / (2 * r) * bins), bins - 1)] += 1;
+    }
+    for (int b = 0; b < bins; ++b)
+      expected[b] = kSamples * (c.cdf(-r + 2 * r * (b + 1) / bins) - c.cdf(-r + 2 * r * b / bins));
+    Chi2Result chi2 = chi2_test(observed, expected);
+    min_p = std::min(min_p, chi2.p_value);
+    std::printf("  %-44s p %.4f  %s; range [%g, %g]\n", c.name.c_str(), chi2.p_value, chi2.describe().c_str(), lo, hi);
+    EXPECT_GE(chi2.p_value, alpha) << chi2.describe_worst();
+    EXPECT_EQ(observed[bins], 0) << "offsets beyond the radius";
+  }
+  std::printf("  %zu runs, min p %.4f, per-run significance %.2e\n", cases.size(), min_p, alpha);
+}
+
+// ---- The thin lens ----
+
+namespace {
+
+struct Rays {
+  std::vector<float> v;
+  glm::dvec3 o(size_t i) const { return {v[6 * i], v[6 * i + 1], v[6 * i + 2]}; }
+  glm::dvec3 d(size_t i) const { return {v[6 * i + 3], v[6 * i + 4], v[6 * i + 5]}; }
+};
+
+// camera_ray for pixel (px, py): the position in the pixel fixed at u_pixel (or hashed when u_pixel.x < 0),
+// the lens position hashed.
+Rays camera_rays(const SceneHeader& h, uint32_t px, uint32_t py, float ux, float uy, uint32_t seed, size_t n) {
+  ClContext& cl = test_device();
+  ClBuffer header = upload(cl, std::vector<SceneHeader>{h}), out(cl, CL_MEM_WRITE_ONLY, n * 6 * sizeof(float));
+  ClKernel k(sampling_test_program().kernel("camera_ray_test"));
+  k.arg(0, header.mem);
+  k.arg(1, cl_uint(px));
+  k.arg(2, cl_uint(py));
+  cl_float2 u = {{ux, uy}};
+  k.arg(3, u);
+  k.arg(4, cl_uint(seed));
+  k.arg(5, out.mem);
+  run_kernel(cl, k.k, n);
+  return {read_buffer<float>(cl, out, n * 6)};
+}
+
+SceneHeader camera_header(const std::string& camera) {
+  std::string scene = R"({"camera": )" + camera + R"(, "materials": {"m": {"type": "diffuse"}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "m"}]})";
+  return load_device_scene(write_temp_file("camera.json", scene)).header;
+}
+
+glm::dvec3 vec(const pc_float4& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+TEST(ThinLens, RaysOfOnePixelPositionMeetInThePlaneInFocus) {
+  const double aperture = 0.25, focus = 3.5;
+  SceneHeader lens = camera_header(R"({"type": "thin_lens", "position": [1, 2, 5], "look_at": [0, 0.5, 0],
+      "up": [0, 1, 0.2], "fov_y_degrees": 50, "width": 64, "height": 48, "aperture_radius": 0.25, "focus_distance": 3.5,
+      "filter": {"type": "tent", "radius": 1.5}})");
+  SceneHeader pinhole = lens;
+  pinhole.lens_radius = 0;
+  const glm::dvec3 cam = vec(lens.cam_position), forward = vec(lens.cam_forward);
+  const size_t n = 20000;
+  for (auto [px, py, ux, uy] : {std::tuple{10u, 20u, 0.3f, 0.8f}, {0u, 0u, 0.01f, 0.99f}, {63u, 47u, 0.5f, 0.5f}}) {
+    SCOPED_TRACE("pixel " + std::to_string(px) + ", " + std::to_string(py));
+    Rays center = camera_rays(pinhole, px, py, ux, uy, 1, 1);
+    EXPECT_EQ(center.o(0), cam);
+    glm::dvec3 d0 = center.d(0);
+    glm::dvec3 target = cam + d0 * (focus / glm::dot(d0, forward));  // the pinhole ray in the plane in focus
+    Rays rays = camera_rays(lens, px, py, ux, uy, 2, n);
+    double r2_sum = 0, r2_sq = 0, max_r = 0;
+    glm::dvec3 offset_sum(0);
+    size_t off_focus = 0, off_lens = 0;
+    for (size_t i = 0; i < n; ++i) {
+      glm::dvec3 o = rays.o(i), d = rays.d(i), offset = o - cam;
+      // On the lens: in the plane through the camera position facing forward, within the aperture.
+      double r = glm::length(offset);
+      off_lens += std::abs(glm::dot(offset, forward)) > 1e-6 || r > aperture * (1 + 1e-6);
+      EXPECT_NEAR(glm::length(d), 1, 1e-6);
+      glm::dvec3 p = o + d * ((focus - glm::dot(offset, forward)) / glm::dot(d, forward));
+      off_focus += glm::length(p - target) > 2e-6 * (focus + glm::length(cam));  // float rounding
+      r2_sum += r * r / (aperture * aperture);
+      r2_sq += std::pow(r / aperture, 4);
+      offset_sum += offset / aperture;
+      max_r = std::max(max_r, r);
+    }
+    EXPECT_EQ(off_focus, 0u);
+    EXPECT_EQ(off_lens, 0u);
+    // Uniform over the disk: E[r^2] = R^2 / 2 (Var[r^2 / R^2] = 1/12), E[offset] = 0 (Var = R^2 / 4 per axis).
+    double mean_r2 = r2_sum / n;
+    EXPECT_NEAR(mean_r2, 0.5, 4 * std::sqrt(1.0 / 12 / n));
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(offset_sum[a] / n, 0, 4 * std::sqrt(0.25 / n));
+    EXPECT_GT(max_r, 0.99 * aperture);
+  }
+}
+
+TEST(ThinLens, WithoutApertureEveryRayStartsAtTheCamera) {
+  SceneHeader pinhole = camera_header(R"({"position": [1, 2, 5], "look_at": [0, 0.5, 0], "width": 32, "height": 32,
+      "filter": {"type": "gaussian", "sigma": 0.7}})");
+  ASSERT_EQ(pinhole.lens_radius, 0.0f);
+  Rays rays = camera_rays(pinhole, 5, 7, -1, -1, 3, 1000);  // pixel positions hashed too
+  for (size_t i = 0; i < 1000; ++i) EXPECT_EQ(rays.o(i), vec(pinhole.cam_position));
+}

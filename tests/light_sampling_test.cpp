@@ -1,0 +1,548 @@
+// Light sampling (kernels/lights.cl, kernels/environment.cl) against the densities the integrator uses
+// for the same directions: chi-square tests of area lights (triangles by area; spheres by cone from
+// outside, by area from inside) and of a synthetic environment map, every sample checked against the
+// light it points at; spot and point lights exactly.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <gtest/gtest.h>
+
+#include "chi2.h"
+#include "runtime/image_io.h"
+#include "test_support.h"
+
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+constexpr size_t kChi2Samples = 1000000;
+
+pc_float4 f4(const glm::dvec3& v) { return {float(v.x), float(v.y), float(v.z), 0.0f}; }
+
+std::string scene_json(const std::string& shapes, const std::string& lights = "") {
+  return R"({"camera": {"position": [0, 0, -5], "look_at": [0, 0, 0], "width": 4, "height": 4},
+    "materials": {"lamp": {"type": "diffuse", "reflectance": [0, 0, 0]}}, "shapes": [)" +
+         shapes + "]" + (lights.empty() ? "" : R"(, "lights": [)" + lights + "]") + "}";
+}
+
+// A device scene uploaded as the test kernels take it (PC_SCENE_PARAMS in kernels/tests_sampling.cl).
+struct SceneBuffers {
+  ClBuffer header, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist;
+  explicit SceneBuffers(const DeviceScene& s) {
+    ClContext& cl = test_device();
+    header = upload(cl, std::vector<SceneHeader>{s.header});
+    nodes = upload(cl, s.nodes);
+    prims = upload(cl, s.prims);
+    shading = upload(cl, s.shading);
+    normals = upload(cl, s.normals);
+    uvs = upload(cl, s.uvs);
+    materials = upload(cl, s.materials);
+    lights = upload(cl, s.lights);
+    light_cdf = upload(cl, s.light_cdf);
+    textures = upload(cl, s.textures);
+    texels = upload(cl, s.texels);
+    env_dist = upload(cl, s.env_dist);
+  }
+  // Sets arguments 0..11; returns the next index.
+  cl_uint set(ClKernel& k) const {
+    const ClBuffer* all[] = {&header, &nodes, &prims, &shading, &normals, &uvs, &materials, &lights, &light_cdf,
+                             &textures, &texels, &env_dist};
+    for (cl_uint i = 0; i < 12; ++i) k.arg(i, all[i]->mem);
+    return 12;
+  }
+};
+
+// Light samples as light_sample_test writes them, 12 floats each.
+struct LightSamples {
+  std::vector<float> v;
+  size_t n = 0;
+  glm::dvec3 wi(size_t i) const { return {v[12 * i], v[12 * i + 1], v[12 * i + 2]}; }
+  int status(size_t i) const { return int(v[12 * i + 3]); }
+  double pdf(size_t i) const { return v[12 * i + 4]; }
+  double pdf_eval(size_t i) const { return v[12 * i + 5]; }
+  glm::dvec3 le(size_t i) const { return {v[12 * i + 6], v[12 * i + 7], v[12 * i + 8]}; }
+  double le_seen(size_t i) const { return v[12 * i + 9]; }
+  double distance(size_t i) const { return v[12 * i + 10]; }
+  double hit_t(size_t i) const { return v[12 * i + 11]; }
+};
+
+LightSamples sample_lights(const SceneBuffers& sb, const glm::dvec3& x, uint32_t seed, size_t n) {
+  ClContext& cl = test_device();
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, n * 12 * sizeof(float));
+  ClKernel k(sampling_test_program().kernel("light_sample_test"));
+  cl_uint a = sb.set(k);
+  k.arg(a++, f4(x));
+  k.arg(a++, cl_uint(seed));
+  k.arg(a++, out.mem);
+  run_kernel(cl, k.k, n);
+  return {read_buffer<float>(cl, out, n * 12), n};
+}
+
+BinIntegrator light_pdf_integrator(const SceneBuffers& sb, const glm::dvec3& x, const SphereBinning& binning) {
+  return [&sb, x, binning](const std::vector<uint32_t>& bins, int order) {
+    ClContext& cl = test_device();
+    std::vector<double> nd, wd;
+    gauss_legendre01(order, nd, wd);
+    ClBuffer frame = upload(cl, binning.device_params()), b = upload(cl, bins),
+             nodes = upload(cl, std::vector<float>(nd.begin(), nd.end())),
+             weights = upload(cl, std::vector<float>(wd.begin(), wd.end()));
+    ClBuffer out(cl, CL_MEM_WRITE_ONLY, bins.size() * 2 * sizeof(float));
+    ClKernel k(sampling_test_program().kernel("light_pdf_bins"));
+    cl_uint a = sb.set(k);
+    k.arg(a++, f4(x));
+    k.arg(a++, frame.mem);
+    k.arg(a++, b.mem);
+    k.arg(a++, cl_uint(order));
+    k.arg(a++, nodes.mem);
+    k.arg(a++, weights.mem);
+    k.arg(a++, out.mem);
+    run_kernel(cl, k.k, bins.size());
+    return bin_values(read_buffer<float>(cl, out, 2 * bins.size()));
+  };
+}
+
+bool close_rel(double a, double b, double tol) {
+  return std::abs(a - b) <= tol * std::max({std::abs(a), std::abs(b), 1e-30});
+}
+
+struct LightCase {
+  std::string name;
+  DeviceScene scene;
+  glm::dvec3 x;           // the shading point
+  SphereBinning binning;  // directions from x
+  double emission = 1;    // expected Le (first channel) of every sample
+};
+
+struct LightOutcome {
+  Chi2Result chi2;
+  BinIntegrals integrals;
+  double pdf_total = 0, sampled_fraction = 0;
+  size_t mismatches = 0;
+  std::string first_problem;
+};
+
+// Samples are binned by direction (failures in the cell beyond the bins); each one must point at the
+// light it claims (hit distance = distance to the sampled point, radiance seen = Le = emission) with the
+// density the integrator would find for that direction.
+LightOutcome run_light_chi2(const LightCase& c, uint32_t seed, size_t n = kChi2Samples) {
+  SceneBuffers sb(c.scene);
+  LightSamples s = sample_lights(sb, c.x, seed, n);
+  LightOutcome r;
+  std::vector<double> observed(c.binning.count() + 1, 0), expected(c.binning.count() + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    if (s.status(i) == 0) {
+      observed.back() += 1;
+      continue;
+    }
+    r.sampled_fraction += 1;
+    glm::dvec3 wi = s.wi(i);
+    observed[c.binning.bin_of(wi)] += 1;
+    bool far = std::isinf(s.distance(i));
+    bool ok = s.status(i) == 1 && std::abs(glm::length(wi) - 1) < 1e-5 && close_rel(s.pdf(i), s.pdf_eval(i), 1e-3) &&
+              close_rel(s.le(i).x, c.emission, 1e-6) && close_rel(s.le_seen(i), c.emission, 1e-6) &&
+              (far ? std::isinf(s.hit_t(i)) : close_rel(s.hit_t(i), s.distance(i), 1e-4));
+    if (!ok && !r.mismatches++) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "sample %zu: wi (%g %g %g) status %d pdf %.7g, pdf of the direction %.7g, Le %g, seen %g, "
+                    "distance %.7g, hit at %.7g",
+                    i, wi.x, wi.y, wi.z, s.status(i), s.pdf(i), s.pdf_eval(i), s.le(i).x, s.le_seen(i), s.distance(i),
+                    s.hit_t(i));
+      r.first_problem = buf;
+    }
+  }
+  r.sampled_fraction /= double(n);
+  r.integrals = integrate_bins(light_pdf_integrator(sb, c.x, c.binning), c.binning.count(), double(n), 0.1, 256);
+  for (uint32_t b = 0; b < c.binning.count(); ++b) {
+    expected[b] = double(n) * r.integrals.value[b];
+    r.pdf_total += r.integrals.value[b];
+  }
+  expected.back() = double(n) * std::max(0.0, 1.0 - r.pdf_total);
+  r.chi2 = chi2_test(observed, expected);
+  return r;
+}
+
+void expect_light_family(const std::vector<LightCase>& cases, uint32_t seed) {
+  const double alpha = sidak_alpha(0.01, int(cases.size()));
+  double min_p = 1;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const LightCase& c = cases[i];
+    LightOutcome r = run_light_chi2(c, seed + uint32_t(i));
+    min_p = std::min(min_p, r.chi2.p_value);
+    std::printf("  %-40s p %.4f  %s; integral %.6f, sampled %.6f, quadrature order <= %d\n", c.name.c_str(),
+                r.chi2.p_value, r.chi2.describe().c_str(), r.pdf_total, r.sampled_fraction, r.integrals.highest_order);
+    SCOPED_TRACE(c.name);
+    EXPECT_GE(r.chi2.p_value, alpha) << r.chi2.describe_worst();
+    // Expected counts good to half a standard error in every bin (the refinement aims at a tenth).
+    EXPECT_LT(r.integrals.worst, 0.5) << "quadrature: " << r.integrals.unconverged << " bins unconverged";
+    // Samples whose ray just grazes the light's outline may see no light in single precision: at most 1e-5.
+    EXPECT_LE(r.mismatches, kChi2Samples / 100000) << r.mismatches << " samples, first: " << r.first_problem;
+    double f = r.sampled_fraction, se = std::sqrt(f * (1 - f) / double(kChi2Samples));
+    EXPECT_NEAR(r.pdf_total, f, 5 * se + 5e-4);  // 5e-4: quadrature of the density's discontinuous outline
+    EXPECT_GT(r.sampled_fraction, 0.999);
+  }
+  std::printf("  %zu runs, min p %.4f, per-run significance %.2e\n", cases.size(), min_p, alpha);
+}
+
+std::string triangle_json(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const std::string& extra) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                R"({"type": "triangles", "positions": [[%.9g, %.9g, %.9g], [%.9g, %.9g, %.9g], [%.9g, %.9g, %.9g]],
+                   "indices": [[0, 1, 2]], "material": "lamp", %s})",
+                a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, extra.c_str());
+  return buf;
+}
+
+std::string sphere_json(const glm::dvec3& c, double r, const std::string& extra) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, R"({"type": "sphere", "center": [%.9g, %.9g, %.9g], "radius": %.9g, "material": "lamp", %s})",
+                c.x, c.y, c.z, r, extra.c_str());
+  return buf;
+}
+
+}  // namespace
+
+TEST(LightChi2, AreaLights) {
+  std::vector<LightCase> cases;
+  auto add = [&](const std::string& name, const std::string& shape, const glm::dvec3& x, const SphereBinning& b) {
+    cases.push_back({name, load_device_scene(write_temp_file("light.json", scene_json(shape))), x, b, 2.5});
+  };
+  // A triangle above x, its front (counter-clockwise) side facing x; binned over the whole sphere.
+  glm::dvec3 a(-1, -0.5, 2), b(0.2, 1.2, 1.8), c(1.5, -1, 2.5);
+  add("triangle", triangle_json(a, b, c, R"("emission": [2.5, 2.5, 2.5])"), {0.1, 0.2, 0}, SphereBinning());
+  add("triangle, two-sided, seen from behind", triangle_json(a, c, b, R"("emission": [2.5, 2.5, 2.5], "two_sided": true)"),
+      {0.1, 0.2, 0}, SphereBinning());
+  // Binned finely about the direction of a small, oblique triangle.
+  glm::dvec3 x(0.3, -0.4, 0.1), t0(2, 0.1, 0.5), t1(2.2, 0.5, 0.3), t2(1.9, 0.4, 0.9);
+  glm::dvec3 centre = (t0 + t1 + t2) / 3.0;
+  add("small oblique triangle", triangle_json(t0, t2, t1, R"("emission": [2.5, 2.5, 2.5])"), x,
+      SphereBinning::about(centre - x, 20 * kDeg));
+  // Spheres from outside: sampled by the cone they subtend.
+  glm::dvec3 origin(0, 0, 0);
+  add("sphere by cone, near", sphere_json({0.2, -0.1, 1.4}, 1, R"("emission": [2.5, 2.5, 2.5])"), origin, SphereBinning());
+  add("sphere by cone, far", sphere_json({0.5, 3, 1}, 0.8, R"("emission": [2.5, 2.5, 2.5])"), origin,
+      SphereBinning::about({0.5, 3, 1}, 18 * kDeg));
+  // sin^2(theta_max) = 4e-4, below the small-cone threshold of sample_sphere_cone (sin^2(1.5 degrees)).
+  glm::dvec3 tiny(0.6, -0.8, 0);
+  add("tiny sphere by cone", sphere_json(tiny, 0.02, R"("emission": [2.5, 2.5, 2.5])"), origin,
+      SphereBinning::about(tiny, 1.5 * kDeg));
+  // From inside a sphere emitting inwards: sampled by area.
+  add("sphere by area from inside", sphere_json({0.1, 0.2, -0.3}, 1.5, R"("emission": [2.5, 2.5, 2.5], "flip_normals": true)"),
+      origin, SphereBinning());
+  add("two-sided sphere by area, off centre",
+      sphere_json({0.1, 0.2, -0.3}, 1.5, R"("emission": [2.5, 2.5, 2.5], "two_sided": true)"), {1.0, 0.8, -0.5},
+      SphereBinning());
+  // Two lights, apart as seen from x: one is chosen in proportion to power, and the density of a
+  // direction is that light's select_pdf times its own.
+  add("triangle and sphere, chosen by power",
+      triangle_json(a, b, c, R"("emission": [2.5, 2.5, 2.5])") + ", " +
+          sphere_json({-2, -1.5, -1}, 0.6, R"("emission": [2.5, 2.5, 2.5])"),
+      {0.1, 0.2, 0}, SphereBinning());
+  expect_light_family(cases, 5000);
+}
+
+TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
+  glm::dvec3 a(-1, -0.5, 2), b(0.2, 1.2, 1.8), c(1.5, -1, 2.5);
+  for (const std::string& shape :
+       {triangle_json(a, c, b, R"("emission": [1, 1, 1])"), sphere_json({0, 0, 0.5}, 2, R"("emission": [1, 1, 1])")}) {
+    SceneBuffers sb(load_device_scene(write_temp_file("behind.json", scene_json(shape))));
+    LightSamples s = sample_lights(sb, {0.1, 0.2, 0}, 3, 10000);
+    for (size_t i = 0; i < s.n; ++i) ASSERT_EQ(s.status(i), 0) << shape;
+  }
+}
+
+TEST(LightChi2, ConstantEnvironment) {
+  // Uniform over the sphere; a constant environment needs no map.
+  std::vector<LightCase> cases = {{"constant environment",
+                                   load_device_scene(write_temp_file(
+                                       "sky.json", scene_json("", R"({"type": "environment", "radiance": [0.7, 0.7, 0.7]})"))),
+                                   {0.5, -2, 1}, SphereBinning(), 0.7}};
+  expect_light_family(cases, 5500);
+}
+
+// ---- The environment map ----
+
+namespace {
+
+// A 32 x 16 map: a smooth background with a dark row, a dark block and single dark texels (all exactly
+// 0) and one bright texel; colours differ per channel so that luminance is not one channel.
+Image synthetic_env_map() {
+  Image img;
+  img.width = 32;
+  img.height = 16;
+  img.rgb.resize(size_t(img.width) * img.height * 3);
+  for (uint32_t r = 0; r < img.height; ++r)
+    for (uint32_t c = 0; c < img.width; ++c) {
+      float v = 0.3f + 0.2f * std::sin(0.4f * c) * std::cos(0.7f * r);
+      bool dark = r == 4 || (r >= 9 && r <= 11 && c >= 3 && c <= 8) || (r * 7 + c * 3) % 23 == 0;
+      float* t = &img.rgb[3 * (size_t(r) * img.width + c)];
+      t[0] = dark ? 0 : v;
+      t[1] = dark ? 0 : 0.5f * v;
+      t[2] = dark ? 0 : 1.5f * v;
+      if (r == 6 && c == 21) t[0] = 40, t[1] = 30, t[2] = 20;
+    }
+  return img;
+}
+
+double luminance(const float* t) { return 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]; }
+
+// Image coordinates in texels (x from the left, y from the top) of a direction under environment.cl's
+// documented convention: +y up, v = theta / pi from +y (row 0 at the top), u = phi / (2 pi) with
+// phi = atan2(z, x).
+glm::dvec2 env_texel_coordinates(const Image& img, const glm::dvec3& d) {
+  double u = std::atan2(d.z, d.x) / (2 * M_PI);
+  if (u < 0) u += 1;
+  double v = std::atan2(std::hypot(d.x, d.z), d.y) / M_PI;
+  return {u * img.width, v * img.height};
+}
+
+// The texel a direction falls in.
+void env_texel(const Image& img, const glm::dvec3& d, uint32_t* row, uint32_t* col) {
+  glm::dvec2 p = env_texel_coordinates(img, d);
+  *col = std::min(uint32_t(p.x), img.width - 1);
+  *row = std::min(uint32_t(p.y), img.height - 1);
+}
+
+// Within eps texels of a texel edge, where a float direction may round into either texel.
+bool near_texel_edge(const Image& img, const glm::dvec3& d, double eps = 1e-4) {
+  glm::dvec2 p = env_texel_coordinates(img, d);
+  return std::abs(p.x - std::round(p.x)) < eps || std::abs(p.y - std::round(p.y)) < eps;
+}
+
+DeviceScene env_scene(const Image& img, double scale) {
+  write_exr(temp_dir() + "/env.exr", img);
+  return load_device_scene(write_temp_file(
+      "env.json", scene_json("", R"({"type": "environment", "file": "env.exr", "scale": )" + std::to_string(scale) + "}")));
+}
+
+}  // namespace
+
+TEST(LightChi2, EnvironmentMap) {
+  const Image img = synthetic_env_map();
+  const double scale = 2;
+  DeviceScene scene = env_scene(img, scale);
+  ASSERT_EQ(scene.lights.size(), 1u);
+  ASSERT_EQ(scene.header.env_light, 0u);
+  // Binned in the map's own frame (polar axis +y, phi from +x towards +z), 5 x 5 bins per texel, so the
+  // piecewise-constant density has no edge inside a bin and its 1 / sin(theta) peak at the poles is
+  // cancelled by the bins' own Jacobian. (About any other axis the quadrature of that integrable
+  // singularity converges too slowly for a million samples.)
+  SphereBinning aligned;
+  aligned.x = {1, 0, 0};
+  aligned.y = {0, 0, 1};
+  aligned.z = {0, 1, 0};
+  std::vector<LightCase> cases = {{"environment map, texel-aligned bins", scene, {0, 0, 0}, aligned, 0}};
+  const double alpha = sidak_alpha(0.01, int(cases.size()));
+
+  // The density the map should have, from the texels: luminance times sin(theta at the row's centre),
+  // normalised over the (u, v) square, over the Jacobian 2 pi^2 sin(theta).
+  double total = 0;
+  for (uint32_t r = 0; r < img.height; ++r)
+    for (uint32_t c = 0; c < img.width; ++c)
+      total += luminance(&img.rgb[3 * (r * img.width + c)]) * std::sin(M_PI * (r + 0.5) / img.height);
+  auto expected_pdf = [&](const glm::dvec3& d) {
+    uint32_t r, c;
+    env_texel(img, d, &r, &c);
+    double p_uv = luminance(&img.rgb[3 * (r * img.width + c)]) * std::sin(M_PI * (r + 0.5) / img.height) / total *
+                  img.width * img.height;
+    return p_uv / (2 * M_PI * M_PI * std::hypot(d.x, d.z) / glm::length(d));
+  };
+
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const LightCase& c = cases[k];
+    SCOPED_TRACE(c.name);
+    SceneBuffers sb(c.scene);
+    LightSamples s = sample_lights(sb, c.x, 6000 + uint32_t(k), kChi2Samples);
+    std::vector<double> observed(c.binning.count() + 1, 0), expected(c.binning.count() + 1, 0);
+    size_t dark_hits = 0, mismatches = 0, failed = 0;
+    std::string first;
+    for (size_t i = 0; i < s.n; ++i) {
+      if (s.status(i) == 0) {
+        ++failed;
+        observed.back() += 1;
+        continue;
+      }
+      glm::dvec3 wi = s.wi(i);
+      observed[c.binning.bin_of(wi)] += 1;
+      uint32_t r, col;
+      env_texel(img, wi, &r, &col);
+      const float* t = &img.rgb[3 * (r * img.width + col)];
+      // At a texel edge the sample's texel is ambiguous (the test below checks those samples).
+      if (near_texel_edge(img, wi)) continue;
+      dark_hits += luminance(t) == 0;
+      // Radiance = scale x texel under the documented convention; the pdf as sampled = env_pdf = the
+      // density computed here from the texels.
+      bool ok = s.status(i) == 1 && std::isinf(s.distance(i)) && std::isinf(s.hit_t(i)) &&
+                close_rel(s.le(i).x, scale * t[0], 1e-6) && close_rel(s.le(i).y, scale * t[1], 1e-6) &&
+                close_rel(s.le(i).z, scale * t[2], 1e-6) && close_rel(s.pdf(i), s.pdf_eval(i), 1e-3) &&
+                close_rel(s.pdf(i), expected_pdf(wi), 1e-3);
+      if (!ok && !mismatches++) {
+        char buf[300];
+        std::snprintf(buf, sizeof buf,
+                      "sample %zu: wi (%g %g %g) texel row %u col %u: Le (%g %g %g), texel x scale (%g %g %g), pdf %.7g, "
+                      "env_pdf %.7g, from the texels %.7g",
+                      i, wi.x, wi.y, wi.z, r, col, s.le(i).x, s.le(i).y, s.le(i).z, scale * t[0], scale * t[1],
+                      scale * t[2], s.pdf(i), s.pdf_eval(i), expected_pdf(wi));
+        first = buf;
+      }
+    }
+    BinIntegrals integrals =
+        integrate_bins(light_pdf_integrator(sb, c.x, c.binning), c.binning.count(), double(kChi2Samples), 0.1, 256);
+    double pdf_total = 0;
+    for (uint32_t b = 0; b < c.binning.count(); ++b) {
+      expected[b] = double(kChi2Samples) * integrals.value[b];
+      pdf_total += integrals.value[b];
+    }
+    expected.back() = double(kChi2Samples) * std::max(0.0, 1.0 - pdf_total);
+    Chi2Result chi2 = chi2_test(observed, expected);
+    std::printf("  %-40s p %.4f  %s; integral %.6f, quadrature order <= %d\n", c.name.c_str(), chi2.p_value,
+                chi2.describe().c_str(), pdf_total, integrals.highest_order);
+    EXPECT_GE(chi2.p_value, alpha) << chi2.describe_worst();
+    EXPECT_LT(integrals.worst, 0.5) << "quadrature: " << integrals.unconverged << " bins unconverged";
+    EXPECT_EQ(failed, 0u);
+    EXPECT_EQ(dark_hits, 0u) << "samples on texels that emit nothing";
+    EXPECT_EQ(mismatches, 0u) << first;
+    EXPECT_NEAR(pdf_total, 1, 5e-4);
+  }
+}
+
+TEST(LightSampling, EnvironmentSampleRadianceAndDensityComeFromOneTexel) {
+  // A 256 x 128 map of texels spread over six decades, a tenth of them black: a sample's radiance and
+  // its density must belong to the same texel (a radiance from one texel over the density of a dimmer
+  // neighbour is a firefly), which must be the texel its direction lies in, or, within 1e-4 texels of
+  // an edge, one of the texels meeting there.
+  Image img;
+  img.width = 256;
+  img.height = 128;
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> decade(-3, 3), unit(0, 1);
+  for (size_t i = 0; i < size_t(img.width) * img.height; ++i) {
+    float v = unit(rng) < 0.1f ? 0 : std::pow(10.0f, decade(rng));
+    img.rgb.insert(img.rgb.end(), {v, 0.8f * v, 1.2f * v});
+  }
+  const double scale = 1;
+  SceneBuffers sb(env_scene(img, scale));
+  // Each texel's probability: its row's, times its own within the row, from luminance x sin(theta).
+  std::vector<double> row_sum(img.height, 0);
+  double total = 0;
+  for (uint32_t r = 0; r < img.height; ++r) {
+    for (uint32_t c = 0; c < img.width; ++c)
+      row_sum[r] += luminance(&img.rgb[3 * (r * img.width + c)]) * std::sin(M_PI * (r + 0.5) / img.height);
+    total += row_sum[r];
+  }
+  LightSamples s = sample_lights(sb, {0, 0, 0}, 21, kChi2Samples);
+  size_t inconsistent = 0, near_edges = 0;
+  std::string first;
+  for (size_t i = 0; i < s.n; ++i) {
+    ASSERT_EQ(s.status(i), 1);
+    glm::dvec3 d = s.wi(i);
+    glm::dvec2 p = env_texel_coordinates(img, d);
+    double sin_theta = std::hypot(d.x, d.z) / glm::length(d);
+    std::vector<std::pair<uint32_t, uint32_t>> candidates;
+    for (double du : {-1e-4, 1e-4})
+      for (double dv : {-1e-4, 1e-4}) {
+        uint32_t c = uint32_t(std::floor(p.x + du) + img.width) % img.width;
+        uint32_t r = uint32_t(std::clamp(std::floor(p.y + dv), 0.0, img.height - 1.0));
+        if (std::find(candidates.begin(), candidates.end(), std::pair{r, c}) == candidates.end()) candidates.push_back({r, c});
+      }
+    near_edges += candidates.size() > 1;
+    bool ok = false;
+    for (auto [r, c] : candidates) {
+      const float* t = &img.rgb[3 * (r * img.width + c)];
+      double p_row = row_sum[r] / total, p_col = luminance(t) * std::sin(M_PI * (r + 0.5) / img.height) / row_sum[r];
+      double pdf = p_row * p_col * img.width * img.height / (2 * M_PI * M_PI * sin_theta);
+      // The device takes each probability as the difference of two float cdf entries, each within
+      // 3e-8 of its exact value.
+      double tol = 1e-4 + 6e-8 / p_row + 6e-8 / p_col;
+      ok = ok || (close_rel(s.le(i).x, scale * t[0], 1e-6) && close_rel(s.le(i).z, scale * t[2], 1e-6) &&
+                  close_rel(s.pdf(i), pdf, tol));
+    }
+    if (!ok && !inconsistent++) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf, "sample %zu: wi (%.9g %.9g %.9g) at texel coordinates (%.9f, %.9f): Le %g, pdf %g", i,
+                    d.x, d.y, d.z, p.x, p.y, s.le(i).x, s.pdf(i));
+      first = buf;
+    }
+  }
+  std::printf("  %zu of %zu samples within 1e-4 texels of an edge\n", near_edges, s.n);
+  EXPECT_EQ(inconsistent, 0u) << first;
+}
+
+// ---- Delta lights, exactly ----
+
+TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
+  const glm::dvec3 pos(0.5, 2, -1), axis = glm::normalize(glm::dvec3(0.2, -1, 0.3));
+  const double intensity = 7, inner = 25, outer = 40;
+  char lights[400];
+  std::snprintf(lights, sizeof lights,
+                R"({"type": "spot", "position": [%.9g, %.9g, %.9g], "direction": [%.9g, %.9g, %.9g],
+                    "intensity": [%g, %g, %g], "inner_angle_degrees": %g, "outer_angle_degrees": %g})",
+                pos.x, pos.y, pos.z, axis.x, axis.y, axis.z, intensity, 2 * intensity, intensity, inner, outer);
+  SceneBuffers sb(load_device_scene(write_temp_file("spot.json", scene_json(
+      R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})", lights))));
+  SphereBinning frame = SphereBinning::about(axis, M_PI);
+  for (double angle : {0.0, 10.0, 24.9, 25.1, 28.0, 32.5, 37.0, 39.9, 40.1, 60.0, 150.0})
+    for (double dist : {0.7, 3.0}) {
+      SCOPED_TRACE("angle " + std::to_string(angle) + " distance " + std::to_string(dist));
+      double a = angle * kDeg;
+      glm::dvec3 x = pos + dist * (std::cos(a) * axis + std::sin(a) * glm::normalize(frame.x + 0.5 * frame.y));
+      LightSamples s = sample_lights(sb, x, 9, 4);
+      glm::vec3 xf(x);  // the kernel sees x in single precision
+      glm::dvec3 d = glm::dvec3(xf) - pos;
+      double cos_t = glm::dot(axis, glm::normalize(d)), cos_i = std::cos(inner * kDeg), cos_o = std::cos(outer * kDeg);
+      double falloff = 1;
+      if (cos_t <= cos_o) falloff = 0;
+      else if (cos_t < cos_i) {
+        double t = (cos_t - cos_o) / (cos_i - cos_o);
+        falloff = t * t * (3 - 2 * t);  // smoothstep
+      }
+      double want = intensity * falloff / glm::dot(d, d);
+      for (size_t i = 0; i < s.n; ++i) {
+        if (falloff == 0) {  // no light reaches x: no sample
+          EXPECT_EQ(s.status(i), 0);
+          continue;
+        }
+        ASSERT_EQ(s.status(i), 2);
+        // The falloff's slope in cos is at most 1.5 / (cos_inner - cos_outer) = 11: float cosines leave it
+        // 2e-6 (of the unattenuated value) uncertain.
+        double unattenuated = intensity / glm::dot(d, d);
+        EXPECT_NEAR(s.le(i).x, want, 1e-5 * want + 2e-6 * unattenuated);
+        EXPECT_NEAR(s.le(i).y, 2 * want, 2 * (1e-5 * want + 2e-6 * unattenuated));
+        EXPECT_NEAR(s.pdf(i), 1, 1e-6);  // the only light
+        EXPECT_NEAR(glm::length(s.wi(i) + glm::normalize(d)), 0, 1e-6);
+        EXPECT_NEAR(s.distance(i), glm::length(d), 1e-5 * glm::length(d));
+      }
+    }
+}
+
+TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
+  SceneBuffers sb(load_device_scene(write_temp_file(
+      "sun.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
+                             R"({"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [3, 2, 1]})"))));
+  glm::dvec3 towards_light = -glm::normalize(glm::dvec3(0.3, -1, 0.2));
+  for (glm::dvec3 x : {glm::dvec3(0, 0, 0), glm::dvec3(-10, 4, 20)}) {
+    LightSamples s = sample_lights(sb, x, 1, 1);
+    ASSERT_EQ(s.status(0), 2);
+    EXPECT_NEAR(glm::length(s.wi(0) - towards_light), 0, 1e-6);
+    EXPECT_EQ(s.le(0), glm::dvec3(3, 2, 1));
+    EXPECT_TRUE(std::isinf(s.distance(0)));
+  }
+}
+
+TEST(LightSampling, PointLightFollowsTheInverseSquareLaw) {
+  SceneBuffers sb(load_device_scene(write_temp_file(
+      "point.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
+                               R"({"type": "point", "position": [1, 2, 3], "intensity": [5, 5, 5]})"))));
+  for (glm::dvec3 x : {glm::dvec3(0, 0, 0), glm::dvec3(1, 2, 3.5), glm::dvec3(-10, 4, 20)}) {
+    LightSamples s = sample_lights(sb, x, 1, 1);
+    glm::dvec3 d = glm::dvec3(1, 2, 3) - x;
+    ASSERT_EQ(s.status(0), 2);
+    EXPECT_NEAR(s.le(0).x, 5 / glm::dot(d, d), 1e-5 * 5 / glm::dot(d, d));
+    EXPECT_NEAR(glm::length(s.wi(0) - glm::normalize(d)), 0, 1e-6);
+  }
+}
