@@ -43,12 +43,12 @@ struct LoadedScene {
   double load_ms = 0;  // reading, mesh loading and cleaning
 };
 
-LoadedScene load(const std::string& path) {
+LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera) {
   LoadedScene s;
   auto start = std::chrono::steady_clock::now();
   s.description = load_scene(path);
   s.load_ms = ms_since(start);
-  s.device = build_device_scene(s.description);
+  s.device = build_device_scene(s.description, origin);
   return s;
 }
 
@@ -347,7 +347,7 @@ struct RaysArgs {
 };
 
 int run_rays(const RaysArgs& a) {
-  LoadedScene s = load(a.scene);
+  LoadedScene s = load(a.scene, DeviceOrigin::world);  // ray files are in world coordinates
   std::vector<RayRecord> rays = read_ray_file(a.rays);
   if (a.repeat < 1) throw UsageError("--repeat: expected at least 1");
   ClContext cl(select_device(a.device));

@@ -16,17 +16,17 @@ float bits_to_float(uint32_t u) {
 }
 float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
-SceneHeader camera_header(const CameraDesc& c) {
+SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
   SceneHeader h{};
-  glm::vec3 forward = glm::normalize(c.look_at - c.position);
-  glm::vec3 right = glm::normalize(glm::cross(forward, c.up));
-  glm::vec3 up = glm::cross(right, forward);
-  float tan_half = std::tan(glm::radians(c.fov_y_degrees) * 0.5f);
-  float aspect = float(c.width) / float(c.height);
-  h.cam_position = f4(c.position);
-  h.cam_right = f4(right * tan_half * aspect);
-  h.cam_up = f4(up * tan_half);
-  h.cam_forward = f4(forward);
+  glm::dvec3 forward = glm::normalize(c.look_at - c.position);
+  glm::dvec3 right = glm::normalize(glm::cross(forward, c.up));
+  glm::dvec3 up = glm::cross(right, forward);
+  double tan_half = std::tan(glm::radians(double(c.fov_y_degrees)) * 0.5);
+  double aspect = double(c.width) / double(c.height);
+  h.cam_position = f4(glm::vec3(c.position - origin));  // 0 for DeviceOrigin::camera
+  h.cam_right = f4(glm::vec3(right * tan_half * aspect));
+  h.cam_up = f4(glm::vec3(up * tan_half));
+  h.cam_forward = f4(glm::vec3(forward));
   h.width = c.width;
   h.height = c.height;
   return h;
@@ -38,9 +38,12 @@ Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
 }
 
-DeviceScene build_device_scene(const SceneDescription& scene) {
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin) {
   DeviceScene out;
-  out.header = camera_header(scene.camera);
+  out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
+  out.header = camera_header(scene.camera, out.origin);
+  // World (double) to device (float) coordinates: the subtraction first, in double, then the rounding.
+  auto to_device = [&](const glm::dvec3& world) { return glm::vec3(world - out.origin); };
   for (const MaterialDesc& m : scene.materials) {
     Material mat{};
     mat.reflectance = f4(m.reflectance);
@@ -59,19 +62,24 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
       uint32_t index = uint32_t(prims.size());
-      prims.push_back({f4(s.center, bits_to_float(index)), {s.radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
-      boxes.push_back({s.center - glm::vec3(s.radius), s.center + glm::vec3(s.radius)});
+      glm::vec3 center = to_device(s.center);
+      float radius = float(s.radius);
+      prims.push_back({f4(center, bits_to_float(index)), {radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
+      boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
-      if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * s.radius * s.radius, s.two_sided});
+      if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * radius * radius, s.two_sided});
       out.sphere_count++;
       out.features |= kFeatureSpheres;
       continue;
     }
     bool smooth = !s.mesh.normals.empty();
     if (smooth) out.features |= kFeatureSmoothNormals;
+    std::vector<glm::vec3> positions;
+    positions.reserve(s.mesh.positions.size());
+    for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(p));
     for (const auto& t : s.mesh.triangles) {
       uint32_t index = uint32_t(prims.size());
-      glm::vec3 a = s.mesh.positions[t[0]], b = s.mesh.positions[t[1]], c = s.mesh.positions[t[2]];
+      glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
       prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
       Aabb box;
       box.grow(a);

@@ -173,11 +173,11 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
   report.input_vertices = soup.positions.size();
   report.input_polygons = soup.polygons.size();
 
-  // 1. CGAL polygon soup. Coordinates go float -> double exactly and come back the same way.
+  // 1. CGAL polygon soup, in the soup's double coordinates (they come back unchanged).
   std::vector<Point> points;
   points.reserve(soup.positions.size());
   for (std::size_t i = 0; i < soup.positions.size(); ++i) {
-    const glm::vec3& p = soup.positions[i];
+    const glm::dvec3& p = soup.positions[i];
     // NaN would break the lexicographic order CGAL merges points with.
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw SceneError("vertex " + std::to_string(i) + ": coordinate is not finite");
@@ -318,8 +318,7 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
 
   TriangleMesh result;
   result.positions.reserve(points.size());
-  for (const Point& p : points)
-    result.positions.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  for (const Point& p : points) result.positions.emplace_back(p.x(), p.y(), p.z());
   result.triangles.reserve(tris.size());
   for (const Polygon& t : tris)
     result.triangles.push_back({static_cast<uint32_t>(t[0]), static_cast<uint32_t>(t[1]), static_cast<uint32_t>(t[2])});

@@ -9,9 +9,11 @@
 
 #include <glm/vec3.hpp>
 
-// Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list.
+// Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list. Positions are
+// world coordinates in double: far from the origin, float would already have moved them (at 1e6 its
+// spacing is 0.0625); they become float only relative to the camera (scene/device_scene_build.cpp).
 struct PolygonSoup {
-  std::vector<glm::vec3> positions;
+  std::vector<glm::dvec3> positions;
   std::vector<std::vector<uint32_t>> polygons;
 };
 
@@ -34,7 +36,7 @@ struct CleanReport {
 };
 
 struct TriangleMesh {
-  std::vector<glm::vec3> positions;
+  std::vector<glm::dvec3> positions;               // world coordinates, as in PolygonSoup
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
   std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals
 };

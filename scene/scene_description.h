@@ -9,8 +9,9 @@
 
 #include "scene/mesh_clean.h"
 
+// Positions are world coordinates in double until build_device_scene makes them camera-relative floats.
 struct CameraDesc {
-  glm::vec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
+  glm::dvec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
   float fov_y_degrees = 40;
   uint32_t width = 512, height = 512;
 };
@@ -38,8 +39,8 @@ struct ShapeDesc {
   bool is_sphere = false;
   TriangleMesh mesh;  // when !is_sphere
   CleanReport clean;  // when !is_sphere
-  glm::vec3 center{0};
-  float radius = 0;
+  glm::dvec3 center{0};  // world coordinates, like TriangleMesh::positions
+  double radius = 0;
   bool flip_normals = false;  // sphere: normals point inwards (meshes are flipped by winding at load)
   uint32_t material = 0;      // index into SceneDescription::materials
   glm::vec3 emission{0};

@@ -15,9 +15,10 @@
 
 namespace {
 
+using glm::dvec3;
 using glm::vec3;
 
-glm::dvec3 d(const vec3& v) { return glm::dvec3(v); }
+dvec3 d(const dvec3& v) { return v; }
 
 glm::dvec3 tri_normal(const TriangleMesh& m, const std::array<uint32_t, 3>& t) {
   const glm::dvec3 a = d(m.positions[t[0]]), b = d(m.positions[t[1]]), c = d(m.positions[t[2]]);
@@ -57,9 +58,9 @@ bool consistently_oriented(const TriangleMesh& m) {
   return true;
 }
 
-vec3 centroid(const TriangleMesh& m, std::size_t tri) {
+dvec3 centroid(const TriangleMesh& m, std::size_t tri) {
   const auto& t = m.triangles[tri];
-  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0f;
+  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
 }
 
 // Unit cube [0,1]^3 as 8 shared vertices and 6 outward (CCW seen from outside) quads.
@@ -101,10 +102,10 @@ TEST(MeshClean, MergesDuplicateVertices) {
     for (int i = 0; i < 3; ++i) ++edges[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}];
   EXPECT_EQ(edges.size(), 5u);
   // Positions are kept exactly, in input order (first occurrence).
-  EXPECT_EQ(m.positions[0], vec3(0, 0, 0));
-  EXPECT_EQ(m.positions[1], vec3(1, 0, 0));
-  EXPECT_EQ(m.positions[2], vec3(1, 1, 0));
-  EXPECT_EQ(m.positions[3], vec3(0, 1, 0));
+  EXPECT_EQ(m.positions[0], dvec3(0, 0, 0));
+  EXPECT_EQ(m.positions[1], dvec3(1, 0, 0));
+  EXPECT_EQ(m.positions[2], dvec3(1, 1, 0));
+  EXPECT_EQ(m.positions[3], dvec3(0, 1, 0));
   // Winding kept: both face +z.
   for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0);
 }
@@ -192,7 +193,7 @@ TEST(MeshClean, TriangulatesNonConvexPolygon) {
     for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0) << "start " << start;
     // No triangle's centroid lies in the notch [1,2]x[1,2].
     for (std::size_t i = 0; i < m.triangles.size(); ++i) {
-      const vec3 c = centroid(m, i);
+      const dvec3 c = centroid(m, i);
       EXPECT_FALSE(c.x > 1 && c.y > 1) << "start " << start;
     }
   }
@@ -212,7 +213,7 @@ TEST(MeshClean, TriangulatesTiltedNonConvexPolygon) {
   // The L in a tilted plane (rotated about x by 30 degrees): same area, triangles face the polygon normal.
   PolygonSoup s = l_shape();
   const float c = std::cos(0.5235988f), sn = std::sin(0.5235988f);
-  for (vec3& p : s.positions) p = vec3(p.x, c * p.y - sn * p.z, sn * p.y + c * p.z);
+  for (dvec3& p : s.positions) p = dvec3(p.x, c * p.y - sn * p.z, sn * p.y + c * p.z);
   const glm::dvec3 normal(0, -sn, c);
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {}, r);
@@ -258,8 +259,8 @@ TEST(MeshClean, KeepsTriangleOrder) {
   EXPECT_FLOAT_EQ(centroid(m, 3).z, 3.0f);
   // Vertex order: the input's, without the removed (isolated) ones.
   ASSERT_EQ(m.positions.size(), 10u);
-  EXPECT_EQ(m.positions[6], vec3(0, 1, 1));
-  EXPECT_EQ(m.positions[7], vec3(0, 0, 3));
+  EXPECT_EQ(m.positions[6], dvec3(0, 1, 1));
+  EXPECT_EQ(m.positions[7], dvec3(0, 0, 3));
   EXPECT_EQ(r.removed_isolated_vertices, 3u);
 }
 
@@ -323,19 +324,19 @@ void expect_outward_unit_normals(const TriangleMesh& m) {
   ASSERT_EQ(m.normals.size(), m.positions.size());
   for (std::size_t i = 0; i < m.positions.size(); ++i) {
     EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-5f) << i;
-    EXPECT_GT(glm::dot(m.normals[i], m.positions[i]), 0.0f) << i;
+    EXPECT_GT(glm::dot(m.normals[i], vec3(m.positions[i])), 0.0f) << i;
   }
 }
 
 TEST(MeshClean, SmoothNormalsOfCubePointOutward) {
   PolygonSoup s = cube_quads();
-  for (vec3& p : s.positions) p -= vec3(0.5f);  // centre on the origin
+  for (dvec3& p : s.positions) p -= dvec3(0.5);  // centre on the origin
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
   expect_outward_unit_normals(m);
   // A cube corner's normal is along the diagonal, whatever the triangulation weights.
   for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_GT(glm::dot(m.normals[i], glm::normalize(m.positions[i])), 0.9f);
+    EXPECT_GT(glm::dot(m.normals[i], vec3(glm::normalize(m.positions[i]))), 0.9f);
 }
 
 TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
@@ -348,12 +349,12 @@ TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
   EXPECT_NEAR(signed_volume(m), 4.0 / 3.0, 1e-6);
   expect_outward_unit_normals(m);
   for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_NEAR(glm::dot(m.normals[i], m.positions[i]), 1.0f, 1e-5f);  // exactly radial by symmetry
+    EXPECT_NEAR(glm::dot(m.normals[i], vec3(m.positions[i])), 1.0f, 1e-5f);  // exactly radial by symmetry
 }
 
 TEST(MeshClean, SmoothNormalsAfterOrientingInsideOutCube) {
   PolygonSoup s = cube_quads();
-  for (vec3& p : s.positions) p -= vec3(0.5f);
+  for (dvec3& p : s.positions) p -= dvec3(0.5);
   for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {.orient = true, .smooth_normals = true}, r);

@@ -80,15 +80,15 @@ TEST(SceneLoad, TransformsMoveGeometryAndMirrorsKeepTheFrontSide) {
       "moved.json", scene_with_shape(tri + R"(, "transform": {"translate": [1, 2, 3], "scale": 2}})")));
   const TriangleMesh& m = moved.shapes[0].mesh;
   ASSERT_EQ(m.triangles.size(), 1u);
-  EXPECT_EQ(m.positions[m.triangles[0][1]], glm::vec3(3, 2, 3));  // (1,0,0) scaled by 2, then moved
+  EXPECT_EQ(m.positions[m.triangles[0][1]], glm::dvec3(3, 2, 3));  // (1,0,0) scaled by 2, then moved
 
   SceneDescription mirrored = load_scene(write_temp_file(
       "mirrored.json", scene_with_shape(tri + R"(, "transform": {"scale": [1, 1, -1]}})")));
   const TriangleMesh& mm = mirrored.shapes[0].mesh;
-  glm::vec3 a = mm.positions[mm.triangles[0][0]], b = mm.positions[mm.triangles[0][1]], c = mm.positions[mm.triangles[0][2]];
+  glm::dvec3 a = mm.positions[mm.triangles[0][0]], b = mm.positions[mm.triangles[0][1]], c = mm.positions[mm.triangles[0][2]];
   // The front faces +z; mirrored in z it must face -z, as the transformed normal M^-T n does. The
   // points do not move, so only the swapped winding can say so.
-  EXPECT_LT(glm::cross(b - a, c - a).z, 0.0f);
+  EXPECT_LT(glm::cross(b - a, c - a).z, 0.0);
 
   SceneDescription sphere = load_scene(write_temp_file(
       "sphere.json", scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "center": [1, 0, 0],
@@ -120,4 +120,28 @@ TEST(SceneLoad, LightsAreChosenInProportionToPower) {
   EXPECT_NEAR(d.lights[0].select_pdf, 1.0 / 9.0, 1e-6);
   EXPECT_NEAR(d.lights[1].select_pdf, 8.0 / 9.0, 1e-6);
   EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
+}
+
+TEST(SceneLoad, DeviceSceneIsCameraRelativeWithPositionsSubtractedInDouble) {
+  // At 1e6 float spacing is 0.0625: in float, 1e6 + 0.33 - (1e6 + 0.1) would be 0.1875, not 0.23.
+  std::string path = write_temp_file("far.json", R"({"camera": {"position": [1000000.1, 2000000.2, 5], "look_at": [1000000.1, 2000000.2, 0],
+    "width": 8, "height": 8}, "materials": {"m": {"type": "diffuse"}}, "shapes": [
+      {"type": "triangles", "positions": [[0.33, 0.2, 0], [1.33, 0.2, 0], [0.33, 1.2, 0]], "indices": [[0, 1, 2]],
+       "material": "m", "transform": {"translate": [1000000, 2000000, 0]}},
+      {"type": "sphere", "center": [1000000.35, 2000000.2, -1], "radius": 0.5, "material": "m"}]})");
+  SceneDescription description = load_scene(path);
+  DeviceScene d = build_device_scene(description);
+  EXPECT_EQ(d.origin, description.camera.position);
+  EXPECT_EQ(d.header.cam_position.x, 0.0f);
+  EXPECT_EQ(d.header.cam_position.y, 0.0f);
+  EXPECT_EQ(d.header.cam_position.z, 0.0f);
+  Primitive tri = scene_primitive(d, 0), sphere = scene_primitive(d, 1);
+  EXPECT_NEAR(tri.a.x, 0.23, 1e-6);
+  EXPECT_NEAR(tri.a.y, 0.0, 1e-6);
+  EXPECT_NEAR(tri.a.z, -5.0, 1e-6);
+  EXPECT_NEAR(sphere.a.x, 0.25, 1e-6);
+  // Flattened around the world origin (ray files), the camera keeps its world position.
+  DeviceScene w = build_device_scene(description, DeviceOrigin::world);
+  EXPECT_EQ(w.origin, glm::dvec3(0));
+  EXPECT_EQ(w.header.cam_position.x, float(1000000.1));
 }

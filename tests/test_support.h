@@ -18,8 +18,8 @@ std::string temp_dir();
 // Writes text to a file in temp_dir() and returns its path.
 std::string write_temp_file(const std::string& name, const std::string& text);
 
-// Loads and flattens a scene file.
-DeviceScene load_device_scene(const std::string& path);
+// Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).
+DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera);
 
 // Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err and
 // stdout in *out when given.
