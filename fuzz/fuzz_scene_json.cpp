@@ -27,6 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (slot >= prims || seen[slot]) fuzz::invariant_failed("leaf slots are not a permutation");
       seen[slot] = true;
     }
+    if (!device.normals.empty() && device.normals.size() != 3 * prims)
+      fuzz::invariant_failed("smooth normals are not 3 per primitive");
     if (device.light_cdf.size() != device.lights.size() + 1) fuzz::invariant_failed("light CDF size");
     for (const Light& light : device.lights)
       if (light.prim >= prims || light.slot >= prims) fuzz::invariant_failed("light primitive out of range");

@@ -67,6 +67,7 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
       prims.push_back({f4(center, bits_to_float(index)), {radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
       boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
+      out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});  // 3 per primitive, as for triangles
       if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * radius * radius, s.two_sided});
       out.sphere_count++;
       out.features |= kFeatureSpheres;

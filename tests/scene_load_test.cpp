@@ -145,3 +145,18 @@ TEST(SceneLoad, DeviceSceneIsCameraRelativeWithPositionsSubtractedInDouble) {
   EXPECT_EQ(w.origin, glm::dvec3(0));
   EXPECT_EQ(w.header.cam_position.x, float(1000000.1));
 }
+
+TEST(SceneLoad, SmoothNormalsAreIndexedByPrimitiveAfterSpheres) {
+  // Normals are stored 3 per scene-order primitive: a sphere before a smooth mesh takes its 3 slots.
+  std::string scene = scene_with_shape(R"({"type": "sphere", "radius": 0.5, "center": [0, 0, -3], "material": "m"},
+    {"type": "mesh", "file": ")" + std::string(PATHCL_SOURCE_DIR) + R"(/scenes/meshes/cube.obj", "material": "m",
+     "smooth": true})");
+  DeviceScene d = load_device_scene(write_temp_file("sphere-then-smooth.json", scene));
+  ASSERT_EQ(d.header.prim_count, 13u);
+  ASSERT_EQ(d.normals.size(), 3u * 13);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(d.normals[k].x * d.normals[k].x + d.normals[k].y * d.normals[k].y, 0.0f);
+  for (uint32_t i = 3; i < d.normals.size(); ++i) {
+    const pc_float4& n = d.normals[i];
+    EXPECT_NEAR(n.x * n.x + n.y * n.y + n.z * n.z, 1.0f, 1e-5f) << i;
+  }
+}
