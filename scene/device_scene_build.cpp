@@ -88,10 +88,20 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
       box.grow(c);
       boxes.push_back(box);
       out.shading.push_back({s.material, PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
-      if (smooth)
-        for (int k = 0; k < 3; ++k) out.normals.push_back(f4(s.mesh.normals[t[k]]));
-      else
+      if (smooth) {
+        // A vertex without a normal (zero: CGAL found none, e.g. where the normals of its faces cancel)
+        // takes this face's geometric normal at this corner.
+        const glm::dvec3 &wa = s.mesh.positions[t[0]], &wb = s.mesh.positions[t[1]], &wc = s.mesh.positions[t[2]];
+        glm::dvec3 face = glm::cross(wb - wa, wc - wa);
+        double face_length = glm::length(face);
+        glm::vec3 fallback = face_length > 0 ? glm::vec3(face / face_length) : glm::vec3(0);
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3& n = s.mesh.normals[t[k]];
+          out.normals.push_back(f4(glm::dot(n, n) > 0 ? n : fallback));
+        }
+      } else {
         out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
+      }
       float area = 0.5f * glm::length(glm::cross(b - a, c - a));
       if (emits) {
         if (area > 0 && std::isfinite(area))

@@ -296,9 +296,11 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
         for (Mesh::Vertex_index v : mesh.vertices()) {
           const Vector& n = vnormals[v];
           // CGAL already normalizes in double; normalize again in float so the output is unit there.
+          // CGAL returns a null vector where it finds no normal (incident face normals that cancel, as
+          // on a folded mesh): that stays zero, and build_device_scene uses the face normal there.
           glm::vec3 g(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
           const float len = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
-          normals[v.idx()] = len > 0 ? g / len : g;
+          normals[v.idx()] = len > 0 && std::isfinite(len) ? g / len : glm::vec3(0);
         }
       }
     }

@@ -38,7 +38,7 @@ struct CleanReport {
 struct TriangleMesh {
   std::vector<glm::dvec3> positions;               // world coordinates, as in PolygonSoup
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
-  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals
+  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals; unit or zero
 };
 
 // Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place

@@ -389,6 +389,29 @@ TEST(MeshClean, OrientSplitsNonManifoldEdge) {
   for (const vec3& n : m.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
 }
 
+// A closed surface folded flat into the plane y = 0: the square (0,0)-(2,2) in x, z covered on one side
+// by two triangles and on the other by a fan around its centre.
+PolygonSoup folded_square() {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {2, 0, 0}, {2, 0, 2}, {0, 0, 2}, {1, 0, 1}};
+  s.polygons = {{0, 1, 2}, {0, 2, 3}, {4, 1, 0}, {4, 2, 1}, {4, 3, 2}, {4, 0, 3}};
+  return s;
+}
+
+TEST(MeshClean, ZeroLengthVertexNormalsStayZeroNeverNaN) {
+  // The folded square lying in z = 0, consistently oriented as given. At its corners 0 and 2 the faces
+  // of the two sides subtend the same angles, so their angle-weighted normals cancel exactly and CGAL
+  // returns a null vector: the normal stays zero (build_device_scene then uses the face normal).
+  PolygonSoup s = folded_square();
+  for (dvec3& p : s.positions) p = dvec3(p.x, p.z, 0);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  ASSERT_EQ(m.normals.size(), 5u);
+  EXPECT_EQ(m.normals[0], vec3(0));
+  EXPECT_EQ(m.normals[2], vec3(0));
+  for (uint32_t i : {1u, 3u, 4u}) EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-6f) << i;
+}
+
 TEST(MeshClean, OutOfRangeIndexThrows) {
   PolygonSoup s;
   s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};

@@ -1,5 +1,6 @@
 // Hard numerical cases: watertightness of a perturbed closed mesh, rays spawned from surfaces at
 // scales from 1e-8 to 1e8, and a camera grazing a diffuse floor inside an emitting enclosure.
+// Smooth normals of zero length fall back to the face normal.
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -183,4 +184,59 @@ TEST(Robustness, GrazingCameraAboveAFloorSeesRhoTimesLeEverywhere) {
   EXPECT_LE(failures, pixels / 100) << failures << " of " << pixels << " pixels fail";
   MeanStd m = mean_and_error(values);
   EXPECT_NEAR(m.mean, 0.5, 4 * m.std_error + 1e-6);
+}
+
+namespace {
+
+// No invalid sample was counted and every pixel is finite.
+void expect_finite_render(const RenderResult& r) {
+  EXPECT_EQ(r.nan_samples, 0u);
+  EXPECT_EQ(r.inf_samples, 0u);
+  EXPECT_EQ(r.negative_samples, 0u);
+  size_t bad = 0;
+  for (float v : r.film.mean) bad += !std::isfinite(v);
+  for (float v : r.film.variance) bad += !std::isfinite(v);
+  EXPECT_EQ(bad, 0u);
+}
+
+// An emitting sphere around everything (normals inwards), so that any surface is lit.
+const char* kEnclosure = R"({"type": "sphere", "radius": 20, "flip_normals": true, "material": "m", "emission": [1, 1, 1]})";
+
+}  // namespace
+
+TEST(Robustness, ZeroLengthSmoothNormalsFallBackToTheFaceNormal) {
+  // A closed surface folded flat into the plane z = 0: the square (0,0)-(2,2) covered on its front by
+  // two triangles and on its back by a fan around its centre. CGAL's vertex normals at the corners 0
+  // and 2 cancel exactly (the faces on either side subtend the same angles there): zero-length normals.
+  std::vector<glm::dvec3> v = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {1, 1, 0}};
+  std::string folded = triangles_json(v, {{0, 1, 2}, {0, 2, 3}, {4, 1, 0}, {4, 2, 1}, {4, 3, 2}, {4, 0, 3}},
+                                      R"("material": "m", "smooth": true)");
+  std::string camera = R"({"position": [1, 0.5, 3], "look_at": [1, 1, 0], "width": 16, "height": 16})";
+  std::string path = write_temp_file("folded.json", scene_json(folded + "," + kEnclosure, camera));
+  SceneDescription description = load_scene(path);
+  const TriangleMesh& mesh = description.shapes[0].mesh;
+  ASSERT_EQ(mesh.normals.size(), 5u);
+  size_t zero = 0;
+  for (const glm::vec3& n : mesh.normals) zero += n == glm::vec3(0);
+  ASSERT_EQ(zero, 2u) << "the case under test: two vertices without a normal";
+
+  DeviceScene scene = build_device_scene(description);
+  ASSERT_EQ(scene.normals.size(), 3 * (mesh.triangles.size() + 1));  // + the sphere's unused slots
+  for (uint32_t i = 0; i < mesh.triangles.size(); ++i) {
+    Primitive p = scene_primitive(scene, i);
+    glm::vec3 face = glm::normalize(glm::cross(glm::vec3(p.b.x, p.b.y, p.b.z) - glm::vec3(p.a.x, p.a.y, p.a.z),
+                                               glm::vec3(p.c.x, p.c.y, p.c.z) - glm::vec3(p.a.x, p.a.y, p.a.z)));
+    for (int k = 0; k < 3; ++k) {
+      const pc_float4& n = scene.normals[3 * i + k];
+      glm::vec3 corner(n.x, n.y, n.z);
+      EXPECT_NEAR(glm::length(corner), 1.0f, 1e-6f) << "triangle " << i << " corner " << k;
+      // Where the vertex had no normal, the corner has the face's.
+      if (mesh.normals[mesh.triangles[i][k]] == glm::vec3(0)) EXPECT_NEAR(glm::dot(corner, face), 1.0f, 1e-6f);
+    }
+  }
+  RenderOptions opt;
+  opt.spp = 16;
+  opt.max_depth = 3;
+  RenderResult r = render(test_device(), scene, opt);
+  expect_finite_render(r);
 }
