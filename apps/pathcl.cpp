@@ -150,6 +150,9 @@ void warn_about_clean_up(const LoadedScene& s) {
     if (c.degenerate_faces + c.duplicate_faces > 0)
       std::fprintf(stderr, "warning: %s: removed %zu degenerate and %zu duplicate faces\n", shape.label.c_str(),
                    c.degenerate_faces, c.duplicate_faces);
+    if (c.self_intersecting)
+      std::fprintf(stderr, "warning: %s: the closed mesh intersects itself; each connected part was oriented to a "
+                   "positive volume instead of by CGAL's orient_to_bound_a_volume\n", shape.label.c_str());
   }
   if (s.device.skipped_zero_area_emitters > 0)
     std::fprintf(stderr, "warning: %u zero-area emitting triangles are not lights\n", s.device.skipped_zero_area_emitters);
@@ -328,7 +331,8 @@ int run_info(const std::string& path) {
     std::printf("    merged %zu duplicate vertices, removed %zu isolated vertices, %zu degenerate faces, %zu duplicate "
                 "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s\n",
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,
-                c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped, c.closed ? "closed" : "open",
+                c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped,
+                c.self_intersecting ? "closed, self-intersecting" : c.closed ? "closed" : "open",
                 shape.mesh.normals.empty() ? "" : ", smooth normals");
   }
   const DeviceScene& v = s.device;

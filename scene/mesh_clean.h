@@ -33,6 +33,10 @@ struct CleanReport {
   size_t triangles_from_polygons = 0;
   size_t faces_flipped = 0;          // only when CleanOptions::orient
   bool closed = false;               // every edge shared by exactly two faces
+  // Only checked with CleanOptions::orient on a closed mesh: its faces intersect each other (e.g. two
+  // overlapping boxes in one file, or a fold), so CGAL's orient_to_bound_a_volume does not apply and each
+  // connected part is turned to a positive signed volume instead.
+  bool self_intersecting = false;
 };
 
 struct TriangleMesh {
@@ -42,5 +46,6 @@ struct TriangleMesh {
 };
 
 // Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place
-// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh).
+// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh, or a failed CGAL
+// check where CGAL's checks are compiled in); never CGAL's own exceptions.
 TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report);

@@ -101,6 +101,21 @@ TEST(Cli, DevicesInfoAndRays) {
   EXPECT_NE(err.find("multiple of the 32-byte"), std::string::npos) << err;
 }
 
+TEST(Cli, SelfIntersectingClosedMeshIsOrientedWithAWarning) {
+  // Two overlapping closed boxes in one OBJ file, inside out, emitting from their front side, with
+  // "orient": true. CGAL's orient_to_bound_a_volume requires a mesh without self-intersections; each
+  // box is turned outward by its signed volume instead, so the camera outside sees the emission.
+  std::string out = temp_dir() + "/self-intersecting.exr", err, info;
+  ASSERT_EQ(run_pathcl("render " + scene("self-intersecting-orient.json") + " -o " + out, &err), 0) << err;
+  EXPECT_NE(err.find("warning: shapes[0] (meshes/overlapping-boxes.obj): the closed mesh intersects itself"),
+            std::string::npos) << err;
+  Image image = read_exr(out);
+  size_t centre = 3 * (image.width * (image.height / 2) + image.width / 2);
+  EXPECT_GE(image.rgb[centre], 1.0f);  // Le = 1 seen directly, plus what the box reflects
+  ASSERT_EQ(run_pathcl("info " + scene("self-intersecting-orient.json"), &err, &info), 0) << err;
+  EXPECT_NE(info.find("flipped 24 faces; closed, self-intersecting"), std::string::npos) << info;
+}
+
 TEST(Cli, FilmLargerThanTheDeviceIsAClearRuntimeFailure) {
   std::string scene_file = write_temp_file("huge.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0],
     "width": 16384, "height": 16384}, "materials": {"m": {"type": "diffuse"}},

@@ -1,5 +1,5 @@
 // Tests for clean_mesh (scene/mesh_clean.cpp): merging, degeneracies, duplicates, triangulation,
-// orientation and smooth normals.
+// orientation and smooth normals. Built with CGAL's own checks on (tests/CMakeLists.txt).
 #include "scene/mesh_clean.h"
 
 #include <gtest/gtest.h>
@@ -410,6 +410,59 @@ TEST(MeshClean, ZeroLengthVertexNormalsStayZeroNeverNaN) {
   EXPECT_EQ(m.normals[0], vec3(0));
   EXPECT_EQ(m.normals[2], vec3(0));
   for (uint32_t i : {1u, 3u, 4u}) EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-6f) << i;
+}
+
+// Two closed unit cubes overlapping in [0.5, 1]^3, in one soup: a self-intersecting closed mesh.
+PolygonSoup overlapping_cubes(bool first_inward, bool second_inward) {
+  PolygonSoup s = cube_quads(), b = cube_quads();
+  if (first_inward)
+    for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
+  for (auto& p : b.polygons) {
+    if (second_inward) std::reverse(p.begin(), p.end());
+    for (uint32_t& v : p) v += 8;
+    s.polygons.push_back(p);
+  }
+  for (const dvec3& p : b.positions) s.positions.push_back(p + dvec3(0.5));
+  return s;
+}
+
+TEST(MeshClean, OrientSelfIntersectingClosedMeshTurnsEachPartOutward) {
+  for (int inward = 0; inward < 4; ++inward) {
+    const bool first = inward & 1, second = inward & 2;
+    CleanReport r;
+    TriangleMesh m = clean_mesh(overlapping_cubes(first, second), {.orient = true}, r);
+    ASSERT_EQ(m.triangles.size(), 24u);
+    EXPECT_TRUE(r.closed);
+    EXPECT_TRUE(r.self_intersecting);
+    EXPECT_TRUE(consistently_oriented_closed(m));
+    EXPECT_NEAR(signed_volume(m), 2.0, 1e-6) << inward;  // +1 for each cube: both outward
+    EXPECT_EQ(r.faces_flipped, 12u * (first + second)) << inward;
+  }
+  // Without self-intersections CGAL's own orientation is used and nothing is reported.
+  PolygonSoup apart = overlapping_cubes(true, true);
+  for (std::size_t i = 8; i < 16; ++i) apart.positions[i] += dvec3(2);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(apart, {.orient = true}, r);
+  EXPECT_FALSE(r.self_intersecting);
+  EXPECT_NEAR(signed_volume(m), 2.0, 1e-6);
+}
+
+TEST(MeshClean, OrientFoldedClosedMeshNeverTripsCgal) {
+  // Every face is vertical, which trips CGAL's assertion "p1p2p3_2d!=COLLINEAR || p2p1p4_2d!=COLLINEAR
+  // // no self-intersection" in orient_to_bound_a_volume (is_outward_oriented).
+  CleanReport r;
+  TriangleMesh m;
+  ASSERT_NO_THROW(m = clean_mesh(folded_square(), {.orient = true, .smooth_normals = true}, r));
+  ASSERT_EQ(m.triangles.size(), 6u);
+  EXPECT_TRUE(r.closed);
+  EXPECT_TRUE(r.self_intersecting);
+  EXPECT_TRUE(consistently_oriented_closed(m));
+  EXPECT_EQ(r.faces_flipped, 0u);  // zero volume: no side is the outside, the winding stays
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  for (const vec3& n : m.normals) {
+    const float len = glm::length(n);
+    EXPECT_TRUE(len == 0 || std::abs(len - 1) < 1e-6f) << len;  // never NaN
+  }
 }
 
 TEST(MeshClean, OutOfRangeIndexThrows) {
