@@ -41,13 +41,14 @@ struct DeviceScene {
   std::vector<float> light_cdf;      // light_count + 1 entries, light_cdf[0] = 0, last = 1
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;
-  uint32_t skipped_zero_area_emitters = 0;
+  uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
   Bvh bvh;                           // statistics; bvh.nodes is moved into nodes
 };
 
 // Flattens the scene: primitives in scene order (shapes in file order, triangles of a mesh in mesh
 // order), the BVH over them, the light distribution (proportional to power), the camera basis; every
-// position relative to `origin`, converted to float only after that subtraction.
+// position relative to `origin`, converted to float only after that subtraction. Throws SceneError when
+// geometry lies farther than kMaxSceneExtent from the origin.
 DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
 
 // Geometry of a scene-order primitive as the device sees it (world minus DeviceScene::origin), for tests

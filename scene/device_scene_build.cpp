@@ -1,10 +1,14 @@
 #include "scene/device_scene.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
+
+#include "scene/scene_error.h"
 
 namespace {
 
@@ -14,7 +18,8 @@ float bits_to_float(uint32_t u) {
   std::memcpy(&f, &u, 4);
   return f;
 }
-float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+// In double: an emission of 1e-45 in blue alone still has a (tiny) positive power.
+double luminance(const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
 
 SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
   SceneHeader h{};
@@ -43,7 +48,18 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
   out.header = camera_header(scene.camera, out.origin);
   // World (double) to device (float) coordinates: the subtraction first, in double, then the rounding.
-  auto to_device = [&](const glm::dvec3& world) { return glm::vec3(world - out.origin); };
+  // Geometry farther than kMaxSceneExtent would overflow squared distances on the device.
+  auto to_device = [&](const ShapeDesc& s, const glm::dvec3& world, double radius = 0) {
+    glm::dvec3 d = world - out.origin;
+    double reach = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) + radius;
+    if (!(reach <= kMaxSceneExtent)) {
+      char what[200];
+      std::snprintf(what, sizeof what, ": geometry reaches %g from the %s, beyond the largest distance of %g",
+                    reach, origin == DeviceOrigin::camera ? "camera" : "origin", kMaxSceneExtent);
+      throw SceneError(scene.path + ": " + s.label + what + " (squared distances would overflow float)");
+    }
+    return glm::vec3(d);
+  };
   for (const MaterialDesc& m : scene.materials) {
     Material mat{};
     mat.reflectance = f4(m.reflectance);
@@ -55,20 +71,27 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   // Primitives in scene order, with their boxes and (for emitters) light candidates.
   std::vector<Primitive> prims;
   std::vector<Aabb> boxes;
-  struct Emitter { uint32_t prim; glm::vec3 emission; float area; bool two_sided; };
+  struct Emitter { uint32_t prim; glm::vec3 emission; double area; bool two_sided; };
   std::vector<Emitter> emitters;
   for (const ShapeDesc& s : scene.shapes) {
     bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
       uint32_t index = uint32_t(prims.size());
-      glm::vec3 center = to_device(s.center);
+      glm::vec3 center = to_device(s, s.center, s.radius);
       float radius = float(s.radius);
       prims.push_back({f4(center, bits_to_float(index)), {radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
       boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
       out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});  // 3 per primitive, as for triangles
-      if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * radius * radius, s.two_sided});
+      // The area of the float sphere the device samples; 0 for a radius below about 1e-23.
+      double area = 4 * M_PI * double(radius) * double(radius);
+      if (emits) {
+        if (float(area) > 0)
+          emitters.push_back({index, s.emission, area, s.two_sided});
+        else
+          out.skipped_zero_area_emitters++;
+      }
       out.sphere_count++;
       out.features |= kFeatureSpheres;
       continue;
@@ -77,7 +100,7 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
     if (smooth) out.features |= kFeatureSmoothNormals;
     std::vector<glm::vec3> positions;
     positions.reserve(s.mesh.positions.size());
-    for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(p));
+    for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(s, p));
     for (const auto& t : s.mesh.triangles) {
       uint32_t index = uint32_t(prims.size());
       glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
@@ -102,9 +125,10 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
       } else {
         out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
       }
-      float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+      // The area of the float triangle the device samples (computed in double from its vertices).
+      double area = 0.5 * glm::length(glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a)));
       if (emits) {
-        if (area > 0 && std::isfinite(area))
+        if (float(area) > 0)
           emitters.push_back({index, s.emission, area, s.two_sided});
         else
           out.skipped_zero_area_emitters++;
@@ -115,11 +139,13 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
 
-  // One distribution over all emitters, proportional to emitted power.
+  // One distribution over all emitters, proportional to emitted power. Every power is positive (a
+  // positive area and a non-zero emission) and finite (areas are bounded by kMaxSceneExtent), so the
+  // total is too and every select_pdf and cdf entry is a finite number in [0, 1].
   double total = 0;
   std::vector<double> power;
   for (const Emitter& e : emitters) {
-    power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
+    power.push_back(luminance(e.emission) * e.area * M_PI * (e.two_sided ? 2 : 1));
     total += power.back();
   }
   out.light_cdf.push_back(0);
@@ -129,7 +155,7 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
     Light light{};
     light.emission = f4(e.emission);
     light.prim = e.prim;
-    light.area = e.area;
+    light.area = float(e.area);
     light.select_pdf = float(power[i] / total);
     out.shading[e.prim].light = uint32_t(out.lights.size());
     out.lights.push_back(light);

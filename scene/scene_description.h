@@ -33,6 +33,12 @@ struct RenderSettings {
 bool sampler_from_name(const std::string& name, uint32_t* sampler);
 const char* sampler_name(uint32_t sampler);
 
+// The largest distance from the camera (in scene units, per axis) that geometry may reach, and so the
+// largest sphere radius. The kernels work in camera-relative floats and square distances across the
+// scene and multiply areas by 4 pi: with every coordinate within E of the camera a squared distance is
+// at most 12 E^2, and 4 pi 12 E^2 stays below FLT_MAX for E = 1.5e18.
+constexpr double kMaxSceneExtent = 1.5e18;
+
 // One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space.
 struct ShapeDesc {
   std::string label;  // "shapes[3] (meshes/box.obj)" for messages and `pathcl info`

@@ -1,6 +1,7 @@
 // Reads the JSON scene file (docs/scene-format.md), checking every key and type, and loads, transforms
 // and cleans the meshes it names.
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -243,6 +244,14 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     s.radius = radius * sx;
     if (!within_float_range(s.center) || !(s.radius <= std::numeric_limits<float>::max()))
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes the sphere to infinity");
+    // Its area 4 pi r^2 (the light's power and pdf) and squared distances across it are floats on the
+    // device: refused rather than turned into infinities and NaNs there.
+    if (s.radius > kMaxSceneExtent) {
+      char what[160];
+      std::snprintf(what, sizeof what, "a sphere radius of %g is beyond the largest of %g (4 pi r^2 would overflow float)",
+                    s.radius, kMaxSceneExtent);
+      (radius > kMaxSceneExtent || !n.has("transform") ? n.at("radius") : n.at("transform")).fail(what);
+    }
     return s;
   }
 

@@ -27,6 +27,7 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
       {scene("bad-nan-vertex.json"), "nan-vertex.obj:2"},
       {scene("bad-unknown-material.json"), "unknown material \"glas\""},
       {scene("bad-negative-spp.json"), "render.spp"},
+      {scene("bad-huge-sphere.json"), "shapes[0].radius: a sphere radius of 1e+30 is beyond the largest of 1.5e+18"},
       {scene("tiny.json") + " --spp -3", "--spp"},
       {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
       {scene("tiny.json") + " --device 99", "no device with that index"},

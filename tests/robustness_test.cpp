@@ -1,6 +1,7 @@
 // Hard numerical cases: watertightness of a perturbed closed mesh, rays spawned from surfaces at
 // scales from 1e-8 to 1e8, and a camera grazing a diffuse floor inside an emitting enclosure.
 // Smooth normals of zero length fall back to the face normal.
+// An emitting sphere as large as the scene may be renders like a small one.
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -239,4 +240,39 @@ TEST(Robustness, ZeroLengthSmoothNormalsFallBackToTheFaceNormal) {
   opt.max_depth = 3;
   RenderResult r = render(test_device(), scene, opt);
   expect_finite_render(r);
+}
+
+TEST(Robustness, EmittingSphereAsLargeAsAllowedRendersLikeASmallOne) {
+  // A sphere of the largest radius the loader accepts (its area 4 pi r^2 ~ 3e37 is close to float's
+  // 3.4e38), emitting Le = 0.5 inwards with albedo 0.5 and seen from its centre: a furnace whose
+  // pixels are Le (1 - rho^4) / (1 - rho) for max_depth 3 (tests/furnace_test.cpp), like the same
+  // scene with radius 2. Same seed, so the two renders use the same random numbers.
+  auto furnace = [](double radius) {
+    char sphere[200];
+    std::snprintf(sphere, sizeof sphere,
+                  R"({"type": "sphere", "radius": %.17g, "flip_normals": true, "material": "m", "emission": [0.5, 0.5, 0.5]})",
+                  radius);
+    std::string camera = R"({"position": [0, 0, 0], "look_at": [0.5, 0.4, -1], "fov_y_degrees": 100, "width": 16,
+                             "height": 16})";
+    DeviceScene scene = load_device_scene(write_temp_file("furnace.json", scene_json(sphere, camera)));
+    EXPECT_EQ(scene.lights.size(), 1u);
+    EXPECT_TRUE(std::isfinite(scene.lights[0].area));
+    EXPECT_EQ(scene.lights[0].select_pdf, 1.0f);
+    RenderOptions opt;
+    opt.spp = 8;
+    opt.max_depth = 3;
+    return render(test_device(), scene, opt);
+  };
+  RenderResult small = furnace(2), huge = furnace(kMaxSceneExtent);
+  expect_finite_render(huge);
+  const double expected = 0.5 * (1 - std::pow(0.5, 4)) / (1 - 0.5);
+  double worst = 0, sum = 0;
+  for (size_t i = 0; i < huge.film.mean.size(); ++i) {
+    worst = std::max(worst, std::abs(double(huge.film.mean[i]) - small.film.mean[i]) / expected);
+    sum += huge.film.mean[i];
+  }
+  // The furnace's own samples are exact to a few 1e-4 (float rounding in the MIS weights); a sphere
+  // broken by its size would be off by orders of magnitude, or NaN.
+  EXPECT_LT(worst, 1e-4);
+  EXPECT_NEAR(sum / huge.film.mean.size(), expected, 1e-4 * expected);
 }

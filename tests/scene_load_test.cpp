@@ -146,6 +146,69 @@ TEST(SceneLoad, DeviceSceneIsCameraRelativeWithPositionsSubtractedInDouble) {
   EXPECT_EQ(w.header.cam_position.x, float(1000000.1));
 }
 
+TEST(SceneLoad, GeometryBeyondFloatReachIsRefusedWithThePlace) {
+  struct Case {
+    std::string shape, expected;
+  } cases[] = {
+      // 4 pi r^2 overflows float for these radii.
+      {R"({"type": "sphere", "radius": 1e30, "material": "m"})",
+       "shapes[0].radius: a sphere radius of 1e+30 is beyond the largest of 1.5e+18"},
+      {R"({"type": "sphere", "radius": 3e38, "material": "m", "emission": [1, 1, 1]})",
+       "shapes[0].radius: a sphere radius of 3e+38 is beyond the largest of 1.5e+18"},
+      {R"({"type": "sphere", "radius": 1e10, "material": "m", "transform": {"scale": 1e9}})",
+       "shapes[0].transform: a sphere radius of 1e+19 is beyond the largest of 1.5e+18"},
+      // Within float range, but too far from the camera for squared distances.
+      {R"({"type": "sphere", "radius": 1, "center": [0, 2e18, 0], "material": "m"})",
+       "shapes[0]: geometry reaches 2e+18 from the camera"},
+      {R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1e38,0]], "indices": [[0,1,2]], "material": "m"})",
+       "shapes[0]: geometry reaches 1e+38 from the camera"},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("case.json", scene_with_shape(c.shape));
+    std::string error;
+    try {
+      build_device_scene(load_scene(path));
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.shape << "\n  gave: " << error;
+    EXPECT_EQ(error.rfind(path, 0), 0u) << "the message starts with the file: " << error;
+  }
+  // The same from an OBJ file: the message names the shape and its file.
+  write_temp_file("meshes/huge.obj", "v 0 0 0\nv 1e38 0 0\nv 0 1 0\nf 1 2 3\n");
+  std::string path = write_temp_file("huge-obj.json", scene_with_shape(R"({"type": "mesh", "file": "meshes/huge.obj", "material": "m"})"));
+  try {
+    build_device_scene(load_scene(path));
+    ADD_FAILURE() << "expected a SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("shapes[0] (meshes/huge.obj): geometry reaches 1e+38 from the camera"),
+              std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneLoad, LightDistributionStaysFiniteForExtremeEmitters) {
+  // The largest sphere allowed, a small one, one whose float area is 0, and a triangle emitting 1e-45
+  // in blue only (its luminance is 0 in float): powers span ~80 orders of magnitude.
+  std::string scene = R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse"}}, "shapes": [
+      {"type": "sphere", "radius": 1.5e18, "flip_normals": true, "material": "m", "emission": [1, 1, 1]},
+      {"type": "sphere", "radius": 1e-3, "material": "m", "emission": [1, 1, 1]},
+      {"type": "sphere", "radius": 1e-30, "center": [1, 0, 0], "material": "m", "emission": [1, 1, 1]},
+      {"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m",
+       "emission": [0, 0, 1e-45]}]})";
+  DeviceScene d = load_device_scene(write_temp_file("extreme-lights.json", scene));
+  EXPECT_EQ(d.skipped_zero_area_emitters, 1u);  // the 1e-30 sphere
+  ASSERT_EQ(d.lights.size(), 3u);
+  for (const Light& l : d.lights) {
+    EXPECT_TRUE(l.area > 0 && std::isfinite(l.area)) << l.area;
+    EXPECT_TRUE(l.select_pdf >= 0 && l.select_pdf <= 1) << l.select_pdf;
+  }
+  EXPECT_EQ(d.lights[0].select_pdf, 1.0f);  // the others' share is below float's smallest numbers
+  ASSERT_EQ(d.light_cdf.size(), 4u);
+  for (size_t i = 1; i < d.light_cdf.size(); ++i) EXPECT_GE(d.light_cdf[i], d.light_cdf[i - 1]);
+  EXPECT_EQ(d.light_cdf.back(), 1.0f);
+}
+
 TEST(SceneLoad, SmoothNormalsAreIndexedByPrimitiveAfterSpheres) {
   // Normals are stored 3 per scene-order primitive: a sphere before a smooth mesh takes its 3 slots.
   std::string scene = scene_with_shape(R"({"type": "sphere", "radius": 0.5, "center": [0, 0, -3], "material": "m"},
