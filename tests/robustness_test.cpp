@@ -2,6 +2,7 @@
 // scales from 1e-8 to 1e8, and a camera grazing a diffuse floor inside an emitting enclosure.
 // Smooth normals of zero length fall back to the face normal.
 // An emitting sphere as large as the scene may be renders like a small one.
+// Degenerate triangles and spheres (emitting ones included) never put a NaN in the image.
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -275,4 +276,45 @@ TEST(Robustness, EmittingSphereAsLargeAsAllowedRendersLikeASmallOne) {
   // broken by its size would be off by orders of magnitude, or NaN.
   EXPECT_LT(worst, 1e-4);
   EXPECT_NEAR(sum / huge.film.mean.size(), expected, 1e-4 * expected);
+}
+
+TEST(Robustness, DegenerateTrianglesAndSpheresNeverPutANaNInTheImage) {
+  // The camera sits at x = z = 0, so that offsets as small as 1e-30 in x and z survive the
+  // camera-relative conversion to float. Each case emits, and again without emission: a collinear
+  // triangle, one with a repeated vertex (both removed by clean-up), needles 1e-20 and 1e-12 wide, a
+  // triangle whose area (~1e-60) underflows float, a sphere of radius 1e-30 (area underflows too), and a
+  // triangle of sides 5e-10 (area ~1e-19: light pdfs near 1e20). A floor, all inside an emitting sphere.
+  auto tri = [](const std::string& a, const std::string& b, const std::string& c, bool emits) {
+    return R"({"type": "triangles", "positions": [)" + a + "," + b + "," + c + R"(], "indices": [[0, 1, 2]],
+               "material": "m")" + (emits ? R"(, "emission": [5, 5, 5], "two_sided": true)" : "") + "}";
+  };
+  std::string shapes = tri("[-4, -1, -5]", "[0, -1, 3]", "[4, -1, -5]", false);  // the floor
+  for (bool emits : {true, false}) {
+    shapes += "," + tri("[0, 0, -1]", "[1, 0, -1]", "[2, 0, -1]", emits);              // collinear
+    shapes += "," + tri("[0, 0.1, -1]", "[1, 0.1, -1]", "[1, 0.1, -1]", emits);        // repeated vertex
+    shapes += "," + tri("[0, 0.2, -3]", "[0, 0.2, -0.5]", "[1e-20, 0.2, -1.5]", emits);  // needle
+    shapes += "," + tri("[0, 0.3, -3]", "[0, 0.3, -0.5]", "[1e-12, 0.3, -1.5]", emits);  // needle
+    shapes += "," + tri("[0, 0.4, 0]", "[1e-30, 0.4, 0]", "[0, 0.4, 1e-30]", emits);   // area underflows
+    shapes += "," + tri("[0, 0, 0]", "[5e-10, 0, 0]", "[0, 0, 5e-10]", emits);         // tiny
+    shapes += std::string(R"(, {"type": "sphere", "center": [0, 0.6, -1], "radius": 1e-30, "material": "m")") +
+              (emits ? R"(, "emission": [5, 5, 5]})" : "}");
+  }
+  shapes += std::string(",") + kEnclosure;
+  std::string camera = R"({"position": [0, 0.5, 0], "look_at": [0, 0, -2], "width": 24, "height": 24})";
+  DeviceScene scene = load_device_scene(write_temp_file("degenerate.json", scene_json(shapes, camera)));
+  EXPECT_EQ(scene.triangle_count, 1u + 2 * 4);  // the floor and 4 of the 6 triangles, twice
+  // The triangle and the sphere whose float areas are 0 are not lights; the needles, the tiny triangle
+  // and the enclosure are.
+  EXPECT_EQ(scene.skipped_zero_area_emitters, 2u);
+  ASSERT_EQ(scene.lights.size(), 4u);
+  for (const Light& l : scene.lights) {
+    EXPECT_TRUE(l.area > 0 && std::isfinite(l.area));
+    EXPECT_TRUE(l.select_pdf >= 0 && l.select_pdf <= 1);
+  }
+  for (float c : scene.light_cdf) EXPECT_TRUE(c >= 0 && c <= 1);
+  RenderOptions opt;
+  opt.spp = 64;
+  opt.max_depth = 4;
+  RenderResult r = render(test_device(), scene, opt);
+  expect_finite_render(r);
 }

@@ -223,3 +223,16 @@ TEST(SceneLoad, SmoothNormalsAreIndexedByPrimitiveAfterSpheres) {
     EXPECT_NEAR(n.x * n.x + n.y * n.y + n.z * n.z, 1.0f, 1e-5f) << i;
   }
 }
+
+TEST(SceneLoad, ObjNormalsAreIgnoredEvenZeroLengthOnes) {
+  // `vn` lines (here of zero length) are not read: shading normals come only from "smooth".
+  write_temp_file("meshes/vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn nan 0 0\nf 1//1 2//1 3//2\n");
+  for (bool smooth : {false, true}) {
+    std::string path = write_temp_file("vn.json", scene_with_shape(R"({"type": "mesh", "file": "meshes/vn.obj", "material": "m",
+      "smooth": )" + std::string(smooth ? "true" : "false") + "}"));
+    SceneDescription s = load_scene(path);
+    ASSERT_EQ(s.shapes[0].mesh.triangles.size(), 1u);
+    EXPECT_EQ(s.shapes[0].mesh.normals.size(), smooth ? 3u : 0u);
+    for (const glm::vec3& n : s.shapes[0].mesh.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
+  }
+}
