@@ -44,12 +44,12 @@ struct LoadedScene {
   double load_ms = 0;  // reading, mesh loading and cleaning
 };
 
-LoadedScene load(const std::string& path) {
+LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera) {
   LoadedScene s;
   auto start = std::chrono::steady_clock::now();
   s.description = load_scene(path);
   s.load_ms = ms_since(start);
-  s.device = build_device_scene(s.description);
+  s.device = build_device_scene(s.description, origin);
   return s;
 }
 
@@ -153,9 +153,12 @@ void warn_about_clean_up(const LoadedScene& s) {
     if (c.degenerate_faces + c.duplicate_faces > 0)
       std::fprintf(stderr, "warning: %s: removed %zu degenerate and %zu duplicate faces\n", shape.label.c_str(),
                    c.degenerate_faces, c.duplicate_faces);
+    if (c.self_intersecting)
+      std::fprintf(stderr, "warning: %s: the closed mesh intersects itself; each connected part was oriented to a "
+                   "positive volume instead of by CGAL's orient_to_bound_a_volume\n", shape.label.c_str());
   }
   if (s.device.skipped_zero_area_emitters > 0)
-    std::fprintf(stderr, "warning: %u zero-area emitting triangles are not lights\n", s.device.skipped_zero_area_emitters);
+    std::fprintf(stderr, "warning: %u zero-area emitters are not lights\n", s.device.skipped_zero_area_emitters);
 }
 
 int run_render(const RenderArgs& a) {
@@ -368,7 +371,8 @@ int run_info(const std::string& path, const std::string& dump_obj) {
     std::printf("    merged %zu duplicate vertices, removed %zu isolated vertices, %zu degenerate faces, %zu duplicate "
                 "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s\n",
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,
-                c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped, c.closed ? "closed" : "open",
+                c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped,
+                c.self_intersecting ? "closed, self-intersecting" : c.closed ? "closed" : "open",
                 shape.mesh.normals.empty() ? "" : ", smooth normals");
   }
   const DeviceScene& v = s.device;
@@ -392,7 +396,7 @@ struct RaysArgs {
 };
 
 int run_rays(const RaysArgs& a) {
-  LoadedScene s = load(a.scene);
+  LoadedScene s = load(a.scene, DeviceOrigin::world);  // ray files are in world coordinates
   std::vector<RayRecord> rays = read_ray_file(a.rays);
   if (a.repeat < 1) throw UsageError("--repeat: expected at least 1");
   ClContext cl(select_device(a.device));

@@ -79,14 +79,14 @@ int main(int argc, char** argv) {
   try {
     std::string mode = argc > 1 ? argv[1] : "";
     if (mode == "camera" && (argc == 4 || argc == 5)) {
-      DeviceScene scene = build_device_scene(load_scene(argv[2]));
+      DeviceScene scene = build_device_scene(load_scene(argv[2]), DeviceOrigin::world);
       auto rays = camera_rays(scene, argc == 5 ? std::stoi(argv[4]) : 2);
       write_rays(argv[3], rays);
       std::printf("%zu camera rays -> %s\n", rays.size(), argv[3]);
       return 0;
     }
     if (mode == "bounce" && argc == 6) {
-      DeviceScene scene = build_device_scene(load_scene(argv[2]));
+      DeviceScene scene = build_device_scene(load_scene(argv[2]), DeviceOrigin::world);
       auto rays = bounce_rays(scene, read_ray_file(argv[3]), argv[4]);
       write_rays(argv[5], rays);
       std::printf("%zu diffuse bounce rays -> %s\n", rays.size(), argv[5]);

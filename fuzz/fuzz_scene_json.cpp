@@ -27,9 +27,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (slot >= prims || seen[slot]) fuzz::invariant_failed("leaf slots are not a permutation");
       seen[slot] = true;
     }
+    if (!device.normals.empty() && device.normals.size() != 3 * prims)
+      fuzz::invariant_failed("smooth normals are not 3 per primitive");
     if (device.light_cdf.size() != device.lights.size() + 1) fuzz::invariant_failed("light CDF size");
-    for (const Light& light : device.lights)
+    for (const Light& light : device.lights) {
       if (light.prim >= prims || light.slot >= prims) fuzz::invariant_failed("light primitive out of range");
+      if (!(light.area > 0 && light.area <= 3.4e38f)) fuzz::invariant_failed("light area zero or not finite");
+      if (!(light.select_pdf >= 0 && light.select_pdf <= 1)) fuzz::invariant_failed("light select_pdf not in [0, 1]");
+    }
+    for (size_t i = 0; i < device.light_cdf.size(); ++i)
+      if (!(device.light_cdf[i] >= (i ? device.light_cdf[i - 1] : 0.0f) && device.light_cdf[i] <= 1))
+        fuzz::invariant_failed("light CDF not finite and non-decreasing in [0, 1]");
   } catch (const SceneError&) {
     // Rejected input: expected.
   }

@@ -14,7 +14,17 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
   timing.kernel_from_cache = program.from_cache;
   std::vector<HitRecord> hits(rays.size());
   if (rays.empty()) return hits;
-  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), ray_buf = upload(cl, rays);
+  // Ray records are in world coordinates. A scene flattened around the camera (DeviceOrigin::camera)
+  // gets the ray origins moved by the same offset, in double and then rounded; `pathcl rays` flattens
+  // around the world origin, so its rays are traced exactly as written.
+  std::vector<RayRecord> moved;
+  if (scene.origin != glm::dvec3(0)) {
+    moved = rays;
+    for (RayRecord& r : moved)
+      for (int k = 0; k < 3; ++k) r.org[k] = float(double(r.org[k]) - scene.origin[k]);
+  }
+  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims),
+           ray_buf = upload(cl, moved.empty() ? rays : moved);
   ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
   ClKernel kernel(program.kernel("trace_rays"));
   kernel.arg(0, nodes.mem);

@@ -12,7 +12,8 @@ struct TraceTiming {
   bool kernel_from_cache = false;
 };
 
-// Traces every ray `repeat` times (the hits of the last repeat are returned).
+// Traces every ray `repeat` times (the hits of the last repeat are returned). Rays are in world
+// coordinates, whatever the scene's DeviceOrigin.
 std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
                                          int repeat, TraceTiming& timing, size_t work_group = 0);
 

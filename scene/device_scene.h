@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "kernels/shared/types.h"
 #include "scene/bvh_build.h"
 #include "scene/scene_description.h"
@@ -33,8 +35,16 @@ enum : uint32_t {
 // The -D flag name of each feature bit, in bit order ("PC_HAS_TRIANGLES", ...).
 extern const char* const kFeatureFlags[16];
 
+// Where the device's float coordinates have their origin. Rendering puts it at the camera (the kernel's
+// camera then sits at 0): floats are finest where the image needs them, and a scene 1e6 away from the
+// world origin renders like one at it, because world positions stay in double until the camera position
+// is subtracted. Ray files (`pathcl rays`, bench/make_rays) hold world coordinates and other tracers
+// read the same files, so their scenes keep the world origin and the rays are traced as written.
+enum class DeviceOrigin { camera, world };
+
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
+  glm::dvec3 origin{0};              // world position of the device coordinates' origin (DeviceOrigin)
   std::vector<BvhNode> nodes;
   std::vector<Primitive> prims;      // BVH leaf order
   std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims
@@ -49,13 +59,16 @@ struct DeviceScene {
   std::vector<float> env_dist;       // the environment map's sampling distribution (kernels/environment.cl)
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;
-  uint32_t skipped_zero_area_emitters = 0;
+  uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
   Bvh bvh;                           // statistics; bvh.nodes is moved into nodes
 };
 
 // Flattens the scene: primitives in scene order (shapes in file order, triangles of a mesh in mesh
-// order), the BVH over them, the light distribution (proportional to power), the camera basis.
-DeviceScene build_device_scene(const SceneDescription& scene);
+// order), the BVH over them, the light distribution (proportional to power), the camera basis; every
+// position relative to `origin`, converted to float only after that subtraction. Throws SceneError when
+// geometry lies farther than kMaxSceneExtent from the origin.
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
 
-// Geometry of a scene-order primitive as the host sees it (for tests and ray generation).
+// Geometry of a scene-order primitive as the device sees it (world minus DeviceScene::origin), for tests
+// and ray generation.
 Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index);

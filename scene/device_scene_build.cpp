@@ -1,12 +1,16 @@
 #include "scene/device_scene.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 #include <glm/trigonometric.hpp>
+
+#include "scene/scene_error.h"
 
 namespace {
 
@@ -16,7 +20,8 @@ float bits_to_float(uint32_t u) {
   std::memcpy(&f, &u, 4);
   return f;
 }
-float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+// In double: an emission of 1e-45 in blue alone still has a (tiny) positive power.
+double luminance(const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
 
 constexpr uint32_t kMaterialFeature[] = {kFeatureDiffuse, kFeatureOrenNayar, kFeaturePhong, kFeatureMirror,
                                          kFeatureDielectric, kFeatureRoughConductor, kFeaturePlastic};  // by PC_MAT_*
@@ -69,17 +74,17 @@ double build_env_distribution(const TextureImage& map, std::vector<float>& dist)
   return integral;
 }
 
-SceneHeader camera_header(const CameraDesc& c) {
+SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
   SceneHeader h{};
-  glm::vec3 forward = glm::normalize(c.look_at - c.position);
-  glm::vec3 right = glm::normalize(glm::cross(forward, c.up));
-  glm::vec3 up = glm::cross(right, forward);
-  float tan_half = std::tan(glm::radians(c.fov_y_degrees) * 0.5f);
-  float aspect = float(c.width) / float(c.height);
-  h.cam_position = f4(c.position);
-  h.cam_right = f4(right * tan_half * aspect);
-  h.cam_up = f4(up * tan_half);
-  h.cam_forward = f4(forward);
+  glm::dvec3 forward = glm::normalize(c.look_at - c.position);
+  glm::dvec3 right = glm::normalize(glm::cross(forward, c.up));
+  glm::dvec3 up = glm::cross(right, forward);
+  double tan_half = std::tan(glm::radians(double(c.fov_y_degrees)) * 0.5);
+  double aspect = double(c.width) / double(c.height);
+  h.cam_position = f4(glm::vec3(c.position - origin));  // 0 for DeviceOrigin::camera
+  h.cam_right = f4(glm::vec3(right * tan_half * aspect));
+  h.cam_up = f4(glm::vec3(up * tan_half));
+  h.cam_forward = f4(glm::vec3(forward));
   h.width = c.width;
   h.height = c.height;
   h.lens_radius = c.aperture_radius;
@@ -103,9 +108,23 @@ Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
 }
 
-DeviceScene build_device_scene(const SceneDescription& scene) {
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin) {
   DeviceScene out;
-  out.header = camera_header(scene.camera);
+  out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
+  out.header = camera_header(scene.camera, out.origin);
+  // World (double) to device (float) coordinates: the subtraction first, in double, then the rounding.
+  // Geometry farther than kMaxSceneExtent would overflow squared distances on the device.
+  auto to_device = [&](const ShapeDesc& s, const glm::dvec3& world, double radius = 0) {
+    glm::dvec3 d = world - out.origin;
+    double reach = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) + radius;
+    if (!(reach <= kMaxSceneExtent)) {
+      char what[200];
+      std::snprintf(what, sizeof what, ": geometry reaches %g from the %s, beyond the largest distance of %g",
+                    reach, origin == DeviceOrigin::camera ? "camera" : "origin", kMaxSceneExtent);
+      throw SceneError(scene.path + ": " + s.label + what + " (squared distances would overflow float)");
+    }
+    return glm::vec3(d);
+  };
   for (const MaterialDesc& m : scene.materials) {
     out.materials.push_back(device_material(m));
     out.features |= kMaterialFeature[m.type_id];
@@ -119,7 +138,7 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
   // Primitives in scene order, with their boxes and (for emitters) light candidates.
   std::vector<Primitive> prims;
   std::vector<Aabb> boxes;
-  struct Emitter { uint32_t prim; glm::vec3 emission; float area; bool two_sided; };
+  struct Emitter { uint32_t prim; glm::vec3 emission; double area; bool two_sided; };
   std::vector<Emitter> emitters;
   const bool textures = out.features & kFeatureTextures;
   for (const ShapeDesc& s : scene.shapes) {
@@ -127,9 +146,12 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     if (s.is_sphere) {
       bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
       uint32_t index = uint32_t(prims.size());
-      prims.push_back({f4(s.center, bits_to_float(index)), {s.radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
-      boxes.push_back({s.center - glm::vec3(s.radius), s.center + glm::vec3(s.radius)});
+      glm::vec3 center = to_device(s, s.center, s.radius);
+      float radius = float(s.radius);
+      prims.push_back({f4(center, bits_to_float(index)), {radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
+      boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
+      out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});  // 3 per primitive, as for triangles
       if (textures) {
         // The sphere's own frame for its lat-long uvs (kernels/integrator.cl, surface_uv): x axis and
         // handedness, y axis (the pole).
@@ -137,19 +159,29 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
         out.uvs.push_back(f4(s.frame[0], handedness));
         out.uvs.push_back(f4(s.frame[1]));
       }
-      if (emits) emitters.push_back({index, s.emission, float(4 * M_PI) * s.radius * s.radius, s.two_sided});
+      // The area of the float sphere the device samples; 0 for a radius below about 1e-23.
+      double area = 4 * M_PI * double(radius) * double(radius);
+      if (emits) {
+        if (float(area) > 0)
+          emitters.push_back({index, s.emission, area, s.two_sided});
+        else
+          out.skipped_zero_area_emitters++;
+      }
       out.sphere_count++;
       out.features |= kFeatureSpheres;
       continue;
     }
     bool smooth = !s.mesh.normals.empty();
     if (smooth) out.features |= kFeatureSmoothNormals;
+    std::vector<glm::vec3> positions;
+    positions.reserve(s.mesh.positions.size());
+    for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(s, p));
     for (size_t ti = 0; ti < s.mesh.triangles.size(); ++ti) {
       const auto& t = s.mesh.triangles[ti];
       glm::vec3 emission = triangle_emission(s, ti);
       bool emits = emission.x > 0 || emission.y > 0 || emission.z > 0;
       uint32_t index = uint32_t(prims.size());
-      glm::vec3 a = s.mesh.positions[t[0]], b = s.mesh.positions[t[1]], c = s.mesh.positions[t[2]];
+      glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
       prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
       Aabb box;
       box.grow(a);
@@ -165,13 +197,24 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
         out.uvs.push_back({uv[0].x, uv[0].y, uv[1].x, uv[1].y});
         out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
       }
-      if (smooth)
-        for (int k = 0; k < 3; ++k) out.normals.push_back(f4(s.mesh.normals[t[k]]));
-      else
+      if (smooth) {
+        // A vertex without a normal (zero: CGAL found none, e.g. where the normals of its faces cancel)
+        // takes this face's geometric normal at this corner.
+        const glm::dvec3 &wa = s.mesh.positions[t[0]], &wb = s.mesh.positions[t[1]], &wc = s.mesh.positions[t[2]];
+        glm::dvec3 face = glm::cross(wb - wa, wc - wa);
+        double face_length = glm::length(face);
+        glm::vec3 fallback = face_length > 0 ? glm::vec3(face / face_length) : glm::vec3(0);
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3& n = s.mesh.normals[t[k]];
+          out.normals.push_back(f4(glm::dot(n, n) > 0 ? n : fallback));
+        }
+      } else {
         out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
-      float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+      }
+      // The area of the float triangle the device samples (computed in double from its vertices).
+      double area = 0.5 * glm::length(glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a)));
       if (emits) {
-        if (area > 0 && std::isfinite(area))
+        if (float(area) > 0)
           emitters.push_back({index, emission, area, s.two_sided});
         else
           out.skipped_zero_area_emitters++;
@@ -202,7 +245,7 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     light.type = PC_LIGHT_AREA;
     light.emission = f4(e.emission);
     light.prim = e.prim;
-    light.area = e.area;
+    light.area = float(e.area);
     out.shading[e.prim].light = uint32_t(out.lights.size());
     out.lights.push_back(light);
     power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
@@ -211,7 +254,7 @@ DeviceScene build_device_scene(const SceneDescription& scene) {
     Light light{};
     light.type = l.type;
     light.emission = f4(l.emission);
-    light.position = f4(l.position);
+    light.position = f4(glm::vec3(l.position - out.origin));  // camera-relative, like the geometry
     light.direction = f4(l.direction);
     light.prim = light.slot = PC_INVALID;
     light.cos_inner = l.cos_inner;

@@ -5,6 +5,11 @@
 //   -> drop collinear triangles -> drop duplicate faces -> drop isolated points
 //   -> [orient: orient_polygon_soup, outward if closed] -> [smooth normals: compute_vertex_normals]
 //
+// CGAL's preconditions and assertions are off in release builds (NDEBUG), where a violated one is
+// undefined behaviour; where they are on (debug and fuzz builds, tests/mesh_clean_test) a violation
+// throws CGAL::Failure_exception. Both are avoided by checking the preconditions we know of first (see
+// the orientation step), and any CGAL failure that still happens becomes a SceneError.
+//
 // Two orders matter to the renderer and CGAL does not keep them by itself:
 //   * triangle order (the renderer reports primitive indices): merge_duplicate_polygons_in_polygon_soup
 //     moves removed polygons to the back by swapping, so we tag every triangle with its position and
@@ -31,13 +36,16 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/compute_normal.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Projection_traits_3.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/assertions.h>
 #include <CGAL/boost/graph/helpers.h>
 
 #include "scene/scene_error.h"
@@ -205,18 +213,44 @@ bool is_closed_soup(const std::vector<Polygon>& triangles) {
   return true;
 }
 
-}  // namespace
+// Turns every connected part of a closed mesh so that its signed volume is positive (outward), leaving
+// parts of zero volume (flat or folded) as they are. Unlike orient_to_bound_a_volume this needs no
+// freedom from self-intersections: the signed volume of a closed surface is the integral of its winding
+// number, positive for outward overlapping boxes as for a single one.
+void orient_parts_by_signed_volume(Mesh& mesh) {
+  auto part = mesh.add_property_map<Mesh::Face_index, std::size_t>("f:part", 0).first;
+  const std::size_t parts = PMP::connected_components(mesh, part);
+  // Six times the volume, with each part's first vertex as the apex: far from the origin, apexes at
+  // the origin would sum huge terms that cancel.
+  std::vector<double> volume(parts, 0.0);
+  std::vector<Point> apex(parts);
+  std::vector<bool> has_apex(parts, false);
+  for (Mesh::Face_index f : mesh.faces()) {
+    const std::size_t k = part[f];
+    const Mesh::Halfedge_index h = mesh.halfedge(f);
+    const Point& a = mesh.point(mesh.target(h));
+    const Point& b = mesh.point(mesh.target(mesh.next(h)));
+    const Point& c = mesh.point(mesh.target(mesh.next(mesh.next(h))));
+    if (!has_apex[k]) apex[k] = a, has_apex[k] = true;
+    volume[k] += CGAL::scalar_product(a - apex[k], CGAL::cross_product(b - apex[k], c - apex[k]));
+  }
+  std::vector<Mesh::Face_index> flip;
+  for (Mesh::Face_index f : mesh.faces())
+    if (volume[part[f]] < 0) flip.push_back(f);
+  PMP::reverse_face_orientations(flip, mesh);
+  mesh.remove_property_map(part);
+}
 
-TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
+TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
   report = CleanReport{};
   report.input_vertices = soup.positions.size();
   report.input_polygons = soup.polygons.size();
 
-  // 1. CGAL polygon soup. Coordinates go float -> double exactly and come back the same way.
+  // 1. CGAL polygon soup, in the soup's double coordinates (they come back unchanged).
   std::vector<Point> points;
   points.reserve(soup.positions.size());
   for (std::size_t i = 0; i < soup.positions.size(); ++i) {
-    const glm::vec3& p = soup.positions[i];
+    const glm::dvec3& p = soup.positions[i];
     // NaN would break the lexicographic order CGAL merges points with.
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw SceneError("vertex " + std::to_string(i) + ": coordinate is not finite");
@@ -353,7 +387,13 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
       PMP::polygon_soup_to_polygon_mesh(points, tris, mesh);
 
       if (options.orient && CGAL::is_closed(mesh)) {
-        PMP::orient_to_bound_a_volume(mesh);  // outward normals; reverses faces in place
+        // orient_to_bound_a_volume requires a mesh without self-intersections: on a folded one CGAL's
+        // is_outward_oriented trips an assertion (or, with assertions off, decides at random).
+        report.self_intersecting = PMP::does_self_intersect(mesh);
+        if (report.self_intersecting)
+          orient_parts_by_signed_volume(mesh);
+        else
+          PMP::orient_to_bound_a_volume(mesh);  // outward normals; reverses faces in place
         for (Mesh::Face_index f : mesh.faces()) {
           Polygon& t = tris[f.idx()];
           t.clear();
@@ -368,9 +408,11 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
         for (Mesh::Vertex_index v : mesh.vertices()) {
           const Vector& n = vnormals[v];
           // CGAL already normalizes in double; normalize again in float so the output is unit there.
+          // CGAL returns a null vector where it finds no normal (incident face normals that cancel, as
+          // on a folded mesh): that stays zero, and build_device_scene uses the face normal there.
           glm::vec3 g(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
           const float len = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
-          normals[v.idx()] = len > 0 ? g / len : g;
+          normals[v.idx()] = len > 0 && std::isfinite(len) ? g / len : glm::vec3(0);
         }
       }
     }
@@ -391,8 +433,7 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
 
   TriangleMesh result;
   result.positions.reserve(points.size());
-  for (const Point& p : points)
-    result.positions.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  for (const Point& p : points) result.positions.emplace_back(p.x(), p.y(), p.z());
   result.triangles.reserve(tris.size());
   for (const Polygon& t : tris)
     result.triangles.push_back({static_cast<uint32_t>(t[0]), static_cast<uint32_t>(t[1]), static_cast<uint32_t>(t[2])});
@@ -414,4 +455,17 @@ TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, Cl
     if (!soup.materials.empty()) result.materials.push_back(soup.materials[s.polygon]);
   }
   return result;
+}
+
+}  // namespace
+
+TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
+  try {
+    return clean_soup(soup, options, report);
+  } catch (const CGAL::Failure_exception& e) {
+    // Only where CGAL's checks are compiled in; a violated precondition is a property of the input.
+    const std::string file = e.filename();
+    throw SceneError("CGAL cannot process this mesh: " + e.expression() + " (" +
+                     file.substr(file.find_last_of('/') + 1) + ":" + std::to_string(e.line_number()) + ")");
+  }
 }

@@ -12,9 +12,11 @@
 
 // Polygons of any size (>= 1 index each, not validated yet) over a shared vertex list, with optional
 // attributes that belong to polygons and their corners rather than to vertices (an OBJ vertex may have
-// different texture coordinates in the faces around it, e.g. on a seam).
+// different texture coordinates in the faces around it, e.g. on a seam). Positions are world
+// coordinates in double: far from the origin, float would already have moved them (at 1e6 its spacing
+// is 0.0625); they become float only relative to the camera (scene/device_scene_build.cpp).
 struct PolygonSoup {
-  std::vector<glm::vec3> positions;
+  std::vector<glm::dvec3> positions;
   std::vector<std::vector<uint32_t>> polygons;
   // Texture coordinates: empty (none at all), or one entry per polygon holding either one uv per corner
   // of that polygon or nothing (that polygon has none).
@@ -39,12 +41,16 @@ struct CleanReport {
   size_t triangles_from_polygons = 0;
   size_t faces_flipped = 0;          // only when CleanOptions::orient
   bool closed = false;               // every edge shared by exactly two faces
+  // Only checked with CleanOptions::orient on a closed mesh: its faces intersect each other (e.g. two
+  // overlapping boxes in one file, or a fold), so CGAL's orient_to_bound_a_volume does not apply and each
+  // connected part is turned to a positive signed volume instead.
+  bool self_intersecting = false;
 };
 
 struct TriangleMesh {
-  std::vector<glm::vec3> positions;
+  std::vector<glm::dvec3> positions;               // world coordinates, as in PolygonSoup
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
-  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals
+  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals; unit or zero
   // Where each triangle came from, whatever merging, triangulation and orienting did to it: the index
   // of its soup polygon, and for each of its three vertices (in the triangle's final order) the corner
   // of that polygon it is.
@@ -58,6 +64,7 @@ struct TriangleMesh {
 };
 
 // Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place
-// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh) or its
-// attributes do not match its polygons.
+// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh, or a failed CGAL
+// check where CGAL's checks are compiled in) or its attributes do not match its polygons; never CGAL's
+// own exceptions.
 TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report);

@@ -11,8 +11,9 @@
 
 #include "scene/mesh_clean.h"
 
+// Positions are world coordinates in double until build_device_scene makes them camera-relative floats.
 struct CameraDesc {
-  glm::vec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
+  glm::dvec3 position{0, 0, 0}, look_at{0, 0, -1}, up{0, 1, 0};
   float fov_y_degrees = 40;
   uint32_t width = 512, height = 512;
   float aperture_radius = 0;  // thin lens; 0 = pinhole
@@ -49,7 +50,8 @@ struct LightDesc {
   std::string label;              // "lights[2]" for messages
   uint32_t type = 0;              // PC_LIGHT_*
   glm::vec3 emission{0};          // intensity, irradiance or radiance (scale of the map)
-  glm::vec3 position{0}, direction{0, -1, 0};
+  glm::dvec3 position{0};         // world coordinates, in double like all positions
+  glm::vec3 direction{0, -1, 0};
   float cos_inner = 1, cos_outer = 0;
   uint32_t texture = 0xffffffffu; // environment map in SceneDescription::textures
 };
@@ -65,14 +67,20 @@ struct RenderSettings {
 bool sampler_from_name(const std::string& name, uint32_t* sampler);
 const char* sampler_name(uint32_t sampler);
 
+// The largest distance from the camera (in scene units, per axis) that geometry may reach, and so the
+// largest sphere radius. The kernels work in camera-relative floats and square distances across the
+// scene and multiply areas by 4 pi: with every coordinate within E of the camera a squared distance is
+// at most 12 E^2, and 4 pi 12 E^2 stays below FLT_MAX for E = 1.5e18.
+constexpr double kMaxSceneExtent = 1.5e18;
+
 // One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space.
 struct ShapeDesc {
   std::string label;  // "shapes[3] (meshes/box.obj)" for messages and `pathcl info`
   bool is_sphere = false;
   TriangleMesh mesh;  // when !is_sphere
   CleanReport clean;  // when !is_sphere
-  glm::vec3 center{0};
-  float radius = 0;
+  glm::dvec3 center{0};  // world coordinates, like TriangleMesh::positions
+  double radius = 0;
   bool flip_normals = false;  // sphere: normals point inwards (meshes are flipped by winding at load)
   glm::mat3 frame{1.0f};      // sphere: its own x, y, z axes in world space (unit columns), for its uvs
   uint32_t material = 0;      // index into SceneDescription::materials

@@ -1,6 +1,7 @@
 // Reads the JSON scene file (docs/scene-format.md), checking every key and type, and loads, transforms
 // and cleans the meshes it names.
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -55,15 +56,16 @@ struct Node {
   double number() const {
     if (!value.is_number()) fail("expected a number");
     double d = value.get<double>();
-    // Every number ends up as a float: 1e39 would become infinity there.
+    // Colours and settings end up as floats, coordinates as floats relative to the camera: 1e39 would
+    // become infinity there.
     if (!std::isfinite(d) || std::abs(d) > double(std::numeric_limits<float>::max()))
       fail("expected a finite number within float range");
     return d;
   }
-  float positive() const {
+  double positive() const {
     double d = number();
     if (!(d > 0)) fail("expected a number > 0");
-    return float(d);
+    return d;
   }
   uint32_t count(uint32_t lo, uint32_t hi) const {
     if (!value.is_number_integer()) fail("expected an integer");
@@ -84,6 +86,11 @@ struct Node {
     if (!value.is_array() || value.size() != 3) fail("expected an array of 3 numbers");
     return {float(at(0).number()), float(at(1).number()), float(at(2).number())};
   }
+  // Positions, directions and transforms stay in double until the camera-relative flattening.
+  glm::dvec3 dvec3() const {
+    if (!value.is_array() || value.size() != 3) fail("expected an array of 3 numbers");
+    return {at(0).number(), at(1).number(), at(2).number()};
+  }
   glm::vec3 color() const {
     glm::vec3 c = vec3();
     if (c.x < 0 || c.y < 0 || c.z < 0) fail("expected non-negative values");
@@ -96,6 +103,12 @@ struct Node {
     return items;
   }
 };
+
+// Finite and within float range: what can still become a float relative to a camera in float range.
+bool within_float_range(const glm::dvec3& p) {
+  const double max = std::numeric_limits<float>::max();
+  return std::abs(p.x) <= max && std::abs(p.y) <= max && std::abs(p.z) <= max;
+}
 
 uint32_t read_filter(const Node& n, CameraDesc& c) {
   n.expect_object({"type", "radius", "sigma"}, {"type"});
@@ -125,16 +138,16 @@ CameraDesc read_camera(const Node& n) {
   if (type != "perspective" && type != "thin_lens")
     n.at("type").fail("unknown camera type \"" + type + "\" (expected perspective or thin_lens)");
   CameraDesc c;
-  c.position = n.at("position").vec3();
-  c.look_at = n.at("look_at").vec3();
-  if (n.has("up")) c.up = n.at("up").vec3();
+  c.position = n.at("position").dvec3();
+  c.look_at = n.at("look_at").dvec3();
+  if (n.has("up")) c.up = n.at("up").dvec3();
   if (n.has("fov_y_degrees")) {
     c.fov_y_degrees = n.at("fov_y_degrees").positive();
     if (c.fov_y_degrees >= 180) n.at("fov_y_degrees").fail("expected a field of view below 180 degrees");
   }
   c.width = n.at("width").count(1, 16384);
   c.height = n.at("height").count(1, 16384);
-  glm::vec3 forward = c.look_at - c.position;
+  glm::dvec3 forward = c.look_at - c.position;
   if (glm::length(forward) == 0) n.fail("position and look_at coincide");
   if (glm::length(glm::cross(forward, c.up)) == 0)
     (n.has("up") ? n.at("up") : n).fail("up is parallel to the view direction (set camera.up)");
@@ -327,13 +340,13 @@ LightDesc read_light(const Node& n) {
   if (type == "point") {
     n.expect_object({"type", "position", "intensity"}, {"position", "intensity"});
     l.type = PC_LIGHT_POINT;
-    l.position = n.at("position").vec3();
+    l.position = n.at("position").dvec3();
     l.emission = n.at("intensity").color();
   } else if (type == "spot") {
     n.expect_object({"type", "position", "direction", "intensity", "outer_angle_degrees", "inner_angle_degrees"},
                     {"position", "direction", "intensity", "outer_angle_degrees"});
     l.type = PC_LIGHT_SPOT;
-    l.position = n.at("position").vec3();
+    l.position = n.at("position").dvec3();
     l.direction = read_unit_direction(n.at("direction"));
     l.emission = n.at("intensity").color();
     double outer = n.at("outer_angle_degrees").number();
@@ -366,37 +379,38 @@ LightDesc read_light(const Node& n) {
 }
 
 // Reads "transform": {"matrix": 4x4 rows} or any of {"translate", "rotate", "scale"}, applied as
-// scale, then rotate, then translate.
-glm::mat4 read_transform(const Node& n) {
+// scale, then rotate, then translate. Composed and applied in double: a translation by 1e6 composed in
+// float would already move the shape by up to 0.03.
+glm::dmat4 read_transform(const Node& n) {
   n.expect_object({"translate", "rotate", "scale", "matrix"});
   if (n.has("matrix")) {
     if (n.has("translate") || n.has("rotate") || n.has("scale"))
       n.fail("\"matrix\" cannot be combined with translate, rotate or scale");
     Node m = n.at("matrix");
     if (!m.value.is_array() || m.value.size() != 4) m.fail("expected 4 rows of 4 numbers");
-    glm::mat4 result(1.0f);
+    glm::dmat4 result(1.0);
     for (int r = 0; r < 4; ++r) {
       Node row = m.at(r);
       if (!row.value.is_array() || row.value.size() != 4) row.fail("expected 4 numbers");
-      for (int c = 0; c < 4; ++c) result[c][r] = float(row.at(c).number());  // glm is column-major
+      for (int c = 0; c < 4; ++c) result[c][r] = row.at(c).number();  // glm is column-major
     }
     if (result[0][3] != 0 || result[1][3] != 0 || result[2][3] != 0 || result[3][3] != 1)
       m.fail("expected an affine matrix (last row 0 0 0 1)");
-    if (glm::determinant(glm::mat3(result)) == 0) m.fail("the matrix is singular");
+    if (glm::determinant(glm::dmat3(result)) == 0) m.fail("the matrix is singular");
     return result;
   }
-  glm::mat4 t(1.0f);
-  if (n.has("translate")) t = glm::translate(t, n.at("translate").vec3());
+  glm::dmat4 t(1.0);
+  if (n.has("translate")) t = glm::translate(t, n.at("translate").dvec3());
   if (n.has("rotate")) {
     Node r = n.at("rotate");
     r.expect_object({"axis", "degrees"}, {"axis", "degrees"});
-    glm::vec3 axis = r.at("axis").vec3();
+    glm::dvec3 axis = r.at("axis").dvec3();
     if (glm::length(axis) == 0) r.at("axis").fail("expected a non-zero axis");
-    t = glm::rotate(t, glm::radians(float(r.at("degrees").number())), glm::normalize(axis));
+    t = glm::rotate(t, glm::radians(r.at("degrees").number()), glm::normalize(axis));
   }
   if (n.has("scale")) {
     Node s = n.at("scale");
-    glm::vec3 v = s.value.is_array() ? s.vec3() : glm::vec3(float(s.number()));
+    glm::dvec3 v = s.value.is_array() ? s.dvec3() : glm::dvec3(s.number());
     if (v.x == 0 || v.y == 0 || v.z == 0) s.fail("expected non-zero scale factors");
     t = glm::scale(t, v);
   }
@@ -406,7 +420,7 @@ glm::mat4 read_transform(const Node& n) {
 // Validates the soup's indices and coordinates (OBJ files are checked line by line in load_obj). `uvs`
 // (optional): one [u, v] per position, which every corner at that position gets.
 void check_inline_triangles(const Node& positions, const Node& indices, const Node* uvs, PolygonSoup& soup) {
-  for (const Node& p : positions.array()) soup.positions.push_back(p.vec3());
+  for (const Node& p : positions.array()) soup.positions.push_back(p.dvec3());
   std::vector<glm::vec2> vertex_uvs;
   if (uvs) {
     for (const Node& uv : uvs->array()) {
@@ -487,27 +501,34 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   }
   if (n.has("emission")) s.emission = n.at("emission").color();
   if (n.has("two_sided")) s.two_sided = n.at("two_sided").boolean();
-  glm::mat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::mat4(1.0f);
+  glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
   s.label = n.path;
 
   if (type == "sphere") {
     s.is_sphere = true;
-    glm::vec3 center = n.has("center") ? n.at("center").vec3() : glm::vec3(0);
-    float radius = n.at("radius").positive();
+    glm::dvec3 center = n.has("center") ? n.at("center").dvec3() : glm::dvec3(0);
+    double radius = n.at("radius").positive();
     if (n.has("flip_normals")) s.flip_normals = n.at("flip_normals").boolean();
     // A sphere stays a sphere only under translation, rotation and uniform scale.
-    glm::mat3 l(transform);
-    float sx = glm::length(l[0]), sy = glm::length(l[1]), sz = glm::length(l[2]);
-    float tol = 1e-5f * std::max({sx, sy, sz});
+    glm::dmat3 l(transform);
+    double sx = glm::length(l[0]), sy = glm::length(l[1]), sz = glm::length(l[2]);
+    double tol = 1e-5 * std::max({sx, sy, sz});
     if (std::abs(sx - sy) > tol || std::abs(sx - sz) > tol || std::abs(glm::dot(l[0], l[1])) > tol * sx ||
         std::abs(glm::dot(l[0], l[2])) > tol * sx || std::abs(glm::dot(l[1], l[2])) > tol * sx)
       n.at("transform").fail("a sphere allows only translation, rotation and uniform scale");
-    s.center = glm::vec3(transform * glm::vec4(center, 1.0f));
+    s.center = glm::dvec3(transform * glm::dvec4(center, 1.0));
     s.radius = radius * sx;
-    s.frame = l / sx;
-    if (!std::isfinite(s.center.x) || !std::isfinite(s.center.y) || !std::isfinite(s.center.z) ||
-        !std::isfinite(s.radius))
+    s.frame = glm::mat3(l / sx);
+    if (!within_float_range(s.center) || !(s.radius <= std::numeric_limits<float>::max()))
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes the sphere to infinity");
+    // Its area 4 pi r^2 (the light's power and pdf) and squared distances across it are floats on the
+    // device: refused rather than turned into infinities and NaNs there.
+    if (s.radius > kMaxSceneExtent) {
+      char what[160];
+      std::snprintf(what, sizeof what, "a sphere radius of %g is beyond the largest of %g (4 pi r^2 would overflow float)",
+                    s.radius, kMaxSceneExtent);
+      (radius > kMaxSceneExtent || !n.has("transform") ? n.at("radius") : n.at("transform")).fail(what);
+    }
     return s;
   }
 
@@ -521,13 +542,13 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     Node uvs = n.has("uvs") ? n.at("uvs") : n;
     check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
   }
-  for (glm::vec3& p : soup.positions) {
-    p = glm::vec3(transform * glm::vec4(p, 1.0f));
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+  for (glm::dvec3& p : soup.positions) {
+    p = glm::dvec3(transform * glm::dvec4(p, 1.0));
+    if (!within_float_range(p))
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
   }
   // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
-  if (glm::determinant(glm::mat3(transform)) < 0) {
+  if (glm::determinant(glm::dmat3(transform)) < 0) {
     for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
     for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
   }

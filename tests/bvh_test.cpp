@@ -97,7 +97,9 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
 
 TEST(Bvh, TraversalMatchesBruteForceOnRandomRays) {
   ClContext& cl = test_device();
-  DeviceScene scene = load_device_scene(write_temp_file("bvh-random.json", random_scene_json(1500, 20, 2)));
+  // World origin: the brute-force kernel gets the (world) rays as they are.
+  DeviceScene scene =
+      load_device_scene(write_temp_file("bvh-random.json", random_scene_json(1500, 20, 2)), DeviceOrigin::world);
   std::vector<RayRecord> rays = random_rays(100000, 3);
   TraceTiming timing;
   std::vector<HitRecord> bvh = trace_ray_records(cl, scene, rays, 1, timing);

@@ -24,6 +24,7 @@ struct Comparison {
   size_t cgal_hits = 0, missed = 0, distance_off = 0;
 };
 
+// The scene keeps the world origin (DeviceOrigin::world): CGAL gets its triangles and the rays as they are.
 Comparison compare_with_cgal(const DeviceScene& scene, const std::vector<RayRecord>& rays) {
   std::vector<Tri3> tris;
   for (uint32_t i = 0; i < scene.triangle_count; ++i) {
@@ -62,7 +63,8 @@ std::string closed_scene(const std::string& shape) {
 }  // namespace
 
 TEST(CgalReference, RaysAtIcosphereVerticesAndEdgesFromInside) {
-  DeviceScene scene = load_device_scene(write_temp_file("ico.json", closed_scene(icosphere_json(1.5f, 2, false))));
+  DeviceScene scene =
+      load_device_scene(write_temp_file("ico.json", closed_scene(icosphere_json(1.5f, 2, false))), DeviceOrigin::world);
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> u(-0.5f, 0.5f), w(0, 1);
   std::vector<RayRecord> rays;
@@ -84,7 +86,7 @@ TEST(CgalReference, RaysAtIcosphereVerticesAndEdgesFromInside) {
 TEST(CgalReference, RaysAtCubeVerticesAndEdgesFromOutside) {
   std::string cube = R"({"type": "mesh", "file": ")" + std::string(PATHCL_TEST_SCENES) +
                      R"(/../../scenes/meshes/cube.obj", "transform": {"scale": 2})";
-  DeviceScene scene = load_device_scene(write_temp_file("cube.json", closed_scene(cube)));
+  DeviceScene scene = load_device_scene(write_temp_file("cube.json", closed_scene(cube)), DeviceOrigin::world);
   ASSERT_EQ(scene.triangle_count, 12u);
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> away(0.5f, 5), free(-3, 3), s(0, 1);

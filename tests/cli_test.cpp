@@ -27,6 +27,7 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
       {scene("bad-nan-vertex.json"), "nan-vertex.obj:2"},
       {scene("bad-unknown-material.json"), "unknown material \"glas\""},
       {scene("bad-negative-spp.json"), "render.spp"},
+      {scene("bad-huge-sphere.json"), "shapes[0].radius: a sphere radius of 1e+30 is beyond the largest of 1.5e+18"},
       {scene("tiny.json") + " --spp -3", "--spp"},
       {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
       {scene("tiny.json") + " --device 99", "no device with that index"},
@@ -116,9 +117,24 @@ TEST(Cli, InfoDumpsTheCleanedWorldSpaceTrianglesAsObj) {
     faces += line.rfind("f ", 0) == 0;
   }
   EXPECT_EQ(objects, (std::vector<std::string>{"o shapes[0]", "o shapes[2]"}));
-  EXPECT_EQ(spheres, (std::vector<std::string>{"# sphere shapes[1] 0 0.5 0 0.400000006 0"}));
+  EXPECT_EQ(spheres, (std::vector<std::string>{"# sphere shapes[1] 0 0.5 0 0.4 0"}));
   EXPECT_EQ(vertices, 8 + 4);
   EXPECT_EQ(faces, 6 + 2);  // the triangle count of `pathcl rays` without the sphere
+}
+
+TEST(Cli, SelfIntersectingClosedMeshIsOrientedWithAWarning) {
+  // Two overlapping closed boxes in one OBJ file, inside out, emitting from their front side, with
+  // "orient": true. CGAL's orient_to_bound_a_volume requires a mesh without self-intersections; each
+  // box is turned outward by its signed volume instead, so the camera outside sees the emission.
+  std::string out = temp_dir() + "/self-intersecting.exr", err, info;
+  ASSERT_EQ(run_pathcl("render " + scene("self-intersecting-orient.json") + " -o " + out, &err), 0) << err;
+  EXPECT_NE(err.find("warning: shapes[0] (meshes/overlapping-boxes.obj): the closed mesh intersects itself"),
+            std::string::npos) << err;
+  Image image = read_exr(out);
+  size_t centre = 3 * (image.width * (image.height / 2) + image.width / 2);
+  EXPECT_GE(image.rgb[centre], 1.0f);  // Le = 1 seen directly, plus what the box reflects
+  ASSERT_EQ(run_pathcl("info " + scene("self-intersecting-orient.json"), &err, &info), 0) << err;
+  EXPECT_NE(info.find("flipped 24 faces; closed, self-intersecting"), std::string::npos) << info;
 }
 
 TEST(Cli, FilmLargerThanTheDeviceIsAClearRuntimeFailure) {

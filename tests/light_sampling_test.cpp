@@ -19,6 +19,9 @@
 
 namespace {
 
+// The test kernels take shading points in world coordinates: flatten around the world origin.
+DeviceScene load_world_scene(const std::string& path) { return load_device_scene(path, DeviceOrigin::world); }
+
 constexpr double kDeg = M_PI / 180;
 constexpr size_t kChi2Samples = 1000000;
 
@@ -210,7 +213,7 @@ std::string sphere_json(const glm::dvec3& c, double r, const std::string& extra)
 TEST(LightChi2, AreaLights) {
   std::vector<LightCase> cases;
   auto add = [&](const std::string& name, const std::string& shape, const glm::dvec3& x, const SphereBinning& b) {
-    cases.push_back({name, load_device_scene(write_temp_file("light.json", scene_json(shape))), x, b, 2.5});
+    cases.push_back({name, load_world_scene(write_temp_file("light.json", scene_json(shape))), x, b, 2.5});
   };
   // A triangle above x, its front (counter-clockwise) side facing x; binned over the whole sphere.
   glm::dvec3 a(-1, -0.5, 2), b(0.2, 1.2, 1.8), c(1.5, -1, 2.5);
@@ -250,7 +253,7 @@ TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
   glm::dvec3 a(-1, -0.5, 2), b(0.2, 1.2, 1.8), c(1.5, -1, 2.5);
   for (const std::string& shape :
        {triangle_json(a, c, b, R"("emission": [1, 1, 1])"), sphere_json({0, 0, 0.5}, 2, R"("emission": [1, 1, 1])")}) {
-    SceneBuffers sb(load_device_scene(write_temp_file("behind.json", scene_json(shape))));
+    SceneBuffers sb(load_world_scene(write_temp_file("behind.json", scene_json(shape))));
     LightSamples s = sample_lights(sb, {0.1, 0.2, 0}, 3, 10000);
     for (size_t i = 0; i < s.n; ++i) ASSERT_EQ(s.status(i), 0) << shape;
   }
@@ -259,7 +262,7 @@ TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
 TEST(LightChi2, ConstantEnvironment) {
   // Uniform over the sphere; a constant environment needs no map.
   std::vector<LightCase> cases = {{"constant environment",
-                                   load_device_scene(write_temp_file(
+                                   load_world_scene(write_temp_file(
                                        "sky.json", scene_json("", R"({"type": "environment", "radiance": [0.7, 0.7, 0.7]})"))),
                                    {0.5, -2, 1}, SphereBinning(), 0.7}};
   expect_light_family(cases, 5500);
@@ -316,7 +319,7 @@ bool near_texel_edge(const Image& img, const glm::dvec3& d, double eps = 1e-4) {
 
 DeviceScene env_scene(const Image& img, double scale) {
   write_exr(temp_dir() + "/env.exr", img);
-  return load_device_scene(write_temp_file(
+  return load_world_scene(write_temp_file(
       "env.json", scene_json("", R"({"type": "environment", "file": "env.exr", "scale": )" + std::to_string(scale) + "}")));
 }
 
@@ -483,7 +486,7 @@ TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
                 R"({"type": "spot", "position": [%.9g, %.9g, %.9g], "direction": [%.9g, %.9g, %.9g],
                     "intensity": [%g, %g, %g], "inner_angle_degrees": %g, "outer_angle_degrees": %g})",
                 pos.x, pos.y, pos.z, axis.x, axis.y, axis.z, intensity, 2 * intensity, intensity, inner, outer);
-  SceneBuffers sb(load_device_scene(write_temp_file("spot.json", scene_json(
+  SceneBuffers sb(load_world_scene(write_temp_file("spot.json", scene_json(
       R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})", lights))));
   SphereBinning frame = SphereBinning::about(axis, M_PI);
   for (double angle : {0.0, 10.0, 24.9, 25.1, 28.0, 32.5, 37.0, 39.9, 40.1, 60.0, 150.0})
@@ -521,7 +524,7 @@ TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
 }
 
 TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
-  SceneBuffers sb(load_device_scene(write_temp_file(
+  SceneBuffers sb(load_world_scene(write_temp_file(
       "sun.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
                              R"({"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [3, 2, 1]})"))));
   glm::dvec3 towards_light = -glm::normalize(glm::dvec3(0.3, -1, 0.2));
@@ -535,7 +538,7 @@ TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
 }
 
 TEST(LightSampling, PointLightFollowsTheInverseSquareLaw) {
-  SceneBuffers sb(load_device_scene(write_temp_file(
+  SceneBuffers sb(load_world_scene(write_temp_file(
       "point.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
                                R"({"type": "point", "position": [1, 2, 3], "intensity": [5, 5, 5]})"))));
   for (glm::dvec3 x : {glm::dvec3(0, 0, 0), glm::dvec3(1, 2, 3.5), glm::dvec3(-10, 4, 20)}) {

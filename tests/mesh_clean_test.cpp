@@ -1,5 +1,5 @@
 // Tests for clean_mesh (scene/mesh_clean.cpp): merging, degeneracies, duplicates, triangulation,
-// orientation and smooth normals.
+// orientation and smooth normals. Built with CGAL's own checks on (tests/CMakeLists.txt).
 #include "scene/mesh_clean.h"
 
 #include <gtest/gtest.h>
@@ -15,9 +15,10 @@
 
 namespace {
 
+using glm::dvec3;
 using glm::vec3;
 
-glm::dvec3 d(const vec3& v) { return glm::dvec3(v); }
+dvec3 d(const dvec3& v) { return v; }
 
 glm::dvec3 tri_normal(const TriangleMesh& m, const std::array<uint32_t, 3>& t) {
   const glm::dvec3 a = d(m.positions[t[0]]), b = d(m.positions[t[1]]), c = d(m.positions[t[2]]);
@@ -57,9 +58,9 @@ bool consistently_oriented(const TriangleMesh& m) {
   return true;
 }
 
-vec3 centroid(const TriangleMesh& m, std::size_t tri) {
+dvec3 centroid(const TriangleMesh& m, std::size_t tri) {
   const auto& t = m.triangles[tri];
-  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0f;
+  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
 }
 
 // Unit cube [0,1]^3 as 8 shared vertices and 6 outward (CCW seen from outside) quads.
@@ -101,10 +102,10 @@ TEST(MeshClean, MergesDuplicateVertices) {
     for (int i = 0; i < 3; ++i) ++edges[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}];
   EXPECT_EQ(edges.size(), 5u);
   // Positions are kept exactly, in input order (first occurrence).
-  EXPECT_EQ(m.positions[0], vec3(0, 0, 0));
-  EXPECT_EQ(m.positions[1], vec3(1, 0, 0));
-  EXPECT_EQ(m.positions[2], vec3(1, 1, 0));
-  EXPECT_EQ(m.positions[3], vec3(0, 1, 0));
+  EXPECT_EQ(m.positions[0], dvec3(0, 0, 0));
+  EXPECT_EQ(m.positions[1], dvec3(1, 0, 0));
+  EXPECT_EQ(m.positions[2], dvec3(1, 1, 0));
+  EXPECT_EQ(m.positions[3], dvec3(0, 1, 0));
   // Winding kept: both face +z.
   for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0);
 }
@@ -192,7 +193,7 @@ TEST(MeshClean, TriangulatesNonConvexPolygon) {
     for (const auto& t : m.triangles) EXPECT_GT(tri_normal(m, t).z, 0.0) << "start " << start;
     // No triangle's centroid lies in the notch [1,2]x[1,2].
     for (std::size_t i = 0; i < m.triangles.size(); ++i) {
-      const vec3 c = centroid(m, i);
+      const dvec3 c = centroid(m, i);
       EXPECT_FALSE(c.x > 1 && c.y > 1) << "start " << start;
     }
   }
@@ -212,7 +213,7 @@ TEST(MeshClean, TriangulatesTiltedNonConvexPolygon) {
   // The L in a tilted plane (rotated about x by 30 degrees): same area, triangles face the polygon normal.
   PolygonSoup s = l_shape();
   const float c = std::cos(0.5235988f), sn = std::sin(0.5235988f);
-  for (vec3& p : s.positions) p = vec3(p.x, c * p.y - sn * p.z, sn * p.y + c * p.z);
+  for (dvec3& p : s.positions) p = dvec3(p.x, c * p.y - sn * p.z, sn * p.y + c * p.z);
   const glm::dvec3 normal(0, -sn, c);
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {}, r);
@@ -258,8 +259,8 @@ TEST(MeshClean, KeepsTriangleOrder) {
   EXPECT_FLOAT_EQ(centroid(m, 3).z, 3.0f);
   // Vertex order: the input's, without the removed (isolated) ones.
   ASSERT_EQ(m.positions.size(), 10u);
-  EXPECT_EQ(m.positions[6], vec3(0, 1, 1));
-  EXPECT_EQ(m.positions[7], vec3(0, 0, 3));
+  EXPECT_EQ(m.positions[6], dvec3(0, 1, 1));
+  EXPECT_EQ(m.positions[7], dvec3(0, 0, 3));
   EXPECT_EQ(r.removed_isolated_vertices, 3u);
 }
 
@@ -323,19 +324,19 @@ void expect_outward_unit_normals(const TriangleMesh& m) {
   ASSERT_EQ(m.normals.size(), m.positions.size());
   for (std::size_t i = 0; i < m.positions.size(); ++i) {
     EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-5f) << i;
-    EXPECT_GT(glm::dot(m.normals[i], m.positions[i]), 0.0f) << i;
+    EXPECT_GT(glm::dot(m.normals[i], vec3(m.positions[i])), 0.0f) << i;
   }
 }
 
 TEST(MeshClean, SmoothNormalsOfCubePointOutward) {
   PolygonSoup s = cube_quads();
-  for (vec3& p : s.positions) p -= vec3(0.5f);  // centre on the origin
+  for (dvec3& p : s.positions) p -= dvec3(0.5);  // centre on the origin
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
   expect_outward_unit_normals(m);
   // A cube corner's normal is along the diagonal, whatever the triangulation weights.
   for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_GT(glm::dot(m.normals[i], glm::normalize(m.positions[i])), 0.9f);
+    EXPECT_GT(glm::dot(m.normals[i], vec3(glm::normalize(m.positions[i]))), 0.9f);
 }
 
 TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
@@ -348,12 +349,12 @@ TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
   EXPECT_NEAR(signed_volume(m), 4.0 / 3.0, 1e-6);
   expect_outward_unit_normals(m);
   for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_NEAR(glm::dot(m.normals[i], m.positions[i]), 1.0f, 1e-5f);  // exactly radial by symmetry
+    EXPECT_NEAR(glm::dot(m.normals[i], vec3(m.positions[i])), 1.0f, 1e-5f);  // exactly radial by symmetry
 }
 
 TEST(MeshClean, SmoothNormalsAfterOrientingInsideOutCube) {
   PolygonSoup s = cube_quads();
-  for (vec3& p : s.positions) p -= vec3(0.5f);
+  for (dvec3& p : s.positions) p -= dvec3(0.5);
   for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {.orient = true, .smooth_normals = true}, r);
@@ -388,6 +389,82 @@ TEST(MeshClean, OrientSplitsNonManifoldEdge) {
   for (const vec3& n : m.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
 }
 
+// A closed surface folded flat into the plane y = 0: the square (0,0)-(2,2) in x, z covered on one side
+// by two triangles and on the other by a fan around its centre.
+PolygonSoup folded_square() {
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {2, 0, 0}, {2, 0, 2}, {0, 0, 2}, {1, 0, 1}};
+  s.polygons = {{0, 1, 2}, {0, 2, 3}, {4, 1, 0}, {4, 2, 1}, {4, 3, 2}, {4, 0, 3}};
+  return s;
+}
+
+TEST(MeshClean, ZeroLengthVertexNormalsStayZeroNeverNaN) {
+  // The folded square lying in z = 0, consistently oriented as given. At its corners 0 and 2 the faces
+  // of the two sides subtend the same angles, so their angle-weighted normals cancel exactly and CGAL
+  // returns a null vector: the normal stays zero (build_device_scene then uses the face normal).
+  PolygonSoup s = folded_square();
+  for (dvec3& p : s.positions) p = dvec3(p.x, p.z, 0);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  ASSERT_EQ(m.normals.size(), 5u);
+  EXPECT_EQ(m.normals[0], vec3(0));
+  EXPECT_EQ(m.normals[2], vec3(0));
+  for (uint32_t i : {1u, 3u, 4u}) EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-6f) << i;
+}
+
+// Two closed unit cubes overlapping in [0.5, 1]^3, in one soup: a self-intersecting closed mesh.
+PolygonSoup overlapping_cubes(bool first_inward, bool second_inward) {
+  PolygonSoup s = cube_quads(), b = cube_quads();
+  if (first_inward)
+    for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
+  for (auto& p : b.polygons) {
+    if (second_inward) std::reverse(p.begin(), p.end());
+    for (uint32_t& v : p) v += 8;
+    s.polygons.push_back(p);
+  }
+  for (const dvec3& p : b.positions) s.positions.push_back(p + dvec3(0.5));
+  return s;
+}
+
+TEST(MeshClean, OrientSelfIntersectingClosedMeshTurnsEachPartOutward) {
+  for (int inward = 0; inward < 4; ++inward) {
+    const bool first = inward & 1, second = inward & 2;
+    CleanReport r;
+    TriangleMesh m = clean_mesh(overlapping_cubes(first, second), {.orient = true}, r);
+    ASSERT_EQ(m.triangles.size(), 24u);
+    EXPECT_TRUE(r.closed);
+    EXPECT_TRUE(r.self_intersecting);
+    EXPECT_TRUE(consistently_oriented_closed(m));
+    EXPECT_NEAR(signed_volume(m), 2.0, 1e-6) << inward;  // +1 for each cube: both outward
+    EXPECT_EQ(r.faces_flipped, 12u * (first + second)) << inward;
+  }
+  // Without self-intersections CGAL's own orientation is used and nothing is reported.
+  PolygonSoup apart = overlapping_cubes(true, true);
+  for (std::size_t i = 8; i < 16; ++i) apart.positions[i] += dvec3(2);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(apart, {.orient = true}, r);
+  EXPECT_FALSE(r.self_intersecting);
+  EXPECT_NEAR(signed_volume(m), 2.0, 1e-6);
+}
+
+TEST(MeshClean, OrientFoldedClosedMeshNeverTripsCgal) {
+  // Every face is vertical, which trips CGAL's assertion "p1p2p3_2d!=COLLINEAR || p2p1p4_2d!=COLLINEAR
+  // // no self-intersection" in orient_to_bound_a_volume (is_outward_oriented).
+  CleanReport r;
+  TriangleMesh m;
+  ASSERT_NO_THROW(m = clean_mesh(folded_square(), {.orient = true, .smooth_normals = true}, r));
+  ASSERT_EQ(m.triangles.size(), 6u);
+  EXPECT_TRUE(r.closed);
+  EXPECT_TRUE(r.self_intersecting);
+  EXPECT_TRUE(consistently_oriented_closed(m));
+  EXPECT_EQ(r.faces_flipped, 0u);  // zero volume: no side is the outside, the winding stays
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  for (const vec3& n : m.normals) {
+    const float len = glm::length(n);
+    EXPECT_TRUE(len == 0 || std::abs(len - 1) < 1e-6f) << len;  // never NaN
+  }
+}
+
 TEST(MeshClean, OutOfRangeIndexThrows) {
   PolygonSoup s;
   s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -420,8 +497,8 @@ TEST(MeshClean, EmptyAndFullyDegenerateInput) {
 
 // Per-corner attributes. Every corner gets a uv that names its position and its polygon, so that a uv
 // that stayed with the wrong vertex, or came from another polygon, shows.
-glm::vec2 uv_of(const vec3& p, std::size_t polygon) {
-  return {p.x + 2 * p.z + 10 * float(polygon), p.y + 4 * p.z};
+glm::vec2 uv_of(const glm::dvec3& p, std::size_t polygon) {
+  return {float(p.x + 2 * p.z + 10.0 * polygon), float(p.y + 4 * p.z)};
 }
 
 void add_position_uvs(PolygonSoup& s) {
@@ -442,7 +519,7 @@ void expect_uvs_follow_vertices(const PolygonSoup& s, const TriangleMesh& m) {
     const uint32_t p = m.source_polygon[t];
     ASSERT_LT(p, s.polygons.size());
     for (int j = 0; j < 3; ++j) {
-      const vec3 at = m.positions[m.triangles[t][j]];
+      const glm::dvec3 at = m.positions[m.triangles[t][j]];
       ASSERT_LT(m.source_corners[t][j], s.polygons[p].size());
       EXPECT_EQ(s.positions[s.polygons[p][m.source_corners[t][j]]], at) << "triangle " << t << " vertex " << j;
       EXPECT_EQ(m.uvs[t][j], uv_of(at, p)) << "triangle " << t << " vertex " << j;

@@ -55,7 +55,9 @@ std::string write_temp_png(const std::string& name, int width, int height, const
   return path;
 }
 
-DeviceScene load_device_scene(const std::string& path) { return build_device_scene(load_scene(path)); }
+DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin) {
+  return build_device_scene(load_scene(path), origin);
+}
 
 int run_pathcl(const std::string& args, std::string* err, std::string* out) {
   std::string err_file = temp_dir() + "/stderr.txt", out_file = temp_dir() + "/stdout.txt";

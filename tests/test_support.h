@@ -32,8 +32,8 @@ std::string write_temp_file(const std::string& name, const std::string& text);
 // Writes an 8-bit RGB PNG (rows from the top, 3 bytes per pixel) in temp_dir() and returns its path.
 std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb);
 
-// Loads and flattens a scene file.
-DeviceScene load_device_scene(const std::string& path);
+// Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).
+DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera);
 
 // Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err and
 // stdout in *out when given.
