@@ -152,6 +152,15 @@ TEST(AnalyticScenes, PointLightAtTheCentreOfADiffuseSphereIsDepthExact) {
     RenderResult r = render_scene(scene, 4, depth);
     for (float v : r.film.mean) ASSERT_NEAR(v, expected(depth), 2e-5 * expected(depth)) << "max_depth " << depth;
   }
+  // The same, 1e5 away from the world origin: the light moves with the camera-relative geometry.
+  DeviceScene far = scene_from("point-sphere-far.json", R"({
+    "camera": {"position": [1e5, 0, 0], "look_at": [100000.3, 0.2, -1], "fov_y_degrees": 100, "width": 16, "height": 16},
+    "materials": {"wall": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
+    "shapes": [{"type": "sphere", "center": [1e5, 0, 0], "radius": 2, "flip_normals": true, "material": "wall"}],
+    "lights": [{"type": "point", "position": [1e5, 0, 0], "intensity": [3, 3, 3]}]})");
+  RenderResult r = render_scene(far, 4, 2);
+  for (float v : r.film.mean) ASSERT_NEAR(v, expected(2), 2e-5 * expected(2)) << "far from the origin";
+
   RenderResult deep = render_scene(scene, 32, 10, 5);
   MeanStd m = mean_and_error(red_channel(deep.film).mean);
   EXPECT_NEAR(m.mean, expected(10), 4 * m.std_error + 1e-6);
