@@ -124,6 +124,16 @@ std::string assemble_kernel_source(const std::string& main_file) {
   return out;
 }
 
+namespace {
+// The -D flag of each feature bit of scene/device_scene.h, in bit order.
+const char* const kFeatureFlags[] = {
+    "PC_HAS_TRIANGLES",  "PC_HAS_SPHERES",         "PC_HAS_SMOOTH_NORMALS", "PC_HAS_AREA_LIGHTS",
+    "PC_HAS_DIFFUSE",    "PC_HAS_OREN_NAYAR",      "PC_HAS_PHONG",          "PC_HAS_MIRROR",
+    "PC_HAS_DIELECTRIC", "PC_HAS_ROUGH_CONDUCTOR", "PC_HAS_PLASTIC",        "PC_HAS_TEXTURES",
+    "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP"};
+static_assert(sizeof kFeatureFlags / sizeof kFeatureFlags[0] == 16 && kFeatureAll == (1u << 16) - 1, "one flag per feature bit");
+}  // namespace
+
 std::string kernel_options(uint32_t features) {
   // No fast-math options: they break the slab test's infinities and the watertight triangle test.
   std::string options = "-cl-std=CL1.2";

@@ -45,6 +45,16 @@ Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_floa
   return f;
 }
 
+LaunchSize adapt_launch_size(LaunchSize size, double slowest_launch_ms, size_t pixels) {
+  // Too slow: fewer samples per launch first, then fewer pixels (in steps of 1024, at least 1024).
+  // Too fast: more pixels first (up to the whole film), then more samples (up to 256).
+  if (slowest_launch_ms > 100 && size.pass_spp > 1) size.pass_spp /= 2;
+  else if (slowest_launch_ms > 100) size.launch_pixels = std::max<size_t>(size.launch_pixels / 2 / 1024 * 1024, 1024);
+  else if (slowest_launch_ms < 50 && size.launch_pixels < pixels) size.launch_pixels = std::min(pixels, size.launch_pixels * 2);
+  else if (slowest_launch_ms < 50 && size.pass_spp < 256) size.pass_spp *= 2;
+  return size;
+}
+
 double estimated_rel_mse(const Film& film) {
   size_t n = film.mean.size();
   if (n == 0 || film.spp < 2) return 0;
@@ -162,10 +172,9 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
     done += count;
     result.passes++;
     if (adaptive && count == pass_spp) {
-      if (slowest_launch_ms > 100 && pass_spp > 1) pass_spp /= 2;
-      else if (slowest_launch_ms > 100) launch_pixels = std::max<size_t>(launch_pixels / 2 / 1024 * 1024, 1024);
-      else if (slowest_launch_ms < 50 && launch_pixels < pixels) launch_pixels = std::min(pixels, launch_pixels * 2);
-      else if (slowest_launch_ms < 50 && pass_spp < 256) pass_spp *= 2;
+      LaunchSize next = adapt_launch_size({pass_spp, launch_pixels}, slowest_launch_ms, pixels);
+      pass_spp = next.pass_spp;
+      launch_pixels = next.launch_pixels;
     }
     if (options.max_pass_seconds > 0 && count == pass_spp) {  // passes of about half to all of the limit
       if (pass_ms > 1e3 * options.max_pass_seconds && pass_spp > 1)

@@ -44,6 +44,15 @@ Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_floa
 // mean over pixels and channels of E[(even - odd)^2] scaled to one full mean, over (mean^2 + 0.01).
 double estimated_rel_mse(const Film& film);
 
+// GPU launch sizing (RenderOptions::pass_spp = 0 on a GPU): after each pass, the samples per pass and
+// pixels per launch move towards a slowest launch of 50-100 ms, long enough to amortise a launch and
+// short enough that a desktop watchdog never kills one.
+struct LaunchSize {
+  uint32_t pass_spp = 1;
+  size_t launch_pixels = 0;
+};
+LaunchSize adapt_launch_size(LaunchSize size, double slowest_launch_ms, size_t pixels);
+
 struct RenderResult {
   Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;

@@ -32,8 +32,6 @@ enum : uint32_t {
   kFeatureAll = (1u << 16) - 1,
 };
 
-// The -D flag name of each feature bit, in bit order ("PC_HAS_TRIANGLES", ...).
-extern const char* const kFeatureFlags[16];
 
 // Where the device's float coordinates have their origin. Rendering puts it at the camera (the kernel's
 // camera then sits at 0): floats are finest where the image needs them, and a scene 1e6 away from the

@@ -98,11 +98,6 @@ SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
 
 }  // namespace
 
-const char* const kFeatureFlags[16] = {
-    "PC_HAS_TRIANGLES",  "PC_HAS_SPHERES",         "PC_HAS_SMOOTH_NORMALS", "PC_HAS_AREA_LIGHTS",
-    "PC_HAS_DIFFUSE",    "PC_HAS_OREN_NAYAR",      "PC_HAS_PHONG",          "PC_HAS_MIRROR",
-    "PC_HAS_DIELECTRIC", "PC_HAS_ROUGH_CONDUCTOR", "PC_HAS_PLASTIC",        "PC_HAS_TEXTURES",
-    "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP"};
 
 Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
