@@ -161,7 +161,7 @@ Chi2Outcome run_chi2(const Chi2Case& c, uint32_t seed) {
   const size_t n = kChi2Samples;
   Samples s = sample_bsdf(c.m, c.wo, seed, n);
   Chi2Outcome r;
-  std::vector<double> observed(binning.count() + 1, 0), expected(binning.count() + 1, 0);
+  std::vector<double> observed(binning.count() + 1, 0);
   char buf[256];
   for (size_t i = 0; i < n; ++i) {
     if (s.status(i) != 1) {
@@ -198,12 +198,7 @@ Chi2Outcome run_chi2(const Chi2Case& c, uint32_t seed) {
   }
   r.sampled_fraction /= double(n);
   r.integrals = integrate_bins(bsdf_pdf_integrator(c.m, c.wo, binning), binning.count(), double(n));
-  for (uint32_t b = 0; b < binning.count(); ++b) {
-    expected[b] = double(n) * r.integrals.value[b];
-    r.pdf_total += r.integrals.value[b];
-  }
-  expected.back() = double(n) * std::max(0.0, 1.0 - r.pdf_total);
-  r.chi2 = chi2_test(observed, expected);
+  r.chi2 = chi2_test(observed, expected_counts(r.integrals, double(n), &r.pdf_total));
   return r;
 }
 

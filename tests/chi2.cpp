@@ -156,3 +156,14 @@ std::string Chi2Result::describe_worst() const {
 }
 
 double sidak_alpha(double alpha, int tests) { return 1 - std::pow(1 - alpha, 1.0 / tests); }
+
+std::vector<double> expected_counts(const BinIntegrals& integrals, double samples, double* pdf_total) {
+  std::vector<double> expected;
+  *pdf_total = 0;
+  for (double v : integrals.value) {
+    expected.push_back(samples * v);
+    *pdf_total += v;
+  }
+  expected.push_back(samples * std::max(0.0, 1.0 - *pdf_total));
+  return expected;
+}

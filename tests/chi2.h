@@ -51,6 +51,10 @@ BinValues bin_values(const std::vector<float>& pairs);
 BinIntegrals integrate_bins(const BinIntegrator& integrate, uint32_t bin_count, double samples,
                             double tolerance = 0.1, int max_order = 128);
 
+// Expected counts of `samples` samples: samples times each bin's integral, and a last cell for the mass
+// the density lacks (failed or delta samples). *pdf_total gets the sum of the integrals.
+std::vector<double> expected_counts(const BinIntegrals& integrals, double samples, double* pdf_total);
+
 // Pearson's chi-square of observed against expected counts (same total). Cells expected below
 // min_expected are pooled into one cell (with the smallest other cells until it reaches
 // min_expected). zero_cells_hit counts observations in cells whose expected count is exactly 0; they

@@ -136,7 +136,7 @@ LightOutcome run_light_chi2(const LightCase& c, uint32_t seed, size_t n = kChi2S
   SceneBuffers sb(c.scene);
   LightSamples s = sample_lights(sb, c.x, seed, n);
   LightOutcome r;
-  std::vector<double> observed(c.binning.count() + 1, 0), expected(c.binning.count() + 1, 0);
+  std::vector<double> observed(c.binning.count() + 1, 0);
   for (size_t i = 0; i < n; ++i) {
     if (s.status(i) == 0) {
       observed.back() += 1;
@@ -161,12 +161,7 @@ LightOutcome run_light_chi2(const LightCase& c, uint32_t seed, size_t n = kChi2S
   }
   r.sampled_fraction /= double(n);
   r.integrals = integrate_bins(light_pdf_integrator(sb, c.x, c.binning), c.binning.count(), double(n), 0.1, 256);
-  for (uint32_t b = 0; b < c.binning.count(); ++b) {
-    expected[b] = double(n) * r.integrals.value[b];
-    r.pdf_total += r.integrals.value[b];
-  }
-  expected.back() = double(n) * std::max(0.0, 1.0 - r.pdf_total);
-  r.chi2 = chi2_test(observed, expected);
+  r.chi2 = chi2_test(observed, expected_counts(r.integrals, double(n), &r.pdf_total));
   return r;
 }
 
@@ -361,7 +356,7 @@ TEST(LightChi2, EnvironmentMap) {
     SCOPED_TRACE(c.name);
     SceneBuffers sb(c.scene);
     LightSamples s = sample_lights(sb, c.x, 6000 + uint32_t(k), kChi2Samples);
-    std::vector<double> observed(c.binning.count() + 1, 0), expected(c.binning.count() + 1, 0);
+    std::vector<double> observed(c.binning.count() + 1, 0);
     size_t dark_hits = 0, mismatches = 0, failed = 0;
     std::string first;
     for (size_t i = 0; i < s.n; ++i) {
@@ -397,12 +392,7 @@ TEST(LightChi2, EnvironmentMap) {
     BinIntegrals integrals =
         integrate_bins(light_pdf_integrator(sb, c.x, c.binning), c.binning.count(), double(kChi2Samples), 0.1, 256);
     double pdf_total = 0;
-    for (uint32_t b = 0; b < c.binning.count(); ++b) {
-      expected[b] = double(kChi2Samples) * integrals.value[b];
-      pdf_total += integrals.value[b];
-    }
-    expected.back() = double(kChi2Samples) * std::max(0.0, 1.0 - pdf_total);
-    Chi2Result chi2 = chi2_test(observed, expected);
+    Chi2Result chi2 = chi2_test(observed, expected_counts(integrals, double(kChi2Samples), &pdf_total));
     std::printf("  %-40s p %.4f  %s; integral %.6f, quadrature order <= %d\n", c.name.c_str(), chi2.p_value,
                 chi2.describe().c_str(), pdf_total, integrals.highest_order);
     EXPECT_GE(chi2.p_value, alpha) << chi2.describe_worst();
