@@ -63,8 +63,7 @@ TEST(FilterChi2, OffsetsFollowTheFiltersCdf) {
       {"gaussian sigma 0.3 radius 2 (far tails)", filter_header(PC_FILTER_GAUSSIAN, 2, 0.3f), gaussian(2, 0.3)},
   };
   const int bins = 100;
-  const double alpha = sidak_alpha(0.01, int(cases.size()));
-  double min_p = 1;
+  Chi2Family family(cases.size());
   for (size_t k = 0; k < cases.size(); ++k) {
     const FilterCase& c = cases[k];
     SCOPED_TRACE(c.name);
@@ -84,12 +83,10 @@ TEST(FilterChi2, OffsetsFollowTheFiltersCdf) {
     for (int b = 0; b < bins; ++b)
       expected[b] = kSamples * (c.cdf(-r + 2 * r * (b + 1) / bins) - c.cdf(-r + 2 * r * b / bins));
     Chi2Result chi2 = chi2_test(observed, expected);
-    min_p = std::min(min_p, chi2.p_value);
-    std::printf("  %-44s p %.4f  %s; range [%g, %g]\n", c.name.c_str(), chi2.p_value, chi2.describe().c_str(), lo, hi);
-    EXPECT_GE(chi2.p_value, alpha) << chi2.describe_worst();
+    family.expect_fit(c.name, chi2, "range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     EXPECT_EQ(observed[bins], 0) << "offsets beyond the radius";
   }
-  std::printf("  %zu runs, min p %.4f, per-run significance %.2e\n", cases.size(), min_p, alpha);
+  family.print_summary();
 }
 
 // ---- The thin lens ----

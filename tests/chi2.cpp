@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <sstream>
 
 #include <boost/math/special_functions/gamma.hpp>
+#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
 uint32_t SphereBinning::bin_of(const glm::dvec3& d) const {
@@ -156,6 +158,25 @@ std::string Chi2Result::describe_worst() const {
 }
 
 double sidak_alpha(double alpha, int tests) { return 1 - std::pow(1 - alpha, 1.0 / tests); }
+
+Chi2Family::Chi2Family(size_t runs) : runs(runs), alpha(sidak_alpha(0.01, int(runs))) {}
+
+void Chi2Family::expect_fit(const std::string& name, const Chi2Result& chi2, const std::string& detail) {
+  min_p = std::min(min_p, chi2.p_value);
+  std::printf("  %-44s p %.4f  %s; %s\n", name.c_str(), chi2.p_value, chi2.describe().c_str(), detail.c_str());
+  EXPECT_GE(chi2.p_value, alpha) << name << ": " << chi2.describe_worst();
+}
+
+std::string run_detail(double pdf_total, double sampled_fraction, int highest_order) {
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "integral %.6f, sampled %.6f, quadrature order <= %d", pdf_total, sampled_fraction,
+                highest_order);
+  return buf;
+}
+
+void Chi2Family::print_summary() const {
+  std::printf("  %zu runs, min p %.4f, per-run significance %.2e\n", runs, min_p, alpha);
+}
 
 std::vector<double> expected_counts(const BinIntegrals& integrals, double samples, double* pdf_total) {
   std::vector<double> expected;

@@ -77,3 +77,18 @@ Chi2Result chi2_test(const std::vector<double>& observed, const std::vector<doub
 
 // Per-test significance for `tests` tests at family-wise significance alpha (Sidak).
 double sidak_alpha(double alpha, int tests);
+
+// "integral I, sampled S, quadrature order <= O": a density run's line after its statistic.
+std::string run_detail(double pdf_total, double sampled_fraction, int highest_order);
+
+// The runs of one test family, each checked at the Sidak-corrected significance of a 1 % family-wise
+// level; the summary gives the smallest p-value.
+struct Chi2Family {
+  explicit Chi2Family(size_t runs);
+  // Prints the run's line (name, p, statistic, then `detail`) and expects p >= alpha.
+  void expect_fit(const std::string& name, const Chi2Result& chi2, const std::string& detail);
+  void print_summary() const;
+  size_t runs;
+  double alpha;
+  double min_p = 1;
+};

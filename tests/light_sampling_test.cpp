@@ -166,16 +166,12 @@ LightOutcome run_light_chi2(const LightCase& c, uint32_t seed, size_t n = kChi2S
 }
 
 void expect_light_family(const std::vector<LightCase>& cases, uint32_t seed) {
-  const double alpha = sidak_alpha(0.01, int(cases.size()));
-  double min_p = 1;
+  Chi2Family family(cases.size());
   for (size_t i = 0; i < cases.size(); ++i) {
     const LightCase& c = cases[i];
     LightOutcome r = run_light_chi2(c, seed + uint32_t(i));
-    min_p = std::min(min_p, r.chi2.p_value);
-    std::printf("  %-40s p %.4f  %s; integral %.6f, sampled %.6f, quadrature order <= %d\n", c.name.c_str(),
-                r.chi2.p_value, r.chi2.describe().c_str(), r.pdf_total, r.sampled_fraction, r.integrals.highest_order);
+    family.expect_fit(c.name, r.chi2, run_detail(r.pdf_total, r.sampled_fraction, r.integrals.highest_order));
     SCOPED_TRACE(c.name);
-    EXPECT_GE(r.chi2.p_value, alpha) << r.chi2.describe_worst();
     // Expected counts good to half a standard error in every bin (the refinement aims at a tenth).
     EXPECT_LT(r.integrals.worst, 0.5) << "quadrature: " << r.integrals.unconverged << " bins unconverged";
     // Samples whose ray just grazes the light's outline may see no light in single precision: at most 1e-5.
@@ -184,7 +180,7 @@ void expect_light_family(const std::vector<LightCase>& cases, uint32_t seed) {
     EXPECT_NEAR(r.pdf_total, f, 5 * se + 5e-4);  // 5e-4: quadrature of the density's discontinuous outline
     EXPECT_GT(r.sampled_fraction, 0.999);
   }
-  std::printf("  %zu runs, min p %.4f, per-run significance %.2e\n", cases.size(), min_p, alpha);
+  family.print_summary();
 }
 
 std::string triangle_json(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const std::string& extra) {
@@ -335,7 +331,7 @@ TEST(LightChi2, EnvironmentMap) {
   aligned.y = {0, 0, 1};
   aligned.z = {0, 1, 0};
   std::vector<LightCase> cases = {{"environment map, texel-aligned bins", scene, {0, 0, 0}, aligned, 0}};
-  const double alpha = sidak_alpha(0.01, int(cases.size()));
+  Chi2Family family(cases.size());
 
   // The density the map should have, from the texels: luminance times sin(theta at the row's centre),
   // normalised over the (u, v) square, over the Jacobian 2 pi^2 sin(theta).
@@ -393,9 +389,7 @@ TEST(LightChi2, EnvironmentMap) {
         integrate_bins(light_pdf_integrator(sb, c.x, c.binning), c.binning.count(), double(kChi2Samples), 0.1, 256);
     double pdf_total = 0;
     Chi2Result chi2 = chi2_test(observed, expected_counts(integrals, double(kChi2Samples), &pdf_total));
-    std::printf("  %-40s p %.4f  %s; integral %.6f, quadrature order <= %d\n", c.name.c_str(), chi2.p_value,
-                chi2.describe().c_str(), pdf_total, integrals.highest_order);
-    EXPECT_GE(chi2.p_value, alpha) << chi2.describe_worst();
+    family.expect_fit(c.name, chi2, run_detail(pdf_total, 1.0 - failed / double(kChi2Samples), integrals.highest_order));
     EXPECT_LT(integrals.worst, 0.5) << "quadrature: " << integrals.unconverged << " bins unconverged";
     EXPECT_EQ(failed, 0u);
     EXPECT_EQ(dark_hits, 0u) << "samples on texels that emit nothing";
