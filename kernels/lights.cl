@@ -90,7 +90,7 @@ inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
   return c + r * (cos_alpha * w + sin_alpha * (cos(phi) * t + sin(phi) * b));
 }
 
-inline bool sample_area_light(Light light, __global const Primitive* prims, __global const PrimShading* shading,
+inline void sample_area_light(Light light, __global const Primitive* prims, __global const PrimShading* shading,
                               float3 x, float2 u, LightSample* out) {
   Primitive p = prims[light.slot];
   uint flags = shading[light.prim].flags;
@@ -123,7 +123,6 @@ inline bool sample_area_light(Light light, __global const Primitive* prims, __gl
   out->wi = normalize(out->p - x);
   out->pdf = light.select_pdf * pdf;
   out->Le = emitted_towards(light.emission.xyz, flags, ny, out->p, x);
-  return true;
 }
 
 /* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). */
