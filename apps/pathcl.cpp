@@ -74,7 +74,8 @@ void make_parent_directory(const std::string& path) {
 nlohmann::json scene_stats(const LoadedScene& s) {
   const DeviceScene& d = s.device;
   return {{"triangles", d.triangle_count},     {"spheres", d.sphere_count},        {"lights", d.lights.size()},
-          {"bvh_nodes", d.nodes.size()},        {"bvh_depth", d.bvh.depth},         {"bvh_leaves", d.bvh.leaf_count},
+          {"bvh_nodes", d.bvh.node_count},      {"bvh_depth", d.bvh.depth},
+          {"bvh4_nodes", d.nodes.size()},       {"bvh4_depth", d.wide_depth},         {"bvh_leaves", d.bvh.leaf_count},
           {"sah_cost", d.bvh.sah_cost},         {"bvh_build_ms", d.bvh.build_ms},   {"scene_load_ms", s.load_ms}};
 }
 
@@ -383,8 +384,9 @@ int run_info(const std::string& path, const std::string& dump_obj) {
               by_type[PC_LIGHT_AREA], v.skipped_zero_area_emitters, by_type[PC_LIGHT_POINT], by_type[PC_LIGHT_SPOT],
               by_type[PC_LIGHT_DIRECTIONAL], by_type[PC_LIGHT_ENVIRONMENT]);
   std::printf("kernel options: %s\n", kernel_options(v.features).c_str());
-  std::printf("bvh: %zu nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
-              v.nodes.size(), v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);
+  std::printf("bvh: %u nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
+              v.bvh.node_count, v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);
+  std::printf("device bvh: 4-wide, %zu nodes, depth %u\n", v.nodes.size(), v.wide_depth);
   std::printf("scene load and clean-up: %.1f ms\n", s.load_ms);
   return 0;
 }

@@ -156,7 +156,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
 
 /* The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself. */
-__kernel void render_pass(__constant const SceneHeader* h, __global const BvhNode* nodes,
+__kernel void render_pass(__constant const SceneHeader* h, __global const Bvh4Node* nodes,
                           __global const Primitive* prims, __global const PrimShading* shading,
                           __global const float4* normals, __global const float4* uvs,
                           __global const Material* materials, __global const Light* lights,

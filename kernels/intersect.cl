@@ -162,46 +162,79 @@ __attribute__((always_inline)) inline bool intersect_prim(__global const Primiti
   return true;
 }
 
-inline float node_entry(__global const BvhNode* nodes, uint i, float3 o, float3 inv_d, float tmin, float tmax) {
-  __global const float* f = (__global const float*)(nodes + i);
-  return ray_box(o, inv_d, tmin, tmax, vload3(0, f), vload3(0, f + 4));
+/* Slab tests of a wide node's four child boxes at once, with ray_box's rules: planes chosen by the sign
+ * of inv_d, NaN comparisons skipped, the far distance widened by 1 + 2 gamma(3). Returns each child's
+ * entry distance, or INFINITY where it is missed within [tmin, tmax] (also for empty slots). */
+inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, int3 negative, float tmin, float tmax) {
+  float4 lx = (n->lo_x - o.x) * inv_d.x, hx = (n->hi_x - o.x) * inv_d.x;
+  float4 ly = (n->lo_y - o.y) * inv_d.y, hy = (n->hi_y - o.y) * inv_d.y;
+  float4 lz = (n->lo_z - o.z) * inv_d.z, hz = (n->hi_z - o.z) * inv_d.z;
+  float4 nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;
+  float4 ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;
+  float4 nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;
+  float4 enter = (float4)(tmin), exit = (float4)(tmax);
+  enter = select(enter, nx, nx > enter);
+  enter = select(enter, ny, ny > enter);
+  enter = select(enter, nz, nz > enter);
+  exit = select(exit, fx, fx < exit);
+  exit = select(exit, fy, fy < exit);
+  exit = select(exit, fz, fz < exit);
+  return select((float4)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));
 }
 
-/* BVH traversal, nearer child first. With any_hit it returns at the first hit (shadow rays).
- * kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices. */
-__attribute__((always_inline)) inline bool trace_bvh_axis(__global const BvhNode* nodes,
+/* Orders two (distance, reference) pairs, nearer first, without branches. */
+inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
+  bool swap = *db < *da;
+  float d = *da;
+  uint r = *ra;
+  *da = swap ? *db : d;
+  *ra = swap ? *rb : r;
+  *db = swap ? d : *db;
+  *rb = swap ? r : *rb;
+}
+
+/* Traversal of the 4-wide BVH, nearest child first. With any_hit it returns at the first hit (shadow
+ * rays). kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices.
+ * The stack holds at most 3 entries per level of the tree, whose depth is at most kBvhMaxDepth. */
+__attribute__((always_inline)) inline bool trace_bvh_axis(__global const Bvh4Node* nodes,
                                                           __global const Primitive* prims, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   hit->t = ray->tmax;
   hit->slot = PC_INVALID;
-  uint stack[PC_BVH_STACK];
-  float stack_entry[PC_BVH_STACK];
+  uint stack[3 * PC_BVH_STACK];
+  float stack_entry[3 * PC_BVH_STACK];
   int sp = 0;
-  uint node = 0;
-  if (nodes[0].prim_count == 0 && nodes[0].left_first == 0) return false; /* the empty scene's root */
-  if (node_entry(nodes, 0, ray->o, rp->inv_d, ray->tmin, ray->tmax) == INFINITY) return false;
+  int3 negative = rp->inv_d < 0.0f;
+  uint ref = 0; /* the root node */
   for (;;) {
-    __global const BvhNode* n = nodes + node;
-    uint count = n->prim_count;
-    if (count > 0) {
-      uint first = n->left_first;
+    if (ref & PC_BVH4_LEAF) {
+      uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
       for (uint i = 0; i < count; ++i) {
         if (intersect_prim(prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
       }
     } else {
-      uint left = node + 1, right = n->left_first;
-      float dl = node_entry(nodes, left, ray->o, rp->inv_d, ray->tmin, hit->t);
-      float dr = node_entry(nodes, right, ray->o, rp->inv_d, ray->tmin, hit->t);
-      /* Branch-free ordering and push: traversal branches are unpredictable, so only "was any child hit"
-       * is a branch. The far child is always written and the stack grows only if it was hit too. */
-      bool right_first = dr < dl;
-      uint near = right_first ? right : left, far = right_first ? left : right;
-      float d_near = right_first ? dr : dl, d_far = right_first ? dl : dr;
-      stack[sp] = far;
-      stack_entry[sp] = d_far;
-      sp += d_far != INFINITY ? 1 : 0;
-      if (d_near != INFINITY) {
-        node = near;
+      __global const Bvh4Node* n = nodes + ref;
+      float4 entry = node_entries(n, ray->o, rp->inv_d, negative, ray->tmin, hit->t);
+      /* Sort the four children by entry distance (a five-comparison network; misses are INFINITY and
+       * end up last), then push the hit ones far to near and go on with the nearest. */
+      float d0 = entry.s0, d1 = entry.s1, d2 = entry.s2, d3 = entry.s3;
+      uint r0 = n->child[0], r1 = n->child[1], r2 = n->child[2], r3 = n->child[3];
+      order_pair(&d0, &r0, &d1, &r1);
+      order_pair(&d2, &r2, &d3, &r3);
+      order_pair(&d0, &r0, &d2, &r2);
+      order_pair(&d1, &r1, &d3, &r3);
+      order_pair(&d1, &r1, &d2, &r2);
+      stack[sp] = r3;
+      stack_entry[sp] = d3;
+      sp += d3 != INFINITY ? 1 : 0;
+      stack[sp] = r2;
+      stack_entry[sp] = d2;
+      sp += d2 != INFINITY ? 1 : 0;
+      stack[sp] = r1;
+      stack_entry[sp] = d1;
+      sp += d1 != INFINITY ? 1 : 0;
+      if (d0 != INFINITY) {
+        ref = r0;
         continue;
       }
     }
@@ -211,11 +244,11 @@ __attribute__((always_inline)) inline bool trace_bvh_axis(__global const BvhNode
       --sp;
       if (stack_entry[sp] <= hit->t) break;
     }
-    node = stack[sp];
+    ref = stack[sp];
   }
 }
 
-inline bool trace_bvh(__global const BvhNode* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
+inline bool trace_bvh(__global const Bvh4Node* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
                       Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
   if (rp.kz == 0u) return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 0u);

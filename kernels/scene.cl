@@ -4,7 +4,7 @@
 
 typedef struct {
   __constant const SceneHeader* h;
-  __global const BvhNode* nodes;
+  __global const Bvh4Node* nodes;
   __global const Primitive* prims;     /* BVH leaf order */
   __global const PrimShading* shading; /* scene order */
   __global const float4* normals;      /* 3 per primitive (smooth shapes) */

@@ -85,7 +85,7 @@ inline Surface query_surface(__global const Primitive* prims, __global const Pri
   return surface_at(prims, shading, normals, &unused, &at);
 }
 
-__kernel void spawn_test(__global const BvhNode* nodes, __global const Primitive* prims,
+__kernel void spawn_test(__global const Bvh4Node* nodes, __global const Primitive* prims,
                          __global const PrimShading* shading, __global const float4* normals,
                          __global const float* queries, uint mode, __global uint* out) {
   uint i = get_global_id(0);

@@ -98,7 +98,7 @@ __kernel void fresnel_conductor_test(__global const float* cos_i, float4 eta, fl
 /* ---- Lights ---- */
 
 #define PC_SCENE_PARAMS                                                                                     \
-  __constant const SceneHeader *h, __global const BvhNode *nodes, __global const Primitive *prims,           \
+  __constant const SceneHeader *h, __global const Bvh4Node *nodes, __global const Primitive *prims,           \
       __global const PrimShading *shading, __global const float4 *normals, __global const float4 *uvs,       \
       __global const Material *materials, __global const Light *lights, __global const float *light_cdf,     \
       __global const Texture *textures, __global const float4 *texels, __global const float *env_dist

@@ -89,7 +89,7 @@ RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions
   result.kernel_options = program.options;
 
   // Everything the render keeps on the device must fit in its memory.
-  size_t scene_bytes = sizeof(SceneHeader) + scene.nodes.size() * sizeof(BvhNode) + scene.prims.size() * sizeof(Primitive) +
+  size_t scene_bytes = sizeof(SceneHeader) + scene.nodes.size() * sizeof(Bvh4Node) + scene.prims.size() * sizeof(Primitive) +
                        scene.shading.size() * sizeof(PrimShading) + scene.normals.size() * sizeof(pc_float4) +
                        scene.uvs.size() * sizeof(pc_float4) + scene.materials.size() * sizeof(Material) +
                        scene.lights.size() * sizeof(Light) + scene.light_cdf.size() * sizeof(float) +

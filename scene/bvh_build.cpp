@@ -27,7 +27,6 @@ namespace {
 
 constexpr int kBins = 32;
 constexpr float kTraversalCost = 1, kIntersectionCost = 1;
-constexpr uint32_t kMaxLeafSize = 16;
 constexpr uint32_t kMedianSplitDepth = kBvhMaxDepth - 24;  // past this, split by count to bound depth
 
 // The bin of a centroid, given (centroid - lo) * scale. Clamped in float before the conversion to int,
@@ -102,7 +101,7 @@ struct Builder {
     }
 
     uint32_t mid;
-    if (best_axis >= 0 && (best_cost < leaf_cost || count > kMaxLeafSize)) {
+    if (best_axis >= 0 && (best_cost < leaf_cost || count > kBvhMaxLeafSize)) {
       float scale = kBins / extent[best_axis];
       float lo = centroid_bounds.lo[best_axis];
       auto first_right = std::partition(
@@ -110,7 +109,7 @@ struct Builder {
             return bin_index((centroids[p][best_axis] - lo) * scale) < best_plane;
           });
       mid = uint32_t(first_right - bvh.prim_order.begin());
-    } else if (count > kMaxLeafSize) {
+    } else if (count > kBvhMaxLeafSize) {
       // All centroids coincide (or the tree is too deep): split by count along the widest axis.
       int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
       mid = begin + count / 2;
@@ -169,6 +168,77 @@ Bvh build_bvh(const std::vector<Aabb>& prim_boxes) {
     builder.root_area = std::max(root.half_area(), 1e-30f);
     builder.build(0, 0, n, 0);
   }
+  bvh.node_count = uint32_t(bvh.nodes.size());
   bvh.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return bvh;
+}
+
+namespace {
+
+void set_lane(pc_float4& v, int lane, float x) { (lane == 0 ? v.x : lane == 1 ? v.y : lane == 2 ? v.z : v.w) = x; }
+
+float node_half_area(const BvhNode& n) {
+  Aabb box;
+  box.grow(glm::vec3(n.lo[0], n.lo[1], n.lo[2]));
+  box.grow(glm::vec3(n.hi[0], n.hi[1], n.hi[2]));
+  return box.half_area();
+}
+
+struct Collapser {
+  const std::vector<BvhNode>& binary;
+  Bvh4& out;
+
+  // Fills out.nodes[wide] with the subtrees of binary node `b`: its children, opened further (largest
+  // interior child first) while fewer than four. A binary leaf at the root becomes the only child.
+  void fill(uint32_t wide, uint32_t b, uint32_t depth) {
+    out.depth = std::max(out.depth, depth + 1);
+    std::vector<uint32_t> kids;
+    if (binary[b].prim_count > 0 || binary[b].left_first == 0) {
+      kids.push_back(b);
+    } else {
+      kids = {b + 1, binary[b].left_first};
+      while (kids.size() < 4) {
+        int open = -1;
+        for (int i = 0; i < int(kids.size()); ++i) {
+          const BvhNode& k = binary[kids[i]];
+          if (k.prim_count == 0 && (open < 0 || node_half_area(k) > node_half_area(binary[kids[open]]))) open = i;
+        }
+        if (open < 0) break;
+        uint32_t k = kids[open];
+        kids[open] = k + 1;
+        kids.push_back(binary[k].left_first);
+      }
+    }
+    Bvh4Node node;
+    for (int lane = 0; lane < 4; ++lane) {
+      bool used = lane < int(kids.size()) && !(binary[kids[lane]].prim_count == 0 && binary[kids[lane]].left_first == 0);
+      const BvhNode* k = used ? &binary[kids[lane]] : nullptr;
+      set_lane(node.lo_x, lane, used ? k->lo[0] : INFINITY);
+      set_lane(node.lo_y, lane, used ? k->lo[1] : INFINITY);
+      set_lane(node.lo_z, lane, used ? k->lo[2] : INFINITY);
+      set_lane(node.hi_x, lane, used ? k->hi[0] : -INFINITY);
+      set_lane(node.hi_y, lane, used ? k->hi[1] : -INFINITY);
+      set_lane(node.hi_z, lane, used ? k->hi[2] : -INFINITY);
+      node.child[lane] = PC_INVALID;
+      if (used && k->prim_count > 0) node.child[lane] = PC_BVH4_LEAF | k->left_first << 4 | (k->prim_count - 1);
+    }
+    out.nodes[wide] = node;
+    for (int lane = 0; lane < int(kids.size()); ++lane) {
+      if (binary[kids[lane]].prim_count > 0 || binary[kids[lane]].left_first == 0) continue;
+      uint32_t child = uint32_t(out.nodes.size());
+      out.nodes.emplace_back();
+      out.nodes[wide].child[lane] = child;
+      fill(child, kids[lane], depth + 1);
+    }
+  }
+};
+
+}  // namespace
+
+Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) {
+  Bvh4 out;
+  out.nodes.reserve(binary.size() / 2 + 1);
+  out.nodes.emplace_back();
+  Collapser{binary, out}.fill(0, 0, 0);
+  return out;
 }

@@ -7,6 +7,18 @@
 
 #include "kernels/shared/types.h"
 
+// One node of the binary tree, flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4)
+// = 32 bytes. Interior node (prim_count == 0): the left child is the next node, the right child is
+// left_first. Leaf: primitives [left_first, left_first + prim_count) in leaf order. The empty scene's
+// root has neither. The device gets the 4-wide tree collapsed from it (collapse_to_bvh4).
+struct BvhNode {
+  float lo[3];
+  uint32_t left_first;
+  float hi[3];
+  uint32_t prim_count;
+};
+static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
+
 struct Aabb {
   glm::vec3 lo{1e30f}, hi{-1e30f};
   void grow(const glm::vec3& p);
@@ -16,13 +28,27 @@ struct Aabb {
 
 // The kernel's traversal stack holds this many entries; the builder guarantees a tree no deeper.
 constexpr uint32_t kBvhMaxDepth = 64;
+// Leaves hold at most this many primitives (a 4-bit count in Bvh4Node references).
+constexpr uint32_t kBvhMaxLeafSize = 16;
 
 struct Bvh {
   std::vector<BvhNode> nodes;       // nodes[0] is the root
   std::vector<uint32_t> prim_order; // leaf slot -> primitive index
+  uint32_t node_count = 0;          // binary nodes (nodes may be dropped after collapsing)
   double sah_cost = 0;              // expected traversal + intersection cost (C_trav = C_isect = 1)
   uint32_t depth = 0, leaf_count = 0, max_leaf_size = 0;
   double build_ms = 0;
 };
 
 Bvh build_bvh(const std::vector<Aabb>& prim_boxes);
+
+// The device's 4-wide BVH (kernels/shared/types.h): each wide node takes up to four subtrees of the
+// binary tree, opening the child of largest surface area first, so a traversal step tests four boxes
+// at once. Leaves and primitive order are the binary tree's. Its depth is at most the binary tree's,
+// which bounds the kernel's stack (kernels/intersect.cl). Needs fewer than PC_BVH4_MAX_LEAF_FIRST
+// primitives and leaves of at most 16.
+struct Bvh4 {
+  std::vector<Bvh4Node> nodes;  // nodes[0] is the root
+  uint32_t depth = 0;
+};
+Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);

@@ -43,7 +43,7 @@ enum class DeviceOrigin { camera, world };
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
   glm::dvec3 origin{0};              // world position of the device coordinates' origin (DeviceOrigin)
-  std::vector<BvhNode> nodes;
+  std::vector<Bvh4Node> nodes;      // the 4-wide BVH (collapse_to_bvh4 of bvh)
   std::vector<Primitive> prims;      // BVH leaf order
   std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims
   std::vector<PrimShading> shading;  // scene order (the primitive index of hits and ray files)
@@ -58,7 +58,8 @@ struct DeviceScene {
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;
   uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
-  Bvh bvh;                           // statistics; bvh.nodes is moved into nodes
+  Bvh bvh;                           // the binary tree's statistics; its nodes are dropped once collapsed
+  uint32_t wide_depth = 0;           // depth of the 4-wide tree
 };
 
 // Flattens the scene: primitives in scene order (shapes in file order, triangles of a mesh in mesh

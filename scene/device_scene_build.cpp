@@ -1,6 +1,7 @@
 #include "scene/device_scene.h"
 
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -220,8 +221,17 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
 
+  if (boxes.size() >= PC_BVH4_MAX_LEAF_FIRST)
+    throw SceneError(scene.path + ": " + std::to_string(boxes.size()) + " primitives; at most " +
+                     std::to_string(PC_BVH4_MAX_LEAF_FIRST - 1) + " are supported");
   out.bvh = build_bvh(boxes);
-  out.nodes = std::move(out.bvh.nodes);
+  auto collapse_start = std::chrono::steady_clock::now();
+  Bvh4 wide = collapse_to_bvh4(out.bvh.nodes);
+  out.bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
+  out.bvh.node_count = uint32_t(out.bvh.nodes.size());
+  out.bvh.nodes = {};  // only the wide tree goes to the device
+  out.nodes = std::move(wide.nodes);
+  out.wide_depth = wide.depth;
   out.prims.reserve(prims.size());
   out.leaf_slot.resize(prims.size());
   for (uint32_t slot = 0; slot < prims.size(); ++slot) {

@@ -46,25 +46,60 @@ std::vector<RayRecord> random_rays(size_t n, uint32_t seed) {
   return rays;
 }
 
+float lane(const pc_float4& v, int i) { return i == 0 ? v.x : i == 1 ? v.y : i == 2 ? v.z : v.w; }
+
+// Lane i's box of a wide node, as {lo, hi}.
+std::pair<glm::vec3, glm::vec3> lane_box(const Bvh4Node& n, int i) {
+  return {{lane(n.lo_x, i), lane(n.lo_y, i), lane(n.lo_z, i)}, {lane(n.hi_x, i), lane(n.hi_y, i), lane(n.hi_z, i)}};
+}
+
 }  // namespace
 
 TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
   DeviceScene scene = load_device_scene(write_temp_file("bvh-structure.json", random_scene_json(3000, 30, 1)));
   ASSERT_EQ(scene.prims.size(), 3030u);
   std::vector<int> seen(scene.prims.size(), 0);
-  std::vector<std::pair<uint32_t, uint32_t>> stack = {{0, 1}};
-  uint32_t max_depth = 0;
+  // (wide node, depth, the box its parent gave it)
+  struct Item {
+    uint32_t node, depth;
+    glm::vec3 lo, hi;
+  };
+  std::vector<Item> stack = {{0, 1, glm::vec3(-INFINITY), glm::vec3(INFINITY)}};
+  uint32_t max_depth = 0, leaves = 0, max_leaf = 0;
   while (!stack.empty()) {
-    auto [i, depth] = stack.back();
+    Item item = stack.back();
     stack.pop_back();
-    max_depth = std::max(max_depth, depth);
-    const BvhNode& n = scene.nodes[i];
-    if (n.prim_count > 0) {
-      for (uint32_t k = 0; k < n.prim_count; ++k) {
-        uint32_t slot = n.left_first + k;
-        seen[slot]++;
+    max_depth = std::max(max_depth, item.depth);
+    ASSERT_LT(item.node, scene.nodes.size());
+    const Bvh4Node& n = scene.nodes[item.node];
+    int used = 0, interior = 0;
+    for (int i = 0; i < 4; ++i) {
+      auto [lo, hi] = lane_box(n, i);
+      if (lo.x > hi.x) {  // an unused slot: an empty box in every axis
+        EXPECT_TRUE(lo.x == INFINITY && lo.y == INFINITY && lo.z == INFINITY && hi.x == -INFINITY &&
+                    hi.y == -INFINITY && hi.z == -INFINITY);
+        continue;
+      }
+      ++used;
+      for (int a = 0; a < 3; ++a) {  // inside the parent's box
+        EXPECT_LE(item.lo[a], lo[a]);
+        EXPECT_GE(item.hi[a], hi[a]);
+      }
+      uint32_t ref = n.child[i];
+      if (!(ref & PC_BVH4_LEAF)) {
+        ++interior;
+        EXPECT_GT(ref, item.node);  // depth-first: children after their parent
+        stack.push_back({ref, item.depth + 1, lo, hi});
+        continue;
+      }
+      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1;
+      ++leaves;
+      max_leaf = std::max(max_leaf, count);
+      for (uint32_t k = 0; k < count; ++k) {
+        ASSERT_LT(first + k, scene.prims.size());
+        seen[first + k]++;
         // The leaf's box holds the primitive.
-        Primitive p = scene.prims[slot];
+        Primitive p = scene.prims[first + k];
         uint32_t kind;
         std::memcpy(&kind, &p.b.w, 4);
         std::vector<glm::vec3> pts = kind == PC_PRIM_SPHERE
@@ -72,27 +107,33 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
             : std::vector<glm::vec3>{{p.a.x, p.a.y, p.a.z}, {p.b.x, p.b.y, p.b.z}, {p.c.x, p.c.y, p.c.z}};
         for (glm::vec3 q : pts)
           for (int a = 0; a < 3; ++a) {
-            EXPECT_LE(n.lo[a], q[a]);
-            EXPECT_GE(n.hi[a], q[a]);
+            EXPECT_LE(lo[a], q[a]);
+            EXPECT_GE(hi[a], q[a]);
           }
       }
-      continue;
     }
-    for (uint32_t child : {i + 1, n.left_first}) {
-      ASSERT_LT(child, scene.nodes.size());
-      for (int a = 0; a < 3; ++a) {
-        EXPECT_LE(n.lo[a], scene.nodes[child].lo[a]);
-        EXPECT_GE(n.hi[a], scene.nodes[child].hi[a]);
-      }
-      stack.push_back({child, depth + 1});
-    }
+    // Collapsing fills every node up to four children unless all of them are leaves.
+    EXPECT_TRUE(used == 4 || interior == 0) << "node " << item.node << ": " << used << " children";
   }
   for (size_t s = 0; s < seen.size(); ++s) ASSERT_EQ(seen[s], 1) << "leaf slot " << s;
-  EXPECT_EQ(max_depth, scene.bvh.depth);
+  EXPECT_EQ(leaves, scene.bvh.leaf_count);
+  EXPECT_EQ(max_leaf, scene.bvh.max_leaf_size);
+  EXPECT_EQ(max_depth, scene.wide_depth);
+  // The kernel's stack holds 3 entries per wide level: the wide tree is no deeper than the binary one.
+  EXPECT_LE(scene.wide_depth, scene.bvh.depth);
   EXPECT_LE(scene.bvh.depth, kBvhMaxDepth);
+  EXPECT_LT(scene.nodes.size(), scene.bvh.node_count / 2);
   // A SAH tree over 3000 scattered primitives is far cheaper than testing them all.
   EXPECT_LT(scene.bvh.sah_cost, 100.0);
   EXPECT_GT(scene.bvh.sah_cost, 1.0);
+}
+
+TEST(Bvh, SmallSceneIsOneLeafUnderTheRoot) {
+  DeviceScene scene = load_device_scene(write_temp_file("bvh-small.json", random_scene_json(1, 0, 5)));
+  ASSERT_EQ(scene.nodes.size(), 1u);
+  const Bvh4Node& root = scene.nodes[0];
+  EXPECT_EQ(root.child[0], PC_BVH4_LEAF | 0u);  // slot 0, one primitive
+  for (int i = 1; i < 4; ++i) EXPECT_GT(lane_box(root, i).first.x, lane_box(root, i).second.x);
 }
 
 TEST(Bvh, TraversalMatchesBruteForceOnRandomRays) {

@@ -60,15 +60,19 @@ typedef uint32_t pc_uint;
 #define PC_FLAG_FLIP_NORMAL 2u /* sphere: normal points to the centre */
 #define PC_FLAG_SMOOTH 4u      /* shading normals in the normals array */
 
-/* One BVH node, flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4) = 32 bytes.
- * Interior node (prim_count == 0): the left child is the next node, the right child is left_first.
- * Leaf: primitives [left_first, left_first + prim_count) of the primitive array. */
+/* The device's BVH: 4-wide, collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened
+ * depth-first. Child boxes are stored by coordinate so one float4 slab test checks all four:
+ * lo_x, lo_y, lo_z, hi_x, hi_y, hi_z (6 x 16) + child (16) = 112 bytes.
+ * child[i] is an interior node index, or a leaf reference (PC_BVH4_LEAF set): primitives
+ * [first, first + count) with first = (ref & ~PC_BVH4_LEAF) >> 4 and count = (ref & 15) + 1.
+ * An unused child slot has an empty box (lo = +inf, hi = -inf) that every slab test misses. */
+#define PC_BVH4_LEAF 0x80000000u
+#define PC_BVH4_MAX_LEAF_FIRST (1u << 27)
 typedef struct {
-  float lo[3];
-  pc_uint left_first;
-  float hi[3];
-  pc_uint prim_count;
-} BvhNode;
+  pc_float4 lo_x, lo_y, lo_z;
+  pc_float4 hi_x, hi_y, hi_z;
+  pc_uint child[4];
+} Bvh4Node;
 
 /* Geometry in BVH leaf order: 3 x 16 = 48 bytes.
  * Triangle: a, b, c are the vertices. Sphere: a.xyz is the centre, b.x the radius.
@@ -190,9 +194,10 @@ typedef struct {
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(BvhNode) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(PassStats) X(RayRecord) X(HitRecord)
+  X(Bvh4Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(PassStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
-  X(BvhNode, lo) X(BvhNode, left_first) X(BvhNode, hi) X(BvhNode, prim_count) X(Primitive, a)                \
+  X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
+  X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
@@ -207,7 +212,7 @@ typedef struct {
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
 #ifndef __OPENCL_VERSION__
-static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
+static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
 static_assert(sizeof(Material) == 80, "Material is 80 bytes");
