@@ -362,6 +362,8 @@ SCENES = {"cornell": "cornell-official.json", "glass-metal": "glass-metal.json"}
 
 def scene_paths(name, data_dir):
     if name in SCENES:
+        if name == "glass-metal" and not os.path.exists(scene_model.ICOSPHERE_MESH):
+            scene_model.write_icosphere_obj()  # the generated mesh the scene's spheres use
         return os.path.join(ROOT, "scenes", SCENES[name])
     if name == "terrain":
         path = os.path.join(data_dir, "terrain.json")

@@ -314,3 +314,29 @@ def shape_triangles(shape, sphere_level=5):
         return shape.positions, shape.triangles
     cx, cy, cz, r, flip = shape.sphere
     return icosphere((cx, cy, cz), r, sphere_level, flip)
+
+
+ICOSPHERE_MESH = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenes", "meshes",
+                                               "icosphere-4.obj"))
+
+
+def write_icosphere_obj(path=ICOSPHERE_MESH, level=4):
+    """Writes the unit icosphere mesh of scenes/glass-metal.json (generated, not committed); the same
+    level always gives the same file."""
+    positions, triangles = icosphere((0, 0, 0), 1, level)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path + ".partial", "w") as f:
+        f.write("# Unit sphere as triangles: the icosahedron subdivided %d times, vertices on the unit sphere,\n"
+                "# faces counter-clockwise seen from outside. Written by scripts/bench/scene_model.py.\n" % level)
+        for p in positions:
+            f.write("v %.9g %.9g %.9g\n" % p)
+        for a, b, c in triangles:
+            f.write("f %d %d %d\n" % (a + 1, b + 1, c + 1))
+    os.replace(path + ".partial", path)
+    return path
+
+
+if __name__ == "__main__":
+    # python3 scripts/bench/scene_model.py [OUT.obj]: writes the icosphere mesh of scenes/glass-metal.json.
+    import sys
+    print(write_icosphere_obj(*sys.argv[1:2]))

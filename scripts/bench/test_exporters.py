@@ -667,6 +667,7 @@ class DumpIntegrationTest(unittest.TestCase):
         self.assertAlmostEqual(light.positions[0][1], 548.7, places=3)
 
     def test_glass_metal_scene_is_the_cornell_box_with_a_glass_and_a_mirror_sphere(self):
+        sm.write_icosphere_obj()  # generated, not committed
         with tempfile.TemporaryDirectory() as tmp:
             scenes = {}
             for name in ("cornell-official", "glass-metal"):
