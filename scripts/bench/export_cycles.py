@@ -16,17 +16,53 @@ Mapping:
   max throughput), unbiased either way.
 - Off: adaptive sampling, denoising, clamping (direct and indirect), the light threshold, the light tree
   (Blender >= 3.5 only; Blender 3.4 has none).
-- Materials: Diffuse BSDF (roughness 0, Lambertian, reflects on both sides). Lights: Emission added to
-  the Diffuse BSDF; for a one-sided pathcl light a Mix shader driven by Geometry > Backfacing keeps only the
-  Diffuse BSDF on the back side (Cycles' mesh lights otherwise emit on both sides).
+- Materials (only those with the same BSDF model; the others are refused, naming the material). Cycles
+  turns the shading frame towards the viewer, so every BSDF reflects on both sides as in pathcl:
+  - `diffuse`: Diffuse BSDF with roughness 0 (Lambertian).
+  - `mirror`: Glossy BSDF with the Sharp distribution (a delta reflection of weight Color, no Fresnel).
+  - `dielectric`: a Mix shader whose factor is a Fresnel node (IOR = ior) between a Sharp Refraction BSDF
+    (Color = transmittance, IOR = ior) and a white Sharp Glossy BSDF. The Fresnel node computes the exact
+    dielectric Fresnel term with the index inverted on back faces (Backfacing: inside), as the Glass BSDF
+    does, so reflection has weight F and refraction (1 - F) transmittance, as in pathcl; the Glass BSDF
+    itself tints reflection too and gives refraction at least the weight 1e-4. Cycles does not scale
+    radiance by (n_i / n_t)^2 on refraction as pathcl does; along a path the factors cancel where it leaves
+    every object it entered before it reaches a light or a non-delta surface, so dielectrics are accepted
+    only on closed, consistently oriented meshes and spheres (with nothing inside them: not checked).
+  - `rough_conductor` is refused: the GGX Glossy BSDF of Blender 3.4 (alpha = Roughness^2, as pathcl) has
+    no conductor Fresnel term and the separable masking-shadowing G1(wi) G1(wo), pathcl's the
+    height-correlated 1 / (1 + Lambda(wi) + Lambda(wo)). oren_nayar, phong and plastic are refused too.
+  Caustics are on (reflective and refractive) and Filter Glossy is 0, so no specular path is cut or blurred.
+- Lights: Emission added to the material's BSDF; for a one-sided pathcl light a Mix shader driven by
+  Geometry > Backfacing keeps only the BSDF on the back side (Cycles' mesh lights otherwise emit on both
+  sides).
 - World: black. Meshes: flat shaded; spheres are tessellated (icosphere level 5; an approximation).
 """
 import json
 import os
 
-from scene_model import camera_frame, shape_triangles, write_ply
+from scene_model import UnsupportedMaterial, camera_frame, is_closed, refuse, shape_triangles, write_ply
 
 RR_DEPTH_PATHCL = 3
+
+REFUSED = {
+    "rough_conductor": "the GGX Glossy BSDF of Blender 3.4 (alpha = Roughness^2, as pathcl) has no conductor Fresnel"
+                       " term (its Color is a constant reflectance) and the separable masking-shadowing"
+                       " G1(wi) G1(wo), where pathcl's is the height-correlated 1 / (1 + Lambda(wi) + Lambda(wo));"
+                       " a smooth metal can be a mirror",
+    "oren_nayar": "the Diffuse BSDF with a roughness is Fujii's improved Oren-Nayar model, not pbrt-v3's qualitative"
+                  " one",
+    "phong": "Cycles has no normalised modified Phong BSDF",
+    "plastic": "no node can give the base pathcl's (1 - F(cos theta_i)) factor of the light direction",
+}
+
+
+def material_data(m):
+    """What the generated script needs to build material M (scene_model.Material) in Cycles."""
+    if m.type in ("diffuse", "mirror"):
+        return {"type": m.type, "reflectance": list(m.reflectance)}
+    if m.type == "dielectric":
+        return {"type": m.type, "ior": m.ior, "transmittance": list(m.transmittance)}
+    refuse(m, "Cycles", REFUSED[m.type])
 
 
 def max_bounces(pathcl_max_depth):
@@ -54,12 +90,18 @@ def scene_data(scene):
     for i, s in enumerate(scene.shapes):
         if s.sphere is None and not s.triangles:
             continue
+        m = scene.materials[s.material]
+        if m.type == "dielectric" and not is_closed(s):
+            raise UnsupportedMaterial(
+                "%s: %s (material %s): Cycles cannot render pathcl's dielectric exactly on an open or inconsistently"
+                " oriented mesh: Cycles does not scale radiance by (n_i / n_t)^2 on refraction as pathcl does, and the"
+                " factors cancel only on closed objects" % (scene.path, s.name, m.name))
         shapes.append({"name": s.name, "ply": "meshes/shape%d.ply" % i, "material": s.material,
                        "emission": list(s.emission), "two_sided": s.two_sided})
     return {
         "camera": {"matrix": camera_matrix(cam), "angle_y": math.radians(cam.fov_y_degrees),
                    "width": cam.width, "height": cam.height},
-        "materials": {m.name: {"reflectance": list(m.reflectance)} for m in scene.materials.values()},
+        "materials": {m.name: material_data(m) for m in scene.used_materials()},
         "shapes": shapes,
         "max_bounces": max_bounces(scene.max_depth),
         "min_light_bounces": min_light_bounces(),
@@ -115,38 +157,64 @@ def read_ply(path):
     return pos, idx
 
 
-def material(name, reflectance, emission, two_sided):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    nt = m.node_tree
+def surface(nt, m):
+    """The output socket of pathcl material M built from nodes (export_cycles.py gives the mapping)."""
+    if m["type"] == "diffuse":
+        diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+        diffuse.inputs["Color"].default_value = (*m["reflectance"], 1.0)
+        diffuse.inputs["Roughness"].default_value = 0.0
+        return diffuse.outputs["BSDF"]
+    if m["type"] == "mirror":
+        mirror = nt.nodes.new("ShaderNodeBsdfGlossy")
+        mirror.distribution = "SHARP"
+        mirror.inputs["Color"].default_value = (*m["reflectance"], 1.0)
+        return mirror.outputs["BSDF"]
+    if m["type"] == "dielectric":
+        fresnel = nt.nodes.new("ShaderNodeFresnel")
+        fresnel.inputs["IOR"].default_value = m["ior"]
+        refraction = nt.nodes.new("ShaderNodeBsdfRefraction")
+        refraction.distribution = "SHARP"
+        refraction.inputs["Color"].default_value = (*m["transmittance"], 1.0)
+        refraction.inputs["IOR"].default_value = m["ior"]
+        reflection = nt.nodes.new("ShaderNodeBsdfGlossy")
+        reflection.distribution = "SHARP"
+        reflection.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        mix = nt.nodes.new("ShaderNodeMixShader")
+        nt.links.new(fresnel.outputs["Fac"], mix.inputs["Fac"])
+        nt.links.new(refraction.outputs["BSDF"], mix.inputs[1])
+        nt.links.new(reflection.outputs["BSDF"], mix.inputs[2])
+        return mix.outputs["Shader"]
+    raise ValueError("unknown material type " + m["type"])
+
+
+def material(name, m, emission, two_sided):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
     nt.nodes.clear()
     out = nt.nodes.new("ShaderNodeOutputMaterial")
-    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (*reflectance, 1.0)
-    diffuse.inputs["Roughness"].default_value = 0.0
+    bsdf = surface(nt, m)
     if max(emission) <= 0:
-        nt.links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
-        return m
+        nt.links.new(bsdf, out.inputs["Surface"])
+        return mat
     strength = max(emission)
     emit = nt.nodes.new("ShaderNodeEmission")
     emit.inputs["Color"].default_value = (*[c / strength for c in emission], 1.0)
     emit.inputs["Strength"].default_value = strength
     front = nt.nodes.new("ShaderNodeAddShader")
-    nt.links.new(diffuse.outputs["BSDF"], front.inputs[0])
+    nt.links.new(bsdf, front.inputs[0])
     nt.links.new(emit.outputs["Emission"], front.inputs[1])
     if two_sided:
         nt.links.new(front.outputs["Shader"], out.inputs["Surface"])
-        return m
-    back = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    back.inputs["Color"].default_value = (*reflectance, 1.0)
-    back.inputs["Roughness"].default_value = 0.0
+        return mat
+    back = surface(nt, m)
     geometry = nt.nodes.new("ShaderNodeNewGeometry")
     mix = nt.nodes.new("ShaderNodeMixShader")
     nt.links.new(geometry.outputs["Backfacing"], mix.inputs["Fac"])
     nt.links.new(front.outputs["Shader"], mix.inputs[1])
-    nt.links.new(back.outputs["BSDF"], mix.inputs[2])
+    nt.links.new(back, mix.inputs[2])
     nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
-    return m
+    return mat
 
 
 def build(data, threads):
@@ -171,6 +239,8 @@ def build(data, threads):
     if hasattr(c, "use_light_tree"):
         c.use_light_tree = False
     c.blur_glossy = 0.0
+    c.caustics_reflective = True
+    c.caustics_refractive = True
     c.pixel_filter_type = "BOX"
     c.filter_width = 1.0
     sc.render.resolution_x = data["camera"]["width"]
@@ -209,8 +279,7 @@ def build(data, threads):
     sc.camera = cam
 
     for s in data["shapes"]:
-        m = data["materials"][s["material"]]
-        mat = material(s["name"], m["reflectance"], s["emission"], s["two_sided"])
+        mat = material(s["name"], data["materials"][s["material"]], s["emission"], s["two_sided"])
         pos, idx = read_ply(os.path.join(HERE, s["ply"]))
         nf = len(idx) // 3
         me = bpy.data.meshes.new(s["name"])

@@ -15,14 +15,24 @@ Mapping:
   first scattering, so at the 4th scattering event, as pathcl) with a cap (lower bound on the survival
   probability) of 0.
 - Off: clamping, light tracing (hybrid back/forward), the photon GI cache.
-- Materials: `matte` (Lambertian, both sides). Lights: `emission` on the matte with gain 1; LuxCore's
-  triangle lights emit on the front (counter-clockwise) side; a two-sided pathcl light gets a second,
-  reversed copy. Light strategy: POWER (pathcl picks lights in proportion to power). Spheres are
-  tessellated (icosphere level 5).
+- Materials (only those with the same BSDF model; the others are refused, naming the material):
+  - `diffuse`: `matte` (Lambertian, both sides).
+  - `mirror`: `mirror` with kr = reflectance (a delta reflection of weight kr, no Fresnel, both sides).
+  - `dielectric`: `glass` with interiorior = ior, exteriorior = 1, kr = 1, kt = transmittance: the exact
+    dielectric Fresnel term (FresnelTexture::CauchyEvaluate), the front (counter-clockwise) side outside,
+    and camera paths scaled by (n_i / n_t)^2 on refraction as in pathcl. LuxCore chooses reflection or
+    refraction with probability 1/2 each instead of F and 1 - F: the same image, other noise.
+  - `rough_conductor` is refused: `metal2` has GGX's distribution (alpha^2 = uroughness vroughness, so
+    pathcl's alpha = roughness^2 would be u = v = alpha) but Schlick's approximation of the masking term,
+    cos / (cos (1 - alpha^2) + alpha^2) per direction, not Smith's. oren_nayar, phong and plastic are
+    refused too.
+- Lights: `emission` with gain 1 on a copy of the material; LuxCore's triangle lights emit on the front
+  (counter-clockwise) side; a two-sided pathcl light gets a second, reversed copy. Light strategy: POWER
+  (pathcl picks lights in proportion to power). Spheres are tessellated (icosphere level 5).
 """
 import os
 
-from scene_model import camera_frame, shape_triangles, write_ply
+from scene_model import camera_frame, refuse, shape_triangles, write_ply
 
 RR_DEPTH_PATHCL = 3
 ROW_OFFSET_PIXELS = 1
@@ -40,6 +50,31 @@ def _vec(v):
     return "%.9g %.9g %.9g" % tuple(v)
 
 
+REFUSED = {
+    "rough_conductor": "its metal2 has the GGX distribution (alpha^2 = uroughness * vroughness) but Schlick's"
+                       " approximation of the masking-shadowing term, cos / (cos (1 - alpha^2) + alpha^2) per"
+                       " direction, not the height-correlated Smith term of pathcl",
+    "oren_nayar": "its roughmatte looks like the same qualitative Oren-Nayar formula (sigma in radians), but that"
+                  " mapping has not been checked against pathcl yet",
+    "phong": "LuxCore has no normalised modified Phong BSDF",
+    "plastic": "its glossy2 is Schlick's coating model (Schlick's Fresnel approximation and distribution), not"
+               " pathcl's exact-Fresnel coat",
+}
+
+
+def material_lines(m, name=None):
+    """The .scn lines of material M (scene_model.Material), named NAME (default: its own)."""
+    p = "scene.materials.%s." % (name or m.name)
+    if m.type == "diffuse":
+        return [p + 'type = "matte"', p + "kd = " + _vec(m.reflectance)]
+    if m.type == "mirror":
+        return [p + 'type = "mirror"', p + "kr = " + _vec(m.reflectance)]
+    if m.type == "dielectric":
+        return [p + 'type = "glass"', p + "kr = 1 1 1", p + "kt = " + _vec(m.transmittance),
+                p + "interiorior = %.9g" % m.ior, p + "exteriorior = 1"]
+    refuse(m, "LuxCore", REFUSED[m.type])
+
+
 def scene_properties(scene):
     """The .scn lines and the PLY files to write: ([line], [(ply_path, positions, triangles, flip)])."""
     cam = scene.camera
@@ -54,9 +89,8 @@ def scene_properties(scene):
              'scene.camera.screenwindow = %.9g %.9g %.9g %.9g' % (-aspect, aspect, -1 - shift, 1 - shift),
              'scene.camera.cliphither = 1e-06',
              'scene.camera.clipyon = 1e+30']
-    for m in scene.materials.values():
-        lines += ['scene.materials.%s.type = "matte"' % m.name,
-                  'scene.materials.%s.kd = %s' % (m.name, _vec(m.reflectance))]
+    for m in scene.used_materials():
+        lines += material_lines(m)
     plys = []
     for i, s in enumerate(scene.shapes):
         if s.sphere is None and not s.triangles:
@@ -64,10 +98,8 @@ def scene_properties(scene):
         mat = s.material
         if s.is_emitter:  # one emitting copy of the material per light colour
             mat = "%s_emit%d" % (s.material, i)
-            m = scene.materials[s.material]
-            lines += ['scene.materials.%s.type = "matte"' % mat,
-                      'scene.materials.%s.kd = %s' % (mat, _vec(m.reflectance)),
-                      'scene.materials.%s.emission = %s' % (mat, _vec(s.emission)),
+            lines += material_lines(scene.materials[s.material], mat)
+            lines += ['scene.materials.%s.emission = %s' % (mat, _vec(s.emission)),
                       'scene.materials.%s.emission.gain = 1 1 1' % mat,
                       'scene.materials.%s.emission.power = 0' % mat,
                       'scene.materials.%s.emission.efficency = 0' % mat]

@@ -9,8 +9,18 @@ Mapping:
   pathcl once more than 3 scattering events were made (depth + 1 > 3); Mitsuba's starts when its depth
   counter (scattering events so far) is >= rr_depth, so rr_depth = 4. Mitsuba caps the survival
   probability at 0.95 where pathcl uses min(1, max throughput): unbiased either way, the variance differs.
-- Materials: pathcl's diffuse reflects on both sides; Mitsuba's `diffuse` only on the front, so it is
-  wrapped in `twosided`.
+- Materials (only those with the same BSDF model; the others are refused, naming the material):
+  - `diffuse`: `diffuse`. pathcl's reflects on both sides, Mitsuba's only on the front, so it is wrapped
+    in `twosided`.
+  - `mirror`: `conductor` with material "none" (complex index 0 + 1i: Fresnel reflectance exactly 1)
+    and `specular_reflectance` = reflectance, in `twosided`.
+  - `dielectric`: `dielectric` with int_ior = ior and ext_ior = 1 (Mitsuba's default ext_ior is air,
+    1.000277), `specular_transmittance` = transmittance, reflection untinted. Exact Fresnel, the normal's
+    side is the outside (the counter-clockwise side, as pathcl's front side), and both scale radiance by
+    (n_i / n_t)^2 on refraction. Not in `twosided` (the two sides differ).
+  - `rough_conductor` is refused: `roughconductor` with distribution ggx has the same D, alpha and
+    conductor Fresnel term, but its masking-shadowing is the separable G1(wi) G1(wo), pathcl's the
+    height-correlated 1 / (1 + Lambda(wi) + Lambda(wo)). oren_nayar, phong and plastic are refused too.
 - Lights: `area` emitters emit on the front side (the counter-clockwise side, as in pathcl); a
   `two_sided` pathcl light becomes two shapes, the second with reversed winding.
 - Meshes: `ply` with `face_normals` (flat shading, as pathcl without `smooth`); spheres are analytic.
@@ -18,7 +28,7 @@ Mapping:
 import os
 from xml.sax.saxutils import quoteattr
 
-from scene_model import camera_frame, write_ply
+from scene_model import camera_frame, refuse, write_ply
 
 RR_DEPTH_PATHCL = 3
 
@@ -33,6 +43,40 @@ def rr_depth():
 
 def _vec(v):
     return "%.9g, %.9g, %.9g" % tuple(v)
+
+
+REFUSED = {
+    "rough_conductor": "its roughconductor (ggx) has the same distribution, alpha and conductor Fresnel term, but"
+                       " the separable masking-shadowing G1(wi) G1(wo), where pathcl's is the height-correlated"
+                       " 1 / (1 + Lambda(wi) + Lambda(wo))",
+    "oren_nayar": "Mitsuba 3 has no Oren-Nayar BSDF",
+    "phong": "Mitsuba 3 has no normalised modified Phong BSDF",
+    "plastic": "its plastic and roughplastic scale the base by 1 / ior^2 and return the light reflected inside"
+               " the coat; pathcl's plastic does neither",
+}
+
+
+def bsdf_lines(m):
+    """The <bsdf> element of material M (scene_model.Material), id "mat-NAME"."""
+    mid = quoteattr("mat-" + m.name)
+    if m.type == "diffuse":
+        return ['  <bsdf type="twosided" id=%s>' % mid,
+                '    <bsdf type="diffuse"><rgb name="reflectance" value="%s"/></bsdf>' % _vec(m.reflectance),
+                '  </bsdf>']
+    if m.type == "mirror":
+        return ['  <bsdf type="twosided" id=%s>' % mid,
+                '    <bsdf type="conductor">',
+                '      <string name="material" value="none"/>',
+                '      <rgb name="specular_reflectance" value="%s"/>' % _vec(m.reflectance),
+                '    </bsdf>',
+                '  </bsdf>']
+    if m.type == "dielectric":
+        return ['  <bsdf type="dielectric" id=%s>' % mid,
+                '    <float name="int_ior" value="%.9g"/>' % m.ior,
+                '    <float name="ext_ior" value="1"/>',
+                '    <rgb name="specular_transmittance" value="%s"/>' % _vec(m.transmittance),
+                '  </bsdf>']
+    refuse(m, "Mitsuba", REFUSED[m.type])
 
 
 def export(scene, out_dir, name="scene"):
@@ -70,10 +114,8 @@ def export(scene, out_dir, name="scene"):
          '      <rfilter type="box"/>',
          '    </film>',
          '  </sensor>']
-    for m in scene.materials.values():
-        x += ['  <bsdf type="twosided" id=%s>' % quoteattr("mat-" + m.name),
-              '    <bsdf type="diffuse"><rgb name="reflectance" value="%s"/></bsdf>' % _vec(m.reflectance),
-              '  </bsdf>']
+    for m in scene.used_materials():
+        x += bsdf_lines(m)
     for i, s in enumerate(scene.shapes):
         emitter = ('    <emitter type="area"><rgb name="radiance" value="%s"/></emitter>' % _vec(s.emission)
                    if s.is_emitter else None)

@@ -357,9 +357,14 @@ class SceneInfo:
     pass
 
 
+SCENES = {"cornell": "cornell-official.json", "glass-metal": "glass-metal.json"}  # in scenes/
+
+
 def scene_paths(name, data_dir):
-    if name == "cornell":
-        return os.path.join(ROOT, "scenes", "cornell-official.json")
+    if name in SCENES:
+        if name == "glass-metal" and not os.path.exists(scene_model.ICOSPHERE_MESH):
+            scene_model.write_icosphere_obj()  # the generated mesh the scene's spheres use
+        return os.path.join(ROOT, "scenes", SCENES[name])
     if name == "terrain":
         path = os.path.join(data_dir, "terrain.json")
         if not os.path.exists(path):
@@ -370,7 +375,8 @@ def scene_paths(name, data_dir):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenes", default="cornell,terrain", help="cornell, terrain or scene JSON paths")
+    ap.add_argument("--scenes", default="cornell,glass-metal,terrain",
+                    help="cornell, glass-metal, terrain or scene JSON paths")
     ap.add_argument("--renderers", default=",".join(RENDERERS))
     ap.add_argument("--budgets", default="5,30,120", help="render time budgets in seconds")
     ap.add_argument("--runs", type=int, default=3, help="runs per figure (medians are reported)")
@@ -399,7 +405,8 @@ def main():
     for scene_name in render_scenes + [s for s in ray_scenes if s not in render_scenes]:
         sc = SceneInfo()
         sc.name, sc.json = scene_name, scene_paths(scene_name, data_dir)
-        work = os.path.join(args.work, scene_name)
+        # A scene given as a path works in a directory named after its file.
+        work = os.path.join(args.work, os.path.splitext(os.path.basename(scene_name))[0])
         os.makedirs(work, exist_ok=True)
         sc.dump = os.path.join(work, "scene.obj")
         scene_model.dump_scene_obj(PATHCL, sc.json, sc.dump)

@@ -23,10 +23,37 @@ class Camera:
     height: int
 
 
+# The material types the exporters read (docs/scene-format.md); each exporter maps those its peer renders
+# with the same BSDF model and refuses the others (refuse below).
+MATERIAL_TYPES = ("diffuse", "oren_nayar", "phong", "mirror", "dielectric", "rough_conductor", "plastic")
+
+
 @dataclass
 class Material:
+    """A pathcl material. The fields its type uses are set (pathcl's defaults filled in), the others are None;
+    oren_nayar, phong and plastic keep only their type (no peer renders them exactly)."""
     name: str
-    reflectance: tuple
+    type: str = "diffuse"
+    place: str = ""             # "scene.json: materials.NAME", for error messages
+    reflectance: tuple = None   # diffuse, mirror
+    ior: float = None           # dielectric: the inside's index; the front side faces index 1
+    transmittance: tuple = None  # dielectric: tints each refraction, not reflection
+    roughness: float = None     # rough_conductor: GGX alpha = roughness^2
+    eta: tuple = None           # rough_conductor: complex index eta + i k per channel
+    k: tuple = None
+
+    @property
+    def alpha(self):
+        return self.roughness ** 2
+
+
+class UnsupportedMaterial(ValueError):
+    """A peer has no BSDF that is the same model as this pathcl material."""
+
+
+def refuse(material, peer, why):
+    raise UnsupportedMaterial("%s: %s cannot render pathcl's %s material exactly: %s"
+                              % (material.place, peer, material.type, why))
 
 
 @dataclass
@@ -56,6 +83,11 @@ class Scene:
 
     def triangle_count(self):
         return sum(len(s.triangles) for s in self.shapes)
+
+    def used_materials(self):
+        """The materials some shape uses, in the order of the scene's `materials` (others never render)."""
+        used = {s.material for s in self.shapes}
+        return [m for name, m in self.materials.items() if name in used]
 
 
 # --- vectors --------------------------------------------------------------------------------------
@@ -136,6 +168,63 @@ def read_dump(path):
     return meshes, spheres
 
 
+def _colour(m, key, default, place):
+    value = m.get(key, default)
+    if not isinstance(value, (list, tuple)):
+        raise ValueError("%s.%s: the exporters take [r, g, b] colours, not textures" % (place, key))
+    return tuple(float(x) for x in value)
+
+
+def read_material(name, m, place):
+    """A Material from its scene JSON object, with pathcl's defaults and conversions (scene/scene_load.cpp)."""
+    t = m["type"]
+    if t not in MATERIAL_TYPES:
+        raise ValueError("%s.type: unknown material type %r" % (place, t))
+    mat = Material(name, t, place)
+    if t == "diffuse":
+        mat.reflectance = _colour(m, "reflectance", (0.5, 0.5, 0.5), place)
+    elif t == "mirror":
+        mat.reflectance = _colour(m, "reflectance", (1, 1, 1), place)
+    elif t == "dielectric":
+        mat.ior = float(m["ior"])
+        mat.transmittance = _colour(m, "transmittance", (1, 1, 1), place)
+    elif t == "rough_conductor":
+        mat.roughness = float(m["roughness"])
+        if "specular" in m:
+            # eta = 1 and k = 2 sqrt(r / (1 - r)) reflect exactly r at normal incidence (r at most 0.9999).
+            r = [min(c, 0.9999) for c in _colour(m, "specular", None, place)]
+            mat.eta, mat.k = (1.0, 1.0, 1.0), tuple(2 * math.sqrt(c / (1 - c)) for c in r)
+        else:
+            mat.eta, mat.k = _colour(m, "eta", None, place), _colour(m, "k", None, place)
+    return mat
+
+
+def conductor_reflectance(cos_i, eta, k):
+    """Fresnel reflectance of a conductor of complex index eta + i k from index 1 (kernels/fresnel.cl)."""
+    cos2 = cos_i * cos_i
+    sin2 = 1 - cos2
+    t0 = eta * eta - k * k - sin2
+    a2b2 = math.sqrt(max(t0 * t0 + 4 * eta * eta * k * k, 0))
+    a = math.sqrt(max(0.5 * (a2b2 + t0), 0))
+    t1, t2 = a2b2 + cos2, 2 * cos_i * a
+    rs = (t1 - t2) / (t1 + t2)
+    t3, t4 = cos2 * a2b2 + sin2 * sin2, t2 * sin2
+    rp = rs * (t3 - t4) / (t3 + t4)
+    return 0.5 * (rp + rs)
+
+
+def is_closed(shape):
+    """True for a sphere, or a mesh whose every edge borders exactly two triangles that run through it in
+    opposite directions (closed and consistently oriented)."""
+    if shape.sphere is not None:
+        return True
+    edges = {}
+    for a, b, c in shape.triangles:
+        for e in ((a, b), (b, c), (c, a)):
+            edges[e] = edges.get(e, 0) + 1
+    return bool(edges) and all(n == 1 and edges.get((b, a)) == 1 for (a, b), n in edges.items())
+
+
 def dump_scene_obj(pathcl, scene_path, out_path):
     """Runs `pathcl info SCENE --dump-obj OUT`."""
     subprocess.run([pathcl, "info", scene_path, "--dump-obj", out_path], check=True, stdout=subprocess.DEVNULL)
@@ -148,11 +237,8 @@ def load(scene_path, dump_path):
     c = j["camera"]
     camera = Camera(tuple(c["position"]), tuple(c["look_at"]), tuple(c.get("up", (0, 1, 0))),
                     float(c.get("fov_y_degrees", 40)), int(c["width"]), int(c["height"]))
-    materials = {}
-    for name, m in j["materials"].items():
-        if m["type"] != "diffuse":
-            raise ValueError("%s: materials.%s: the exporters know only diffuse materials" % (scene_path, name))
-        materials[name] = Material(name, tuple(m.get("reflectance", (0.5, 0.5, 0.5))))
+    materials = {name: read_material(name, m, "%s: materials.%s" % (scene_path, name))
+                 for name, m in j["materials"].items()}
     meshes, spheres = read_dump(dump_path)
     shapes = []
     for i, s in enumerate(j["shapes"]):
@@ -228,3 +314,29 @@ def shape_triangles(shape, sphere_level=5):
         return shape.positions, shape.triangles
     cx, cy, cz, r, flip = shape.sphere
     return icosphere((cx, cy, cz), r, sphere_level, flip)
+
+
+ICOSPHERE_MESH = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenes", "meshes",
+                                               "icosphere-4.obj"))
+
+
+def write_icosphere_obj(path=ICOSPHERE_MESH, level=4):
+    """Writes the unit icosphere mesh of scenes/glass-metal.json (generated, not committed); the same
+    level always gives the same file."""
+    positions, triangles = icosphere((0, 0, 0), 1, level)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path + ".partial", "w") as f:
+        f.write("# Unit sphere as triangles: the icosahedron subdivided %d times, vertices on the unit sphere,\n"
+                "# faces counter-clockwise seen from outside. Written by scripts/bench/scene_model.py.\n" % level)
+        for p in positions:
+            f.write("v %.9g %.9g %.9g\n" % p)
+        for a, b, c in triangles:
+            f.write("f %d %d %d\n" % (a + 1, b + 1, c + 1))
+    os.replace(path + ".partial", path)
+    return path
+
+
+if __name__ == "__main__":
+    # python3 scripts/bench/scene_model.py [OUT.obj]: writes the icosphere mesh of scenes/glass-metal.json.
+    import sys
+    print(write_icosphere_obj(*sys.argv[1:2]))
