@@ -86,8 +86,8 @@ def main():
             "rays_per_second_kernel": statistics.median(s["rays_per_second_kernel"] for s in samples),
             "rays_per_second_wall": statistics.median(s["rays_per_second_wall"] for s in samples),
         }
-    results["terrain"] = {k: samples[0][k] for k in ("triangles", "bvh_nodes", "bvh_depth", "sah_cost", "bvh_build_ms",
-                                                     "scene_load_ms")}
+    results["terrain"] = {k: samples[0][k] for k in ("triangles", "bvh_nodes", "bvh_depth", "bvh4_nodes",
+                                                     "bvh4_depth", "sah_cost", "bvh_build_ms", "scene_load_ms")}
 
     with open(os.path.join(OUT, "results.json"), "w") as f:
         json.dump(results, f, indent=2)
@@ -98,7 +98,8 @@ def main():
           f"{results['kernel_build_ms_cold_all_features']:.0f} ms")
     print(f"Cornell box {c['width']}x{c['height']}, {c['spp']} spp: {c['samples_per_second'] / 1e6:.3f} Msamples/s, "
           f"{c['rays_per_second'] / 1e6:.2f} Mrays/s (median of {args.runs})")
-    print(f"terrain: {t['triangles']} triangles, {t['bvh_nodes']} nodes, SAH cost {t['sah_cost']:.2f}, "
+    print(f"terrain: {t['triangles']} triangles, {t['bvh_nodes']} nodes (4-wide: {t['bvh4_nodes']}), "
+          f"SAH cost {t['sah_cost']:.2f}, "
           f"BVH build {t['bvh_build_ms']:.0f} ms (load + clean-up {t['scene_load_ms']:.0f} ms)")
     for name in ("camera_rays", "diffuse_bounce_rays"):
         r = results[name]
