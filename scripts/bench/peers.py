@@ -12,7 +12,8 @@ Run through scripts/bench/peers (it installs the peers). For each scene:
 4. Each renderer's mean image (its final series images averaged over runs) against the reference.
 5. Traversal: `pathcl rays` against build/embree_rays (1 and 2 threads) on camera and diffuse-bounce rays.
 relMSE everywhere: mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), as `pathcl compare`.
-Writes bench/results/<date>-<machine>.json and regenerates docs/benchmarks.md (report.py).
+Writes bench/results/<date>T<hhmm>-<machine>.json and regenerates docs/benchmarks.md (report.py) from every
+results file there, each scene from the newest run that has it.
 """
 import argparse
 import datetime
@@ -386,7 +387,7 @@ def main():
     ap.add_argument("--ref-cycles-batches", type=int, default=8, help="Cycles reference renders (seeds)")
     ap.add_argument("--rays", default="terrain", help="scenes for the traversal benchmark ('' for none)")
     ap.add_argument("--work", default=os.path.join(ROOT, "bench", "out", "peers"))
-    ap.add_argument("--results", help="JSON to write (default bench/results/<date>-<machine>.json)")
+    ap.add_argument("--results", help="JSON to write (default bench/results/<date>T<hhmm>-<machine>.json)")
     ap.add_argument("--no-docs", action="store_true", help="do not regenerate docs/benchmarks.md")
     args = ap.parse_args()
 
@@ -517,15 +518,19 @@ def main():
                 entry["errors"]["rays"] = str(e)
     results["wall_seconds"] = time.time() - started
 
-    path = args.results or os.path.join(ROOT, "bench", "results", "%s-%s.json" % (datetime.date.today().isoformat(),
-                                                                                  machine))
+    # One file per run (date and time of day): docs/benchmarks.md takes each scene from the newest run.
+    path = args.results or os.path.join(ROOT, "bench", "results", "%s-%s.json" % (
+        datetime.datetime.now().strftime("%Y-%m-%dT%H%M"), machine))
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
         json.dump(results, f, indent=1)
     log("results: " + os.path.relpath(path, ROOT))
     if not args.no_docs:
         import report
-        report.write(path, os.path.join(ROOT, "docs", "benchmarks.md"))
+        results_dir = os.path.join(ROOT, "bench", "results")
+        report.write(sorted(os.path.join(results_dir, f) for f in os.listdir(results_dir) if f.endswith(".json")) +
+                     ([path] if os.path.dirname(os.path.abspath(path)) != results_dir else []),
+                     os.path.join(ROOT, "docs", "benchmarks.md"))
 
 
 def _cpu_name():
