@@ -10,6 +10,7 @@ typedef struct {
   float3 wi;     /* local frame */
   float3 weight; /* f cos / pdf: the factor the path throughput takes */
   float pdf;     /* solid-angle density; for a delta lobe the probability of having chosen it */
+  float eta2;    /* (n_t / n_i)^2 where weight was divided by it on refraction, else 1 (for roulette) */
   bool delta;    /* wi came from a delta lobe: no light sampling can reach it, no MIS */
 } BsdfSample;
 
@@ -101,6 +102,7 @@ inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   bool flipped = wo.z < 0.0f && bsdf_is_two_sided(m);
   if (flipped) wo = flip_z(wo);
   bool ok = false;
+  s->eta2 = 1.0f;
 #define PC_SAMPLE_CASE(type, name) case type: ok = name##_sample(m, wo, u, s); break;
   switch (m.type) {
     PC_BSDF_TYPES(PC_SAMPLE_CASE)

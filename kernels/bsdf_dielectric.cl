@@ -22,6 +22,7 @@ inline bool dielectric_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   float3 n = (float3)(0.0f, 0.0f, entering ? 1.0f : -1.0f);
   if (!refract_dir(wo, n, eta, &s->wi)) return false; /* unreachable: f == 1 there */
   s->weight = m.color.xyz / (eta * eta);
+  s->eta2 = eta * eta;
   s->pdf = 1.0f - f;
   return true;
 }

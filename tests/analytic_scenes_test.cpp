@@ -67,7 +67,10 @@ TEST(AnalyticScenes, MirrorInsideEmittingEnclosureShowsExactlyItsReflectance) {
 
 // Glass neither creates nor absorbs light: inside an enclosure of radiance 1 it shows 1. A cube traps
 // light by total internal reflection at its side faces, so paths run deep; the radiance scaling on the
-// way in (1/eta^2) must cancel on the way out.
+// way in (1/eta^2) must cancel on the way out. Russian roulette judges the throughput without that
+// scaling (pbrt-v4's etaScale), which is 1 along every path here, so no path is cut and every pixel is 1
+// up to float rounding; roulette on the scaled throughput would cut paths inside the glass and make
+// pixels vary by about 1e-3.
 TEST(AnalyticScenes, GlassInsideEmittingEnclosureShowsOne) {
   std::string cube = R"({"type": "triangles", "positions": [[-1,-1,-1],[1,-1,-1],[1,1,-1],[-1,1,-1],[-1,-1,1],[1,-1,1],[1,1,1],[-1,1,1]],
     "indices": [[0,2,1],[0,3,2],[4,5,6],[4,6,7],[0,1,5],[0,5,4],[3,7,6],[3,6,2],[0,4,7],[0,7,3],[1,2,6],[1,6,5]],
@@ -75,12 +78,7 @@ TEST(AnalyticScenes, GlassInsideEmittingEnclosureShowsOne) {
   DeviceScene scene = scene_from("glass.json", enclosure_scene(R"("glass": {"type": "dielectric", "ior": 1.5})", cube));
   RenderResult r = render_scene(scene, 64, 100, 3);
   PixelStats p = red_channel(r.film);
-  MeanStd m = mean_and_error(p.mean);
-  EXPECT_NEAR(m.mean, 1.0, 4 * m.std_error);
-  EXPECT_LT(m.std_error, 0.01);
-  EXPECT_GT(m.std_error, 0.0);  // Russian roulette inside the glass makes single samples vary
-  // Per pixel, within 5 of its own standard errors.
-  for (size_t i = 0; i < p.mean.size(); ++i) EXPECT_NEAR(p.mean[i], 1.0, 5 * p.error[i] + 1e-6) << "pixel " << i;
+  for (size_t i = 0; i < p.mean.size(); ++i) ASSERT_NEAR(p.mean[i], 1.0, 1e-5) << "pixel " << i;
 }
 
 // Irradiance at x (normal +z) from a uniform Lambertian polygon of radiance L (Lambert 1760):
