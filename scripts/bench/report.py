@@ -46,15 +46,29 @@ def plot(scene_name, entry, png):
 
 
 def latest_per_scene(results_paths):
-    """{scene: (run, entry, path)} from the newest run (by its date) that has the scene."""
+    """{scene: [(run, entry, path), ...]}: the renders from the newest run (by its date) that rendered the scene,
+    then the traversal figures from the newest run that traced its rays (the same run or another). Each
+    entry keeps only its part, so one run's renders are not shown with another's ray figures as one run."""
     runs = []
     for path in results_paths:
         with open(path) as f:
             runs.append((json.load(f), path))
-    scenes = {}
+    parts = {}
     for run, path in sorted(runs, key=lambda rp: rp[0]["date"]):
         for name, entry in run["scenes"].items():
-            scenes[name] = (run, entry, path)
+            for part, has in (("renders", bool(entry.get("renderers"))), ("rays", bool(entry.get("rays")))):
+                if has:
+                    parts.setdefault(name, {})[part] = (run, entry, path)
+    scenes = {}
+    for name, p in parts.items():
+        if len(p) == 2 and p["renders"][2] == p["rays"][2]:  # both from one run
+            scenes[name] = [p["renders"]]
+            continue
+        scenes[name] = []
+        for part, (run, entry, path) in sorted(p.items(), key=lambda kv: kv[0] != "renders"):
+            errors = {k: v for k, v in entry.get("errors", {}).items() if (k == "rays") == (part == "rays")}
+            only = dict(entry, rays=None, errors=errors) if part == "renders" else dict(entry, renderers={}, errors=errors)
+            scenes[name].append((run, only, path))
     return scenes
 
 
@@ -62,7 +76,7 @@ def write(results_paths, md_path):
     if isinstance(results_paths, str):
         results_paths = [results_paths]
     scenes = latest_per_scene(results_paths)
-    newest = max((run for run, _, _ in scenes.values()), key=lambda r: r["date"])
+    newest = max((run for picks in scenes.values() for run, _, _ in picks), key=lambda r: r["date"])
     img_dir = os.path.join(os.path.dirname(md_path), "img")
     os.makedirs(img_dir, exist_ok=True)
     out = ["# Benchmarks against the peers",
@@ -75,84 +89,85 @@ def write(results_paths, md_path):
            "relMSE = mean over pixels and channels of (x − ref)² / (ref² + 0.01), as `pathcl compare`. Figures are"
            " medians over the runs; the renderers ran one after another in A B C … A B C … order.",
            ""]
-    for scene_name, (res, e, path) in scenes.items():
-        out += ["## %s" % scene_name, "",
-                "Run of %s, `%s`: `%s`" % (res["date"], os.path.relpath(path, ROOT), res["command"]), ""]
-        if "renderers" in e and e["renderers"]:
-            out += ["`%s`: %d triangles, %d×%d pixels, pathcl max_depth %d." % (e["json"], e["triangles"], e["width"],
-                                                                               e["height"], e["max_depth"]), ""]
-            ref = e.get("reference", {})
-            chk = ref.get("cycles_check", {})
-            out += ["**Reference**: pathcl, %s spp (%.0f s)." % (ref.get("spp"), ref.get("seconds", 0))]
-            if "pass_fraction" in chk:
-                out += ["Per-pixel z-test against the mean of %d Cycles renders of %d spp (|z| threshold %.2f, Student t"
-                        " with %d degrees of freedom, two-sided p = 0.001, a pixel fails if any channel does): **%.2f %%**"
-                        " of %d pixels pass (%s; ≥ 99 %% required). Image means: pathcl %s, Cycles %s."
-                        % (chk["cycles_renders"], chk["spp_each"], chk["threshold"], chk["cycles_renders"] - 1,
-                           100 * chk["pass_fraction"], chk["pixels"], "accepted" if chk["accepted"] else "NOT accepted",
-                           ", ".join("%.5f" % x for x in chk["mean_reference"]),
-                           ", ".join("%.5f" % x for x in chk["mean_cycles"]))]
-            elif chk:
-                out += ["Cycles check failed: `%s`" % chk.get("error")]
-            out += [""]
-            b = e.get("pathcl_build", {})
-            if b:
-                out += ["pathcl set-up: kernel build %.0f ms cold (pathcl's and PoCL's caches off), %.0f ms from the cache;"
-                        " BVH build %.2f ms; scene load and clean-up %.1f ms; device %s." %
-                        (b["kernel_build_ms_cold"], b["kernel_build_ms_cached"], b["bvh_build_ms"], b["scene_load_ms"],
-                         b["device"]), ""]
-            budgets = sorted({k for r in e["renderers"].values() for k in r["budgets"]}, key=float)
-            head = ["renderer", "samples/s", "set-up s", "time to 1e-2 (s)", "time to 1e-3 (s)"]
-            head += ["relMSE @ %s s render" % k for k in budgets] + ["relMSE @ %s s incl. set-up" % k for k in budgets]
-            out += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-            for name, r in sorted(e["renderers"].items()):
-                row = [name, "%.0f" % r["samples_per_second"], "%.2f" % r["setup_seconds"]]
-                for t in ("1e-02", "0.001"):
-                    v = r["time_to_%s" % ("0.01" if t == "1e-02" else t)]
-                    row.append(fmt(v["render_seconds"], "%.2f") + (" (extrap.)" if v["extrapolated"] else ""))
-                row += [fmt(r["budgets"][k]["render_only_relmse"], "%.3g") for k in budgets]
-                row += [fmt(r["budgets"][k]["with_setup_relmse_from_series"], "%.3g") for k in budgets]
-                out.append("| " + " | ".join(row) + " |")
-            out += ["",
-                    "Time to an error is the render time at which the median convergence series (spp %s) crosses it,"
-                    " interpolated log-log; \"extrap.\" extends the last point with relMSE ∝ 1/time. \"render\" budgets"
-                    " are separate runs with each renderer's own time limit (pathcl `--time`, Cycles `time_limit`,"
-                    " Mitsuba `timeout`, LuxCore `batch.halttime`); \"incl. set-up\" reads the series at budget − set-up"
-                    " time. Set-up: pathcl scene load + BVH + kernel build (cached kernel); Cycles: Blender start, scene"
-                    " build and sync (process wall time minus render time); Mitsuba: Python start and scene load;"
-                    " LuxCore: Python start and session start." % res["settings"]["series"], ""]
-            png = "benchmarks-%s.png" % scene_name
-            plot(scene_name, e, os.path.join(img_dir, png))
-            out += ["![relMSE against time, %s](img/%s)" % (scene_name, png), ""]
-            out += ["**Mean image against the reference** (each renderer's final series images, averaged over runs):",
-                    "", "| renderer | relative mean difference R, G, B | z of the difference R, G, B | relMSE floor / per-run relMSE |",
-                    "|---|---|---|---|"]
-            for name, r in sorted(e["renderers"].items()):
-                a = r["agreement"]
-                floor = a.get("relmse_floor")
-                out.append("| %s | %s | %s | %s |" % (
-                    name, ", ".join("%+.2e" % x for x in a["relative_mean_difference"]),
-                    ", ".join("%+.2f" % x for x in a["mean_difference_z"]),
-                    "–" if floor is None else "%.3f" % (floor / a["relmse_per_run"])))
-            out += ["",
-                    "The floor is the part of relMSE that more samples would not remove, from the runs' images"
-                    " (as in docs/accuracy.md): (S·relMSE(mean image) − mean relMSE) / (S − 1); near 0 means the"
-                    " renderer converges to the reference, near 1 that its error is all bias.", ""]
-        if e.get("rays"):
-            out += ["**Traversal** (%s, %d triangles; rays/s, median of %d runs × 5 repetitions; pathcl: kernel time on"
-                    " the PoCL device with both cores; Embree: rtcIntersect1, 1 and 2 threads):" % (
-                        e["json"], e["triangles"], len(next(iter(e["rays"].values()))["pathcl"]["runs"])), "",
-                    "| rays | count | pathcl | Embree 1 thread | Embree 2 threads | pathcl / Embree 2 | same primitive as pathcl |",
-                    "|---|---|---|---|---|---|---|"]
-            for name, r in e["rays"].items():
-                p, e1, e2 = (r[k]["rays_per_second"] for k in ("pathcl", "embree-1", "embree-2"))
-                out.append("| %s | %d | %.2f M | %.2f M | %.2f M | %.2f | %.6f |" % (
-                    name, r["rays"], p / 1e6, e1 / 1e6, e2 / 1e6, p / e2, r["embree_same_primitive_fraction"]))
-            out += [""]
-        if e.get("errors"):
-            out += ["**Could not run here** (exact errors):", ""]
-            out += ["- `%s`: `%s`" % (k, v.replace("`", "'")[:600]) for k, v in e["errors"].items()]
-            out += [""]
+    for scene_name, picks in scenes.items():
+        out += ["## %s" % scene_name, ""]
+        for res, e, path in picks:
+            out += ["Run of %s, `%s`: `%s`" % (res["date"], os.path.relpath(path, ROOT), res["command"]), ""]
+            if "renderers" in e and e["renderers"]:
+                out += ["`%s`: %d triangles, %d×%d pixels, pathcl max_depth %d." % (e["json"], e["triangles"], e["width"],
+                                                                                   e["height"], e["max_depth"]), ""]
+                ref = e.get("reference", {})
+                chk = ref.get("cycles_check", {})
+                out += ["**Reference**: pathcl, %s spp (%.0f s)." % (ref.get("spp"), ref.get("seconds", 0))]
+                if "pass_fraction" in chk:
+                    out += ["Per-pixel z-test against the mean of %d Cycles renders of %d spp (|z| threshold %.2f, Student t"
+                            " with %d degrees of freedom, two-sided p = 0.001, a pixel fails if any channel does): **%.2f %%**"
+                            " of %d pixels pass (%s; ≥ 99 %% required). Image means: pathcl %s, Cycles %s."
+                            % (chk["cycles_renders"], chk["spp_each"], chk["threshold"], chk["cycles_renders"] - 1,
+                               100 * chk["pass_fraction"], chk["pixels"], "accepted" if chk["accepted"] else "NOT accepted",
+                               ", ".join("%.5f" % x for x in chk["mean_reference"]),
+                               ", ".join("%.5f" % x for x in chk["mean_cycles"]))]
+                elif chk:
+                    out += ["Cycles check failed: `%s`" % chk.get("error")]
+                out += [""]
+                b = e.get("pathcl_build", {})
+                if b:
+                    out += ["pathcl set-up: kernel build %.0f ms cold (pathcl's and PoCL's caches off), %.0f ms from the cache;"
+                            " BVH build %.2f ms; scene load and clean-up %.1f ms; device %s." %
+                            (b["kernel_build_ms_cold"], b["kernel_build_ms_cached"], b["bvh_build_ms"], b["scene_load_ms"],
+                             b["device"]), ""]
+                budgets = sorted({k for r in e["renderers"].values() for k in r["budgets"]}, key=float)
+                head = ["renderer", "samples/s", "set-up s", "time to 1e-2 (s)", "time to 1e-3 (s)"]
+                head += ["relMSE @ %s s render" % k for k in budgets] + ["relMSE @ %s s incl. set-up" % k for k in budgets]
+                out += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+                for name, r in sorted(e["renderers"].items()):
+                    row = [name, "%.0f" % r["samples_per_second"], "%.2f" % r["setup_seconds"]]
+                    for t in ("1e-02", "0.001"):
+                        v = r["time_to_%s" % ("0.01" if t == "1e-02" else t)]
+                        row.append(fmt(v["render_seconds"], "%.2f") + (" (extrap.)" if v["extrapolated"] else ""))
+                    row += [fmt(r["budgets"][k]["render_only_relmse"], "%.3g") for k in budgets]
+                    row += [fmt(r["budgets"][k]["with_setup_relmse_from_series"], "%.3g") for k in budgets]
+                    out.append("| " + " | ".join(row) + " |")
+                out += ["",
+                        "Time to an error is the render time at which the median convergence series (spp %s) crosses it,"
+                        " interpolated log-log; \"extrap.\" extends the last point with relMSE ∝ 1/time. \"render\" budgets"
+                        " are separate runs with each renderer's own time limit (pathcl `--time`, Cycles `time_limit`,"
+                        " Mitsuba `timeout`, LuxCore `batch.halttime`); \"incl. set-up\" reads the series at budget − set-up"
+                        " time. Set-up: pathcl scene load + BVH + kernel build (cached kernel); Cycles: Blender start, scene"
+                        " build and sync (process wall time minus render time); Mitsuba: Python start and scene load;"
+                        " LuxCore: Python start and session start." % res["settings"]["series"], ""]
+                png = "benchmarks-%s.png" % scene_name
+                plot(scene_name, e, os.path.join(img_dir, png))
+                out += ["![relMSE against time, %s](img/%s)" % (scene_name, png), ""]
+                out += ["**Mean image against the reference** (each renderer's final series images, averaged over runs):",
+                        "", "| renderer | relative mean difference R, G, B | z of the difference R, G, B | relMSE floor / per-run relMSE |",
+                        "|---|---|---|---|"]
+                for name, r in sorted(e["renderers"].items()):
+                    a = r["agreement"]
+                    floor = a.get("relmse_floor")
+                    out.append("| %s | %s | %s | %s |" % (
+                        name, ", ".join("%+.2e" % x for x in a["relative_mean_difference"]),
+                        ", ".join("%+.2f" % x for x in a["mean_difference_z"]),
+                        "–" if floor is None else "%.3f" % (floor / a["relmse_per_run"])))
+                out += ["",
+                        "The floor is the part of relMSE that more samples would not remove, from the runs' images"
+                        " (as in docs/accuracy.md): (S·relMSE(mean image) − mean relMSE) / (S − 1); near 0 means the"
+                        " renderer converges to the reference, near 1 that its error is all bias.", ""]
+            if e.get("rays"):
+                out += ["**Traversal** (%s, %d triangles; rays/s, median of %d runs × 5 repetitions; pathcl: kernel time on"
+                        " the PoCL device with both cores; Embree: rtcIntersect1, 1 and 2 threads):" % (
+                            e["json"], e["triangles"], len(next(iter(e["rays"].values()))["pathcl"]["runs"])), "",
+                        "| rays | count | pathcl | Embree 1 thread | Embree 2 threads | pathcl / Embree 2 | same primitive as pathcl |",
+                        "|---|---|---|---|---|---|---|"]
+                for name, r in e["rays"].items():
+                    p, e1, e2 = (r[k]["rays_per_second"] for k in ("pathcl", "embree-1", "embree-2"))
+                    out.append("| %s | %d | %.2f M | %.2f M | %.2f M | %.2f | %.6f |" % (
+                        name, r["rays"], p / 1e6, e1 / 1e6, e2 / 1e6, p / e2, r["embree_same_primitive_fraction"]))
+                out += [""]
+            if e.get("errors"):
+                out += ["**Could not run here** (exact errors):", ""]
+                out += ["- `%s`: `%s`" % (k, v.replace("`", "'")[:600]) for k, v in e["errors"].items()]
+                out += [""]
     notes = os.path.join(os.path.dirname(md_path), "benchmarks-notes.md")
     if os.path.exists(notes):
         with open(notes) as f:
