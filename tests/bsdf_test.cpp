@@ -114,29 +114,12 @@ Samples sample_bsdf(const Material& m, const glm::dvec3& wo, uint32_t seed, size
 // Integrates bsdf_pdf(m, wo, .) over bins on the device.
 BinIntegrator bsdf_pdf_integrator(const Material& m, const glm::dvec3& wo, const SphereBinning& binning) {
   return [m, wo, binning](const std::vector<uint32_t>& bins, int order) {
-    ClContext& cl = test_device();
-    std::vector<double> nd, wd;
-    gauss_legendre01(order, nd, wd);
-    ClBuffer mat = upload(cl, std::vector<Material>{m}), b = upload(cl, bins), frame = upload(cl, binning.device_params()),
-             nodes = upload(cl, std::vector<float>(nd.begin(), nd.end())),
-             weights = upload(cl, std::vector<float>(wd.begin(), wd.end()));
-    ClBuffer out(cl, CL_MEM_WRITE_ONLY, bins.size() * 2 * sizeof(float));
+    ClBuffer mat = upload(test_device(), std::vector<Material>{m});
     ClKernel k(sampling_test_program().kernel("bsdf_pdf_bins"));
     k.arg(0, mat.mem);
     k.arg(1, f4(wo.x, wo.y, wo.z));
-    k.arg(2, frame.mem);
-    k.arg(3, b.mem);
-    k.arg(4, cl_uint(order));
-    k.arg(5, nodes.mem);
-    k.arg(6, weights.mem);
-    k.arg(7, out.mem);
-    run_kernel(cl, k.k, bins.size());
-    return bin_values(read_buffer<float>(cl, out, 2 * bins.size()));
+    return run_pdf_bins_kernel(k, 2, binning, bins, order);
   };
-}
-
-bool close_rel(double a, double b, double tol) {
-  return std::abs(a - b) <= tol * std::max({std::abs(a), std::abs(b), 1e-30});
 }
 
 struct Chi2Case {

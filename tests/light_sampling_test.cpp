@@ -88,29 +88,11 @@ LightSamples sample_lights(const SceneBuffers& sb, const glm::dvec3& x, uint32_t
 
 BinIntegrator light_pdf_integrator(const SceneBuffers& sb, const glm::dvec3& x, const SphereBinning& binning) {
   return [&sb, x, binning](const std::vector<uint32_t>& bins, int order) {
-    ClContext& cl = test_device();
-    std::vector<double> nd, wd;
-    gauss_legendre01(order, nd, wd);
-    ClBuffer frame = upload(cl, binning.device_params()), b = upload(cl, bins),
-             nodes = upload(cl, std::vector<float>(nd.begin(), nd.end())),
-             weights = upload(cl, std::vector<float>(wd.begin(), wd.end()));
-    ClBuffer out(cl, CL_MEM_WRITE_ONLY, bins.size() * 2 * sizeof(float));
     ClKernel k(sampling_test_program().kernel("light_pdf_bins"));
     cl_uint a = sb.set(k);
     k.arg(a++, f4(x));
-    k.arg(a++, frame.mem);
-    k.arg(a++, b.mem);
-    k.arg(a++, cl_uint(order));
-    k.arg(a++, nodes.mem);
-    k.arg(a++, weights.mem);
-    k.arg(a++, out.mem);
-    run_kernel(cl, k.k, bins.size());
-    return bin_values(read_buffer<float>(cl, out, 2 * bins.size()));
+    return run_pdf_bins_kernel(k, a, binning, bins, order);
   };
-}
-
-bool close_rel(double a, double b, double tol) {
-  return std::abs(a - b) <= tol * std::max({std::abs(a), std::abs(b), 1e-30});
 }
 
 struct LightCase {

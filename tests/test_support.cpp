@@ -127,3 +127,22 @@ std::string icosphere_json(float radius, int subdivisions, bool inward) {
   out << "]";
   return out.str();  // the caller adds the material etc. and the closing brace
 }
+
+BinValues run_pdf_bins_kernel(ClKernel& k, cl_uint first, const SphereBinning& binning,
+                              const std::vector<uint32_t>& bins, int order) {
+  ClContext& cl = test_device();
+  std::vector<double> nd, wd;
+  gauss_legendre01(order, nd, wd);
+  ClBuffer frame = upload(cl, binning.device_params()), b = upload(cl, bins),
+           nodes = upload(cl, std::vector<float>(nd.begin(), nd.end())),
+           weights = upload(cl, std::vector<float>(wd.begin(), wd.end()));
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, bins.size() * 2 * sizeof(float));
+  k.arg(first, frame.mem);
+  k.arg(first + 1, b.mem);
+  k.arg(first + 2, cl_uint(order));
+  k.arg(first + 3, nodes.mem);
+  k.arg(first + 4, weights.mem);
+  k.arg(first + 5, out.mem);
+  run_kernel(cl, k.k, bins.size());
+  return bin_values(read_buffer<float>(cl, out, 2 * bins.size()));
+}

@@ -1,5 +1,7 @@
 // Shared helpers of the device tests: the test device, temporary scene files, running pathcl.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -8,6 +10,7 @@
 #include "runtime/kernel_program.h"
 #include "runtime/renderer.h"
 #include "scene/device_scene.h"
+#include "chi2.h"
 
 // The device named by $PATHCL_TEST_DEVICE (default: pathcl's own default), one per test process.
 ClContext& test_device();
@@ -48,3 +51,14 @@ MeanStd mean_and_error(const std::vector<double>& values);
 // JSON text of a closed triangle mesh approximating a sphere (icosphere with `subdivisions`), CCW
 // faces with normals pointing inwards when `inward` (for a camera inside).
 std::string icosphere_json(float radius, int subdivisions, bool inward);
+
+// |a - b| within tol relative to the larger magnitude.
+inline bool close_rel(double a, double b, double tol) {
+  return std::abs(a - b) <= tol * std::max({std::abs(a), std::abs(b), 1e-30});
+}
+
+// Runs one of kernels/tests_sampling.cl's *_pdf_bins kernels whose arguments before `first` are set:
+// from `first` on it takes the binning, the bins, the Gauss-Legendre order, nodes and weights, and the
+// output (integral, edge flag) per bin.
+BinValues run_pdf_bins_kernel(ClKernel& k, cl_uint first, const SphereBinning& binning,
+                              const std::vector<uint32_t>& bins, int order);
