@@ -56,24 +56,30 @@ inline RayPrecomp ray_precompute(float3 d) {
   return p;
 }
 
-/* Robust slab test (pbrt-v4): the far distance is widened by 1 + 2 gamma(3) to cover rounding.
- * The near and far planes are chosen by the sign of inv_d, not by comparing distances, so that the NaN
- * of an axis-parallel ray starting exactly on a slab plane (0 * inf) is ignored by fmax/fmin: that axis
- * then does not limit the interval, and a ray lying in a box face counts as inside.
- * Returns the entry distance, or INFINITY when the box is missed within [tmin, tmax]. */
-inline float ray_box(float3 o, float3 inv_d, float tmin, float tmax, float3 lo, float3 hi) {
-  float3 t_lo = (lo - o) * inv_d, t_hi = (hi - o) * inv_d;
-  int3 negative = inv_d < 0.0f;
-  float3 tn = select(t_lo, t_hi, negative), tf = select(t_hi, t_lo, negative);
-  /* Comparisons rather than fmin/fmax: a NaN compares false and is skipped, and they compile to plain
-   * min/max instructions. */
-  float enter = tn.x > tmin ? tn.x : tmin;
-  enter = tn.y > enter ? tn.y : enter;
-  enter = tn.z > enter ? tn.z : enter;
-  float exit = tf.x < tmax ? tf.x : tmax;
-  exit = tf.y < exit ? tf.y : exit;
-  exit = tf.z < exit ? tf.z : exit;
-  return enter <= exit * (1.0f + 2.0f * error_gamma(3)) ? enter : INFINITY;
+/* Robust slab test (pbrt-v4) of four boxes at once, given by coordinate (lo_x holds the four boxes'
+ * lower x): the far distance is widened by 1 + 2 gamma(3) to cover rounding. The near and far planes
+ * are chosen by the sign of inv_d (`negative`), not by comparing distances, so that the NaN of an
+ * axis-parallel ray starting exactly on a slab plane (0 * inf) is skipped: comparisons rather than
+ * fmin/fmax, as a NaN compares false (and they compile to plain min/max instructions). That axis then
+ * does not limit the interval, and a ray lying in a box face counts as inside. An empty box (lo = +inf,
+ * hi = -inf) is always missed. Returns each box's entry distance, or INFINITY when it is missed within
+ * [tmin, tmax]. */
+inline float4 ray_boxes(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
+                        float4 lo_z, float4 hi_x, float4 hi_y, float4 hi_z) {
+  float4 lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;
+  float4 ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;
+  float4 lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;
+  float4 nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;
+  float4 ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;
+  float4 nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;
+  float4 enter = (float4)(tmin), exit = (float4)(tmax);
+  enter = select(enter, nx, nx > enter);
+  enter = select(enter, ny, ny > enter);
+  enter = select(enter, nz, nz > enter);
+  exit = select(exit, fx, fx < exit);
+  exit = select(exit, fy, fy < exit);
+  exit = select(exit, fz, fz < exit);
+  return select((float4)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));
 }
 
 /* Watertight ray/triangle test. Edge functions of a shared edge are computed from the same sheared
@@ -162,24 +168,9 @@ __attribute__((always_inline)) inline bool intersect_prim(__global const Primiti
   return true;
 }
 
-/* Slab tests of a wide node's four child boxes at once, with ray_box's rules: planes chosen by the sign
- * of inv_d, NaN comparisons skipped, the far distance widened by 1 + 2 gamma(3). Returns each child's
- * entry distance, or INFINITY where it is missed within [tmin, tmax] (also for empty slots). */
+/* Entry distances of a wide node's four children (INFINITY for a miss or an unused slot). */
 inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, int3 negative, float tmin, float tmax) {
-  float4 lx = (n->lo_x - o.x) * inv_d.x, hx = (n->hi_x - o.x) * inv_d.x;
-  float4 ly = (n->lo_y - o.y) * inv_d.y, hy = (n->hi_y - o.y) * inv_d.y;
-  float4 lz = (n->lo_z - o.z) * inv_d.z, hz = (n->hi_z - o.z) * inv_d.z;
-  float4 nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;
-  float4 ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;
-  float4 nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;
-  float4 enter = (float4)(tmin), exit = (float4)(tmax);
-  enter = select(enter, nx, nx > enter);
-  enter = select(enter, ny, ny > enter);
-  enter = select(enter, nz, nz > enter);
-  exit = select(exit, fx, fx < exit);
-  exit = select(exit, fy, fy < exit);
-  exit = select(exit, fz, fz < exit);
-  return select((float4)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));
+  return ray_boxes(o, inv_d, negative, tmin, tmax, n->lo_x, n->lo_y, n->lo_z, n->hi_x, n->hi_y, n->hi_z);
 }
 
 /* Orders two (distance, reference) pairs, nearer first, without branches. */

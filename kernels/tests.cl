@@ -17,13 +17,23 @@ __kernel void layout_report(__global uint* out) {
   PC_LAYOUT_FIELDS(PC_WRITE_OFFSET)
 }
 
-/* boxes: lo.xyz, hi.xyz per box (6 floats); rays as RayRecord; out: entry distance or +inf. */
+/* boxes: lo.xyz, hi.xyz per box (6 floats); rays as RayRecord; out: entry distance or +inf.
+ * Through the traversal's four-box test: box i goes into lane i % 4 and the other lanes hold empty boxes,
+ * as unused node slots do; an empty lane that is not missed makes the output NaN. */
 __kernel void ray_box_test(__global const RayRecord* rays, __global const float* boxes, __global float* out) {
   uint i = get_global_id(0);
   __global const float* r = (__global const float*)(rays + i);
   float3 d = vload3(0, r + 4);
   RayPrecomp rp = ray_precompute(d);
-  out[i] = ray_box(vload3(0, r), rp.inv_d, r[3], r[7], vload3(0, boxes + 6 * i), vload3(0, boxes + 6 * i + 3));
+  float3 lo = vload3(0, boxes + 6 * i), hi = vload3(0, boxes + 6 * i + 3);
+  int4 lane = (int4)(0, 1, 2, 3) == (int4)(i % 4u);
+  float4 e = ray_boxes(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7], select((float4)(INFINITY), (float4)(lo.x), lane),
+                       select((float4)(INFINITY), (float4)(lo.y), lane), select((float4)(INFINITY), (float4)(lo.z), lane),
+                       select((float4)(-INFINITY), (float4)(hi.x), lane), select((float4)(-INFINITY), (float4)(hi.y), lane),
+                       select((float4)(-INFINITY), (float4)(hi.z), lane));
+  float mine = i % 4u == 0u ? e.s0 : i % 4u == 1u ? e.s1 : i % 4u == 2u ? e.s2 : e.s3;
+  bool others_missed = all(select(e, (float4)(INFINITY), lane) == (float4)(INFINITY));
+  out[i] = others_missed ? mine : NAN;
 }
 
 /* One triangle (9 floats) per ray; out as HitRecord with prim 0 for a hit. */
