@@ -178,10 +178,7 @@ namespace {
 void set_lane(pc_float4& v, int lane, float x) { (lane == 0 ? v.x : lane == 1 ? v.y : lane == 2 ? v.z : v.w) = x; }
 
 float node_half_area(const BvhNode& n) {
-  Aabb box;
-  box.grow(glm::vec3(n.lo[0], n.lo[1], n.lo[2]));
-  box.grow(glm::vec3(n.hi[0], n.hi[1], n.hi[2]));
-  return box.half_area();
+  return Aabb{{n.lo[0], n.lo[1], n.lo[2]}, {n.hi[0], n.hi[1], n.hi[2]}}.half_area();
 }
 
 struct Collapser {
@@ -189,13 +186,14 @@ struct Collapser {
   Bvh4& out;
 
   // Fills out.nodes[wide] with the subtrees of binary node `b`: its children, opened further (largest
-  // interior child first) while fewer than four. A binary leaf at the root becomes the only child.
+  // interior child first) while fewer than four. A binary leaf at the root becomes the only child; the
+  // empty scene's root (neither leaf nor interior) gives a node with no children.
   void fill(uint32_t wide, uint32_t b, uint32_t depth) {
     out.depth = std::max(out.depth, depth + 1);
     std::vector<uint32_t> kids;
-    if (binary[b].prim_count > 0 || binary[b].left_first == 0) {
-      kids.push_back(b);
-    } else {
+    if (binary[b].prim_count > 0) {
+      kids = {b};
+    } else if (binary[b].left_first != 0) {
       kids = {b + 1, binary[b].left_first};
       while (kids.size() < 4) {
         int open = -1;
@@ -211,7 +209,7 @@ struct Collapser {
     }
     Bvh4Node node;
     for (int lane = 0; lane < 4; ++lane) {
-      bool used = lane < int(kids.size()) && !(binary[kids[lane]].prim_count == 0 && binary[kids[lane]].left_first == 0);
+      bool used = lane < int(kids.size());
       const BvhNode* k = used ? &binary[kids[lane]] : nullptr;
       set_lane(node.lo_x, lane, used ? k->lo[0] : INFINITY);
       set_lane(node.lo_y, lane, used ? k->lo[1] : INFINITY);
@@ -224,7 +222,7 @@ struct Collapser {
     }
     out.nodes[wide] = node;
     for (int lane = 0; lane < int(kids.size()); ++lane) {
-      if (binary[kids[lane]].prim_count > 0 || binary[kids[lane]].left_first == 0) continue;
+      if (binary[kids[lane]].prim_count > 0) continue;
       uint32_t child = uint32_t(out.nodes.size());
       out.nodes.emplace_back();
       out.nodes[wide].child[lane] = child;
