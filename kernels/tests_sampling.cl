@@ -8,6 +8,7 @@
 #include "shared/types.h"
 #include "math.cl"
 #include "rng.cl"
+#include "sampler.cl"
 #include "sampling.cl"
 #include "scene.cl"
 #include "camera.cl"
@@ -199,6 +200,22 @@ __kernel void light_pdf_bins(PC_SCENE_PARAMS, float4 x4, __global const float4* 
   }
   out[2 * b] = sum;
   out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
+}
+
+/* ---- Samplers ---- */
+
+/* sample4(h, key, group) for samples 0 .. n - 1 of one pixel: item i is sample i. */
+__kernel void sampler_points_test(__constant const SceneHeader* h, uint pixel, uint seed, uint group,
+                                  __global float4* out) {
+  uint i = get_global_id(0);
+  SampleKey key = {pixel, i, seed};
+  out[i] = sample4(h, key, group);
+}
+
+/* The unscrambled Sobol bits of index[i] in dimensions 1, 2 and 3. */
+__kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
+  uint i = get_global_id(0);
+  for (uint d = 1u; d <= 3u; ++d) out[3u * i + d - 1u] = sobol_bits(index[i], d);
 }
 
 /* ---- Camera ---- */

@@ -16,6 +16,8 @@ struct RenderOptions {
   uint32_t max_depth = 8;
   uint32_t seed = 1;
   uint32_t rr_depth = 3;       // Russian roulette only on paths longer than this many scattering events
+  // Independent samples here, so that a film's per-pixel variance is an unbiased estimate of its error
+  // (the statistical tests rely on it); a scene file's default is sobol (scene/scene_description.h).
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
   uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 adapts launches to 50-100 ms
   double max_pass_seconds = 0;  // > 0: shrink passes that take longer (keeps a time budget's overrun small)

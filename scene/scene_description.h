@@ -9,6 +9,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "kernels/shared/types.h"
 #include "scene/mesh_clean.h"
 
 // Positions are world coordinates in double until build_device_scene makes them camera-relative floats.
@@ -60,7 +61,7 @@ struct RenderSettings {
   uint32_t spp = 16;
   uint32_t max_depth = 8;
   uint32_t seed = 1;
-  uint32_t sampler = 0;  // PC_SAMPLER_* of kernels/shared/types.h
+  uint32_t sampler = PC_SAMPLER_SOBOL;  // PC_SAMPLER_* of kernels/shared/types.h
 };
 
 // "independent", "stratified", "sobol", "halton" -> PC_SAMPLER_*; false for an unknown name.
