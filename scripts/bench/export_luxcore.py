@@ -8,7 +8,8 @@ Mapping:
   what the screen window puts at row r - 1 (measured on the Cornell box: the light's lower edge one row
   lower than in pathcl, Mitsuba and Cycles, columns unchanged), so the window is moved down by one pixel
   (2 / height in screen units) to compensate (ROW_OFFSET_PIXELS). Film filter: BOX of width 0.5
-  (LuxCore's filter width is a radius: one pixel wide in all). Sampler: RANDOM.
+  (LuxCore's filter width is a radius: one pixel wide in all). Sampler: RANDOM (on the Cornell box at
+  64 spp SOBOL had relMSE 1.67e-3 against RANDOM's 2.69e-3 but took 1.9x the time, so RANDOM is faster to an error).
 - Depth: LuxCore's `path.pathdepth.total` counts scattering events like pathcl's max_depth (1 = direct
   light only), so it is the same number, as are the diffuse, glossy and specular limits. Russian
   roulette: `path.russianroulette.depth` 4 (LuxCore starts at that path depth, counted from 1 at the

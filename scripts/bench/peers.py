@@ -240,8 +240,18 @@ def median_points(series_runs):
             for spp, ps in sorted(by_spp.items())]
 
 
+def error_curve(series_points, budgets):
+    """relMSE against render seconds: the series' median points and each time budget's median render
+    (render seconds, relMSE), in order of time. Budgets reach further than the series on slow scenes."""
+    pts = [dict(render_seconds=p["render_seconds"], relmse=p["relmse"], source="%d spp" % p["spp"])
+           for p in series_points]
+    pts += [dict(render_seconds=b["render_seconds"], relmse=b["render_only_relmse"], source="budget")
+            for b in budgets if b.get("render_seconds") and b.get("render_only_relmse")]
+    return sorted(pts, key=lambda p: p["render_seconds"])
+
+
 def time_to(points, target):
-    """Render seconds to reach relMSE TARGET: log-log interpolation in the series, else extrapolated from
+    """Render seconds to reach relMSE TARGET: log-log interpolation in the curve, else extrapolated from
     its last point with relMSE proportional to 1 / time. Returns (seconds, extrapolated)."""
     pts = [p for p in points if p["relmse"] > 0 and p["render_seconds"] > 0]
     for a, b in zip(pts, pts[1:]):
@@ -445,8 +455,10 @@ def main():
         sc.reference = os.path.join(work, "reference.exr")
         log("[%s] reference: pathcl %d spp" % (scene_name, args.ref_spp))
         st = os.path.join(work, "reference.json")
+        # Independent samples: their per-pixel variance is the reference's true error, as the z-tests need
+        # (a low-discrepancy sampler's variance overstates it and would make the tests lenient).
         r, wall = run([PATHCL, "render", sc.json, "--spp", str(args.ref_spp), "--variance", "--seed", "1000", "-q",
-                       "-o", sc.reference, "--stats", st])
+                       "--sampler", "independent", "-o", sc.reference, "--stats", st])
         if r.returncode:
             raise SystemExit("reference render failed: " + error_tail(r))
         ref, ref_var = read_rgb(sc.reference, variance=True)
@@ -495,10 +507,6 @@ def main():
             setup = statistics.median(s["setup_seconds"] for s in series[name])
             res = dict(series_runs=series[name], median_points=pts, setup_seconds=setup,
                        samples_per_second=statistics.median(s["samples_per_second"] for s in series[name]))
-            for target in (1e-2, 1e-3):
-                t, extrapolated = time_to(pts, target)
-                res["time_to_%g" % target] = dict(render_seconds=t, with_setup_seconds=None if t is None else t + setup,
-                                                  extrapolated=extrapolated)
             res["budgets"] = {}
             for b in budgets:
                 runs_b = budget[name][b]
@@ -506,8 +514,16 @@ def main():
                     render_only_relmse=statistics.median(x["relmse"] for x in runs_b) if runs_b else None,
                     render_seconds=statistics.median(x["render_seconds"] for x in runs_b) if runs_b else None,
                     wall_seconds=statistics.median(x["wall_seconds"] for x in runs_b) if runs_b else None,
-                    runs=runs_b,
-                    with_setup_relmse_from_series=relmse_at(pts, b - setup))
+                    runs=runs_b)
+            # The error curve: the series' points and the budget renders' (median time, median relMSE).
+            curve = error_curve(pts, res["budgets"].values())
+            res["error_curve"] = curve
+            for b in budgets:
+                res["budgets"]["%g" % b]["with_setup_relmse_from_series"] = relmse_at(curve, b - setup)
+            for target in (1e-2, 1e-3):
+                t, extrapolated = time_to(curve, target)
+                res["time_to_%g" % target] = dict(render_seconds=t, with_setup_seconds=None if t is None else t + setup,
+                                                  extrapolated=extrapolated)
             res["agreement"] = agreement([s["image"] for s in series[name]], ref, ref_var)
             entry["renderers"][name] = res
         if scene_name in ray_scenes:
