@@ -17,6 +17,7 @@ results file there, each scene from the newest run that has it.
 """
 import argparse
 import datetime
+import glob
 import json
 import math
 import os
@@ -181,6 +182,12 @@ class PeerProcess(Renderer):
             export_luxcore.export(scene.model, export_dir, self.variant)
             self.target = export_dir
         self.env = dict(os.environ)
+        if self.name == "mitsuba-llvm_ad_rgb":
+            # Dr.Jit's JIT with the system's LLVM 15 aborts on this machine ("Cannot select ... fminimum");
+            # it runs with LLVM 19 (Debian's libllvm19, installed by scripts/bench/peers).
+            found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM*.so*"))
+            if found:
+                self.env["DRJIT_LIBLLVM_PATH"] = found[0]
         if self.name == "luxcore-PATHCPU":
             # pyluxcore 2.11 aborts ("double free or corruption") while enumerating PoCL's OpenCL device;
             # PATHCPU needs no OpenCL, so it runs with no OpenCL driver visible.
