@@ -404,7 +404,8 @@ def main():
     ap.add_argument("--ref-cycles-batches", type=int, default=8, help="Cycles reference renders (seeds)")
     ap.add_argument("--rays", default="terrain", help="scenes for the traversal benchmark ('' for none)")
     ap.add_argument("--work", default=os.path.join(ROOT, "bench", "out", "peers"))
-    ap.add_argument("--results", help="JSON to write (default bench/results/<date>T<hhmm>-<machine>.json)")
+    ap.add_argument("--results", help="JSON to write (default bench/results/<date>T<hhmm>-<machine>.json; a run of"
+                    " some renderers only belongs in bench/results/supplementary/)")
     ap.add_argument("--no-docs", action="store_true", help="do not regenerate docs/benchmarks.md")
     args = ap.parse_args()
 
@@ -550,10 +551,7 @@ def main():
     log("results: " + os.path.relpath(path, ROOT))
     if not args.no_docs:
         import report
-        results_dir = os.path.join(ROOT, "bench", "results")
-        report.write(sorted(os.path.join(results_dir, f) for f in os.listdir(results_dir) if f.endswith(".json")) +
-                     ([path] if os.path.dirname(os.path.abspath(path)) != results_dir else []),
-                     os.path.join(ROOT, "docs", "benchmarks.md"))
+        report.write_all()
 
 
 def _cpu_name():

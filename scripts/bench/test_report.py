@@ -1,9 +1,12 @@
-"""report.py's choice of runs: each scene from the newest results file that has it (standard library only)."""
+"""report.py's choice of runs (each scene from the newest results file that has it) and peers.py's error curve
+and times to an error (standard library only)."""
 import json
+import math
 import os
 import tempfile
 import unittest
 
+import peers
 import report
 
 
@@ -38,6 +41,32 @@ class LatestPerSceneTest(unittest.TestCase):
         self.assertEqual(self.scenes_of(runs), {"terrain": [(1, ["renderers"], "a.json"), (2, ["rays"], "b.json")]})
         del runs["b.json"]  # both parts from one run: shown once, whole
         self.assertEqual(self.scenes_of(runs), {"terrain": [(1, ["rays", "renderers"], "a.json")]})
+
+
+class ErrorCurveTest(unittest.TestCase):
+    SERIES = [dict(spp=1, render_seconds=0.1, relmse=0.4), dict(spp=4, render_seconds=0.4, relmse=0.1),
+              dict(spp=16, render_seconds=1.6, relmse=0.025)]
+
+    def test_budget_renders_extend_the_series_in_order_of_time(self):
+        budgets = [dict(render_seconds=5.0, render_only_relmse=0.008), dict(render_seconds=30.0, render_only_relmse=0.0013),
+                   dict(render_seconds=None, render_only_relmse=None)]  # a renderer without budget runs
+        curve = peers.error_curve(self.SERIES, budgets)
+        self.assertEqual([p["render_seconds"] for p in curve], [0.1, 0.4, 1.6, 5.0, 30.0])
+        self.assertEqual([p["source"] for p in curve], ["1 spp", "4 spp", "16 spp", "budget", "budget"])
+        # 1e-2 lies between 1.6 s (0.025) and 5 s (0.008): interpolated log-log, not extrapolated
+        t, extrapolated = peers.time_to(curve, 1e-2)
+        self.assertFalse(extrapolated)
+        f = math.log(0.025 / 1e-2) / math.log(0.025 / 0.008)
+        self.assertAlmostEqual(t, math.exp(math.log(1.6) + f * math.log(5.0 / 1.6)))
+        # 1e-3 is past the last point: relMSE proportional to 1 / time from it
+        t, extrapolated = peers.time_to(curve, 1e-3)
+        self.assertTrue(extrapolated)
+        self.assertAlmostEqual(t, 30.0 * 1.3)
+
+    def test_series_alone_extrapolates_where_budgets_would_have_measured(self):
+        t, extrapolated = peers.time_to(peers.error_curve(self.SERIES, []), 1e-2)
+        self.assertTrue(extrapolated)
+        self.assertAlmostEqual(t, 1.6 * 2.5)
 
 
 if __name__ == "__main__":
