@@ -188,6 +188,14 @@ class PeerProcess(Renderer):
             found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM*.so*"))
             if found:
                 self.env["DRJIT_LIBLLVM_PATH"] = found[0]
+        if self.name == "luxcore-PATHOCL":
+            # pyluxcore's wheel brings TBB's malloc proxy, which takes over malloc only once pyluxcore is
+            # loaded: memory PoCL and LLVM allocated before is then freed by the other allocator ("double free
+            # or corruption" while enumerating the PoCL device). Preloaded, it serves the process from the start.
+            libs = sorted(glob.glob(os.path.join(sys.prefix, "lib", "python3*", "site-packages", "pyluxcore.libs",
+                                                 "libtbbmalloc*.so*")), key=lambda p: "proxy" in p)  # allocator, proxy
+            if libs:
+                self.env["LD_PRELOAD"] = " ".join(libs)
         if self.name == "luxcore-PATHCPU":
             # pyluxcore 2.11 aborts ("double free or corruption") while enumerating PoCL's OpenCL device;
             # PATHCPU needs no OpenCL, so it runs with no OpenCL driver visible.
