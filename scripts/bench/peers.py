@@ -297,6 +297,59 @@ def relmse_at(points, seconds):
     return pts[-1]["relmse"] * pts[-1]["render_seconds"] / seconds
 
 
+def reference_noise_relmse(ref, ref_var):
+    """The reference's own expected relMSE against the true image, mean of var / (ref^2 + 0.01): a render's
+    relMSE against the reference exceeds its relMSE against the true image by this much (independent noise)."""
+    import numpy as np
+    return float(np.mean(ref_var / (ref * ref + 0.01)))
+
+
+def summarize(series_runs, budget_runs, noise):
+    """One renderer's figures from its series runs and {budget seconds: [budget runs]}. relMSE figures are
+    against the true image: relMSE against the reference minus NOISE (reference_noise_relmse)."""
+    pts = [dict(p, relmse=p["relmse"] - noise, relmse_vs_reference=p["relmse"]) for p in median_points(series_runs)]
+    setup = statistics.median(s["setup_seconds"] for s in series_runs)
+    res = dict(series_runs=series_runs, median_points=pts, setup_seconds=setup, reference_noise_relmse=noise,
+               samples_per_second=statistics.median(s["samples_per_second"] for s in series_runs), budgets={})
+    for b, runs_b in sorted(budget_runs.items()):
+        res["budgets"]["%g" % b] = dict(
+            render_only_relmse=statistics.median(x["relmse"] for x in runs_b) - noise if runs_b else None,
+            render_seconds=statistics.median(x["render_seconds"] for x in runs_b) if runs_b else None,
+            wall_seconds=statistics.median(x["wall_seconds"] for x in runs_b) if runs_b else None,
+            runs=runs_b)
+    # The error curve: the series' points and the budget renders' (median time, median relMSE).
+    curve = error_curve(pts, res["budgets"].values())
+    res["error_curve"] = curve
+    for b in budget_runs:
+        res["budgets"]["%g" % b]["with_setup_relmse_from_series"] = relmse_at(curve, b - setup)
+    for target in (1e-2, 1e-3):
+        t, extrapolated = time_to(curve, target)
+        res["time_to_%g" % target] = dict(render_seconds=t, with_setup_seconds=None if t is None else t + setup,
+                                          extrapolated=extrapolated)
+    return res
+
+
+def rescore(path, work):
+    """Recomputes a results file's figures (summarize) with the reference noise of the references that
+    run left in WORK (for runs made before the noise correction)."""
+    with open(path) as f:
+        results = json.load(f)
+    for scene_name, entry in results["scenes"].items():
+        if not entry.get("renderers"):
+            continue
+        ref_path = os.path.join(work, os.path.splitext(os.path.basename(scene_name))[0], "reference.exr")
+        noise = reference_noise_relmse(*read_rgb(ref_path, variance=True))
+        entry["reference"]["noise_relmse"] = noise
+        for name, r in entry["renderers"].items():
+            budget_runs = {float(b): v["runs"] for b, v in r["budgets"].items()}
+            agreement_ = r["agreement"]
+            entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=agreement_)
+        log("[%s] reference noise relMSE %.3g" % (scene_name, noise))
+    results["rescored"] = "reference noise subtracted by peers.py --rescore"
+    with open(path, "w") as f:
+        json.dump(results, f, indent=1)
+
+
 def agreement(images, reference, ref_var):
     """A renderer's mean image against the reference: per-channel relative difference of the image means
     and its z (standard error from the per-pixel spread of the difference), and the relMSE floor (the
@@ -415,7 +468,15 @@ def main():
     ap.add_argument("--results", help="JSON to write (default bench/results/<date>T<hhmm>-<machine>.json; a run of"
                     " some renderers only belongs in bench/results/supplementary/)")
     ap.add_argument("--no-docs", action="store_true", help="do not regenerate docs/benchmarks.md")
+    ap.add_argument("--rescore", metavar="RESULTS", help="only recompute RESULTS' figures against the true image"
+                    " (the reference noise from the references in --work) and regenerate the docs")
     args = ap.parse_args()
+    if args.rescore:
+        rescore(args.rescore, args.work)
+        if not args.no_docs:
+            import report
+            report.write_all()
+        return
 
     os.environ.setdefault("PATHCL_KERNEL_CACHE", os.path.join(ROOT, "build", "kernel-cache"))
     renderers = [r for r in args.renderers.split(",") if r]
@@ -516,30 +577,12 @@ def main():
                         budget[name][b].append(rend.budget(seed, b))
                     except Exception as e:  # noqa: BLE001
                         entry["errors"].setdefault(name + " budget", str(e))
+        noise = reference_noise_relmse(ref, ref_var)
+        entry["reference"]["noise_relmse"] = noise
         for name in active:
             if not series[name]:
                 continue
-            pts = median_points(series[name])
-            setup = statistics.median(s["setup_seconds"] for s in series[name])
-            res = dict(series_runs=series[name], median_points=pts, setup_seconds=setup,
-                       samples_per_second=statistics.median(s["samples_per_second"] for s in series[name]))
-            res["budgets"] = {}
-            for b in budgets:
-                runs_b = budget[name][b]
-                res["budgets"]["%g" % b] = dict(
-                    render_only_relmse=statistics.median(x["relmse"] for x in runs_b) if runs_b else None,
-                    render_seconds=statistics.median(x["render_seconds"] for x in runs_b) if runs_b else None,
-                    wall_seconds=statistics.median(x["wall_seconds"] for x in runs_b) if runs_b else None,
-                    runs=runs_b)
-            # The error curve: the series' points and the budget renders' (median time, median relMSE).
-            curve = error_curve(pts, res["budgets"].values())
-            res["error_curve"] = curve
-            for b in budgets:
-                res["budgets"]["%g" % b]["with_setup_relmse_from_series"] = relmse_at(curve, b - setup)
-            for target in (1e-2, 1e-3):
-                t, extrapolated = time_to(curve, target)
-                res["time_to_%g" % target] = dict(render_seconds=t, with_setup_seconds=None if t is None else t + setup,
-                                                  extrapolated=extrapolated)
+            res = summarize(series[name], budget[name], noise)
             res["agreement"] = agreement([s["image"] for s in series[name]], ref, ref_var)
             entry["renderers"][name] = res
         if scene_name in ray_scenes:

@@ -85,6 +85,10 @@ def scene_section(scene_name, picks, img_dir, png_tag=""):
             ref = e.get("reference", {})
             chk = ref.get("cycles_check", {})
             out += ["**Reference**: pathcl, %s spp (%.0f s)." % (ref.get("spp"), ref.get("seconds", 0))]
+            if "noise_relmse" in ref:
+                out += ["Its own noise, mean of variance / (ref² + 0.01) = %.3g, is subtracted from every relMSE"
+                        " below, so they estimate the error against the true image (a render's relMSE against a"
+                        " noisy reference is its true relMSE plus the reference's)." % ref["noise_relmse"]]
             if "pass_fraction" in chk:
                 out += ["Per-pixel z-test against the mean of %d Cycles renders of %d spp (|z| threshold %.2f, Student t"
                         " with %d degrees of freedom, two-sided p = 0.001, a pixel fails if any channel does): **%.2f %%**"

@@ -68,6 +68,17 @@ class ErrorCurveTest(unittest.TestCase):
         self.assertTrue(extrapolated)
         self.assertAlmostEqual(t, 1.6 * 2.5)
 
+    def test_summarize_subtracts_the_reference_noise_from_every_relmse(self):
+        series = [dict(setup_seconds=1.0, samples_per_second=10.0,
+                       points=[dict(p, relmse=p["relmse"] + 0.002) for p in self.SERIES])]
+        budget = {5.0: [dict(render_seconds=5.0, relmse=0.010, wall_seconds=6.0)], 30.0: []}
+        r = peers.summarize(series, budget, 0.002)
+        self.assertEqual([p["relmse"] for p in r["median_points"]], [0.4, 0.1, 0.025])
+        self.assertAlmostEqual(r["budgets"]["5"]["render_only_relmse"], 0.008)
+        self.assertIsNone(r["budgets"]["30"]["render_only_relmse"])
+        self.assertFalse(r["time_to_0.01"]["extrapolated"])  # reached by the 5 s budget render
+        self.assertAlmostEqual(r["time_to_0.01"]["with_setup_seconds"], r["time_to_0.01"]["render_seconds"] + 1.0)
+
 
 if __name__ == "__main__":
     unittest.main()
