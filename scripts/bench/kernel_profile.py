@@ -123,13 +123,12 @@ def main():
     ap.add_argument("--frequency", type=int, default=2000, help="perf samples per second per core")
     ap.add_argument("--pathcl", default=os.path.join(ROOT, os.environ.get("PATHCL_BUILD", "build"), "pathcl"))
     ap.add_argument("--json", help="write the shares as JSON")
-    ap.add_argument("render_args", nargs="*", help="more `pathcl render` options (after --)")
-    args = ap.parse_args()
+    args, render_args = ap.parse_known_args()  # the rest goes to `pathcl render` (e.g. --sampler independent)
 
     work = tempfile.mkdtemp(prefix="pathcl-profile-")
     env = dict(os.environ, PATHCL_KERNEL_CACHE=os.path.join(work, "kc"), POCL_CACHE_DIR=os.path.join(work, "pocl"),
                POCL_KERNEL_CACHE="1", POCL_EXTRA_BUILD_FLAGS="-g")
-    render = [args.pathcl, "render", args.scene, "-q", "-o", os.path.join(work, "out.exr")] + args.render_args
+    render = [args.pathcl, "render", args.scene, "-q", "-o", os.path.join(work, "out.exr")] + render_args
     # The first render builds the kernel and PoCL's work-group function, so the profiled one only renders.
     subprocess.run(render + ["--spp", "1"], env=env, check=True)
     stats = os.path.join(work, "stats.json")
