@@ -26,7 +26,6 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -59,9 +58,9 @@ def trace_path_ranges(path=INTEGRATOR):
     out = []
     for phase, first, after in RANGES:
         a = next((i for i in range(start, end) if first in lines[i]), None)
-        b = a + 1 if a is not None and after is None else next(
-            (i for i in range(a + 1, end) if after in lines[i]), None) if a is not None else None
-        if a is None or b is None:
+        b = None if a is None else a + 1 if after is None else next(
+            (i for i in range(a + 1, end) if after in lines[i]), None)
+        if b is None:
             raise SystemExit("profile: cannot find %r .. %r in trace_path (%s)" % (first, after, path))
         out.append((phase, a + 1, b + 1))
     return out

@@ -342,8 +342,7 @@ def rescore(path, work):
         entry["reference"]["noise_relmse"] = noise
         for name, r in entry["renderers"].items():
             budget_runs = {float(b): v["runs"] for b, v in r["budgets"].items()}
-            agreement_ = r["agreement"]
-            entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=agreement_)
+            entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=r["agreement"])
         log("[%s] reference noise relMSE %.3g" % (scene_name, noise))
     results["rescored"] = "reference noise subtracted by peers.py --rescore"
     with open(path, "w") as f:

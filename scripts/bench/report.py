@@ -161,6 +161,7 @@ def scene_section(scene_name, picks, img_dir, png_tag=""):
             out += [""]
     return out
 
+
 def write(results_paths, md_path, supplementary=()):
     if isinstance(results_paths, str):
         results_paths = [results_paths]
