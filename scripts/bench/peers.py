@@ -338,11 +338,14 @@ def rescore(path, work):
         if not entry.get("renderers"):
             continue
         ref_path = os.path.join(work, os.path.splitext(os.path.basename(scene_name))[0], "reference.exr")
-        noise = reference_noise_relmse(*read_rgb(ref_path, variance=True))
+        ref, ref_var = read_rgb(ref_path, variance=True)
+        noise = reference_noise_relmse(ref, ref_var)
         entry["reference"]["noise_relmse"] = noise
         for name, r in entry["renderers"].items():
             budget_runs = {float(b): v["runs"] for b, v in r["budgets"].items()}
-            entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=r["agreement"])
+            images = [s["image"] for s in r["series_runs"]]
+            agree = agreement(images, ref, ref_var) if all(map(os.path.exists, images)) else r["agreement"]
+            entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=agree)
         log("[%s] reference noise relMSE %.3g" % (scene_name, noise))
     results["rescored"] = "reference noise subtracted by peers.py --rescore"
     with open(path, "w") as f:
@@ -352,7 +355,8 @@ def rescore(path, work):
 def agreement(images, reference, ref_var):
     """A renderer's mean image against the reference: per-channel relative difference of the image means
     and its z (standard error from the per-pixel spread of the difference), and the relMSE floor (the
-    part more samples would not remove) from S runs: (S relMSE(mean image) - mean relMSE) / (S - 1)."""
+    part more samples would not remove) from S runs: (S relMSE(mean image) - mean relMSE) / (S - 1), both
+    against the true image (the reference's noise subtracted)."""
     import numpy as np
     xs = [read_rgb(p) for p in images]
     mean = np.mean(xs, axis=0)
@@ -361,10 +365,14 @@ def agreement(images, reference, ref_var):
     ref_mean = reference.reshape(3, -1).mean(axis=1)
     out = dict(runs=len(xs), relative_mean_difference=(d.mean(axis=1) / ref_mean).tolist(),
                mean_difference_z=(d.mean(axis=1) / se).tolist())
+    # Both relMSEs carry the reference's own noise once (the floor formula keeps it whole): subtracted, the
+    # floor is the renderer's bias against the true image, not the reference's noise.
+    noise = reference_noise_relmse(reference, ref_var)
     per_run = float(np.mean([relmse(x, reference) for x in xs]))
-    out["relmse_per_run"] = per_run
+    out["relmse_per_run"] = per_run - noise
+    out["reference_noise_relmse"] = noise
     if len(xs) > 1:
-        out["relmse_floor"] = (len(xs) * relmse(mean, reference) - per_run) / (len(xs) - 1)
+        out["relmse_floor"] = (len(xs) * relmse(mean, reference) - per_run) / (len(xs) - 1) - noise
     return out
 
 

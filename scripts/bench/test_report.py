@@ -80,5 +80,47 @@ class ErrorCurveTest(unittest.TestCase):
         self.assertAlmostEqual(r["time_to_0.01"]["with_setup_seconds"], r["time_to_0.01"]["render_seconds"] + 1.0)
 
 
+class AgreementTest(unittest.TestCase):
+    """The relMSE floor and per-run relMSE are against the true image: the reference's own noise is removed."""
+
+    def setUp(self):
+        import numpy as np
+        rng = np.random.default_rng(7)
+        self.np, self.rng, self.dir = np, rng, tempfile.TemporaryDirectory()
+        self.truth = rng.uniform(0.2, 1.0, (3, 64, 64))
+        self.ref_var = np.full_like(self.truth, 0.01 ** 2)  # the reference's per-pixel variance
+        self.reference = self.truth + rng.normal(0.0, 0.01, self.truth.shape)
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def renders(self, bias, sigma=0.02, runs=4):
+        paths = []
+        for i in range(runs):
+            image = self.truth * (1 + bias) + self.rng.normal(0.0, sigma, self.truth.shape)
+            paths.append(os.path.join(self.dir.name, "run%d-%g.npy" % (i, bias)))
+            self.np.save(paths[-1], image.transpose(1, 2, 0))  # LuxCore's snapshot layout
+        return paths
+
+    def expected_relmse(self, var):
+        return float(self.np.mean(var / (self.reference ** 2 + 0.01)))
+
+    def test_unbiased_renders_have_no_floor_beyond_its_standard_error(self):
+        a = peers.agreement(self.renders(0.0), self.reference, self.ref_var)
+        self.assertAlmostEqual(a["reference_noise_relmse"], self.expected_relmse(self.ref_var), places=12)
+        # per-run relMSE against the truth: the renders' own noise, sigma^2 weighted (relative s.e. 1/sqrt(N))
+        own = self.expected_relmse(self.np.full_like(self.truth, 0.02 ** 2))
+        n = self.truth.size
+        self.assertLess(abs(a["relmse_per_run"] - own), 5 * own * math.sqrt(2.0 / n) + 0.1 * a["reference_noise_relmse"])
+        # Without the correction the floor would be the reference's noise (0.25 of per-run relMSE here).
+        self.assertLess(abs(a["relmse_floor"]), 0.1 * a["reference_noise_relmse"])
+
+    def test_a_biased_renderer_has_its_bias_as_floor(self):
+        a = peers.agreement(self.renders(0.05), self.reference, self.ref_var)
+        bias_relmse = self.expected_relmse((0.05 * self.truth) ** 2)
+        self.assertLess(abs(a["relmse_floor"] - bias_relmse), 0.1 * bias_relmse)
+        self.assertGreater(a["mean_difference_z"][0], 5)
+
+
 if __name__ == "__main__":
     unittest.main()
