@@ -344,7 +344,11 @@ def rescore(path, work):
         for name, r in entry["renderers"].items():
             budget_runs = {float(b): v["runs"] for b, v in r["budgets"].items()}
             images = [s["image"] for s in r["series_runs"]]
-            agree = agreement(images, ref, ref_var) if all(map(os.path.exists, images)) else r["agreement"]
+            if all(map(os.path.exists, images)):
+                agree = agreement(images, ref, noise)
+            else:
+                agree = r["agreement"]
+                log("[%s] %s: the runs' images are gone, agreement kept as it was" % (scene_name, name))
             entry["renderers"][name] = dict(summarize(r["series_runs"], budget_runs, noise), agreement=agree)
         log("[%s] reference noise relMSE %.3g" % (scene_name, noise))
     results["rescored"] = "reference noise subtracted by peers.py --rescore"
@@ -352,11 +356,11 @@ def rescore(path, work):
         json.dump(results, f, indent=1)
 
 
-def agreement(images, reference, ref_var):
+def agreement(images, reference, noise):
     """A renderer's mean image against the reference: per-channel relative difference of the image means
     and its z (standard error from the per-pixel spread of the difference), and the relMSE floor (the
     part more samples would not remove) from S runs: (S relMSE(mean image) - mean relMSE) / (S - 1), both
-    against the true image (the reference's noise subtracted)."""
+    against the true image: NOISE, the reference's own (reference_noise_relmse), subtracted."""
     import numpy as np
     xs = [read_rgb(p) for p in images]
     mean = np.mean(xs, axis=0)
@@ -367,10 +371,8 @@ def agreement(images, reference, ref_var):
                mean_difference_z=(d.mean(axis=1) / se).tolist())
     # Both relMSEs carry the reference's own noise once (the floor formula keeps it whole): subtracted, the
     # floor is the renderer's bias against the true image, not the reference's noise.
-    noise = reference_noise_relmse(reference, ref_var)
     per_run = float(np.mean([relmse(x, reference) for x in xs]))
     out["relmse_per_run"] = per_run - noise
-    out["reference_noise_relmse"] = noise
     if len(xs) > 1:
         out["relmse_floor"] = (len(xs) * relmse(mean, reference) - per_run) / (len(xs) - 1) - noise
     return out
@@ -590,7 +592,7 @@ def main():
             if not series[name]:
                 continue
             res = summarize(series[name], budget[name], noise)
-            res["agreement"] = agreement([s["image"] for s in series[name]], ref, ref_var)
+            res["agreement"] = agreement([s["image"] for s in series[name]], ref, noise)
             entry["renderers"][name] = res
         if scene_name in ray_scenes:
             log("[%s] traversal: pathcl rays vs Embree" % scene_name)
