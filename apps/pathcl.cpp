@@ -23,7 +23,7 @@
 #include "runtime/kernel_program.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
-#include "scene/device_scene.h"
+#include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -79,20 +79,21 @@ nlohmann::json scene_stats(const LoadedScene& s) {
           {"sah_cost", d.bvh.sah_cost},         {"bvh_build_ms", d.bvh.build_ms},   {"scene_load_ms", s.load_ms}};
 }
 
-// A progress bar on stderr: bar, samples per pixel done, samples per second, time left.
-void print_progress(uint32_t done, uint32_t total, double seconds, size_t pixels) {
+// A progress bar on stderr: bar, samples per pixel done (on average over the film), samples per second,
+// time left.
+void print_progress(uint64_t done, uint64_t total, double seconds, size_t pixels) {
   const int width = 30;
-  int filled = int(double(done) / total * width);
-  double rate = seconds > 0 ? double(done) * pixels / seconds : 0;
+  int filled = total > 0 ? int(double(done) / total * width) : width;
+  double rate = seconds > 0 ? double(done) / seconds : 0;
   double eta = done > 0 ? seconds * (double(total) / done - 1) : 0;
-  std::fprintf(stderr, "\r[%s%s] %u/%u spp  %.2f Msamples/s  ETA %.1f s ", std::string(filled, '#').c_str(),
-               std::string(width - filled, '.').c_str(), done, total, rate * 1e-6, eta);
+  std::fprintf(stderr, "\r[%s%s] %.0f/%.0f spp  %.2f Msamples/s  ETA %.1f s ", std::string(filled, '#').c_str(),
+               std::string(width - filled, '.').c_str(), double(done) / pixels, double(total) / pixels, rate * 1e-6, eta);
   if (done == total) std::fprintf(stderr, "\n");
 }
 
-// The first SIGINT or SIGTERM asks the render to stop after the current pass and write what it has; the
-// handler then restores the default action, so a second signal ends the process at once (outputs are
-// written through temporary files and renames, so none is left half-written).
+// The first SIGINT or SIGTERM asks the render to stop at the end of the current pass and write what it
+// has; the handler then restores the default action, so a second signal ends the process at once
+// (outputs are written through temporary files and renames, so none is left half-written).
 volatile std::sig_atomic_t g_stop_signal = 0;
 
 void on_stop_signal(int signal) {
@@ -107,7 +108,7 @@ struct RenderArgs {
   std::optional<double> time_budget, target_error;
   uint32_t pass_spp = 0;
   size_t work_group = 0;
-  bool quiet = false, all_features = false, variance = false;
+  bool quiet = false, all_features = false, variance = false, allow_mixed_devices = false;
 };
 
 // Rows of `--convergence`: one per power of two spp and at the end.
@@ -162,6 +163,39 @@ void warn_about_clean_up(const LoadedScene& s) {
     std::fprintf(stderr, "warning: %u zero-area emitters are not lights\n", s.device.skipped_zero_area_emitters);
 }
 
+// The names of the devices that rendered, joined.
+std::string used_devices(const RenderResult& r) {
+  std::string names;
+  for (const DeviceReport& d : r.devices)
+    if (d.used && d.units > 0) names += (names.empty() ? "" : ", ") + d.name;
+  return names.empty() ? r.devices.front().name : names;
+}
+
+nlohmann::json device_stats(const RenderResult& r) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const DeviceReport& d : r.devices)
+    list.push_back({{"name", d.name},
+                    {"platform", d.platform},
+                    {"class", d.arithmetic_class},
+                    {"used", d.used},
+                    {"note", d.note},
+                    {"sub_device", d.sub_device},
+                    {"compute_units", d.compute_units},
+                    {"units", d.units},
+                    {"samples", d.samples},
+                    {"kernel_seconds", d.kernel_seconds},
+                    {"transfer_seconds", d.transfer_seconds},
+                    {"busy_seconds", d.busy_seconds},
+                    {"idle_seconds", d.idle_seconds},
+                    {"duplicates_run", d.duplicates_run},
+                    {"duplicates_won", d.duplicates_won},
+                    {"failures", d.failures},
+                    {"kernel_build_ms", d.kernel_build_ms},
+                    {"kernel_from_cache", d.kernel_from_cache},
+                    {"probe_seconds", d.probe_seconds}});
+  return list;
+}
+
 int run_render(const RenderArgs& a) {
   auto started = std::chrono::steady_clock::now();
   LoadedScene s = load(a.scene);
@@ -178,11 +212,13 @@ int run_render(const RenderArgs& a) {
   opt.pass_spp = a.pass_spp;
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
-  opt.power_of_two_passes = !a.convergence.empty() || a.target_error.has_value();
-  if (a.time_budget) opt.max_pass_seconds = *a.time_budget / 20;  // overrun the budget by a few percent at most
+  opt.power_of_two_horizons = !a.convergence.empty();
+  opt.allow_mixed_devices = a.allow_mixed_devices;
   if (opt.spp == 0) throw UsageError("--spp: expected at least 1 sample per pixel");
   if (a.time_budget && !(*a.time_budget > 0)) throw UsageError("--time: expected a number of seconds > 0");
   if (a.target_error && !(*a.target_error > 0)) throw UsageError("--target-error: expected a relMSE > 0");
+  opt.time_budget = a.time_budget.value_or(0);
+  opt.target_error = a.target_error.value_or(0);
   std::string out = a.out.empty() ? std::filesystem::path(a.scene).stem().string() + ".exr" : a.out;
   ConvergenceLog log;
   log.path = a.convergence;
@@ -195,59 +231,41 @@ int run_render(const RenderArgs& a) {
   }
 
   if (!(a.checkpoint_every >= 0)) throw UsageError("--checkpoint-every: expected a number of seconds >= 0");
-  uint64_t key = render_key(s.device, opt);
+  opt.checkpoint = a.checkpoint;
+  opt.checkpoint_every = a.checkpoint_every;
+  opt.checkpoint_key = render_key(s.device, opt);
   Film resumed;
   if (!a.resume.empty()) {
-    resumed = read_checkpoint(a.resume, key, s.device.header.width, s.device.header.height);
+    resumed = read_checkpoint(a.resume, opt.checkpoint_key, s.device.header.width, s.device.header.height);
     opt.resume = &resumed;
   }
+  if (!a.checkpoint.empty()) make_parent_directory(a.checkpoint);
 
-  ClContext cl(select_device(a.device));
+  std::vector<DeviceInfo> devices = select_devices(a.device);
   bool show = !a.quiet && isatty(STDERR_FILENO);
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
-  std::string stop_reason = "spp";
-  double last_checkpoint = 0;
-  uint32_t checkpoint_spp = 0;  // samples in the checkpoint file written last
+  opt.interrupt = &g_stop_signal;
+  RenderCallbacks callbacks;
+  if (show && !budgeted)
+    callbacks.progress = [&](uint64_t done, uint64_t total, double seconds) { print_progress(done, total, seconds, pixels); };
+  if (!log.path.empty())
+    callbacks.horizon = [&](const Film& film, double seconds, double kernel_build_ms) {
+      log.add(ms_since(started) * 1e-3, s, kernel_build_ms, seconds, film);
+    };
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
-  RenderResult r = render(cl, s.device, opt, [&](const PassInfo& pass, const std::function<Film()>& read_film) {
-    if (show && !budgeted) print_progress(pass.spp_done, pass.spp_total, pass.seconds, pixels);
-    if (!a.checkpoint.empty() && pass.seconds - last_checkpoint >= a.checkpoint_every) {
-      make_parent_directory(a.checkpoint);
-      write_checkpoint(a.checkpoint, key, read_film());
-      last_checkpoint = pass.seconds;
-      checkpoint_spp = pass.spp_done;
-    }
-    if (g_stop_signal) {
-      stop_reason = "interrupted";
-      return false;
-    }
-    bool power_of_two = (pass.spp_done & (pass.spp_done - 1)) == 0;
-    if (power_of_two && (!log.path.empty() || a.target_error)) {
-      Film film = read_film();
-      if (!log.path.empty()) log.add(ms_since(started) * 1e-3, s, pass.kernel_build_ms, pass.seconds, film);
-      // The half-image estimate needs a few samples in each half before it can be trusted.
-      if (a.target_error && film.spp >= 8 && estimated_rel_mse(film) < *a.target_error) {
-        stop_reason = "target_error";
-        return false;
-      }
-    }
-    if (a.time_budget && pass.seconds >= *a.time_budget) {
-      stop_reason = "time";
-      return false;
-    }
-    return true;
-  });
-  if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", stop_reason.c_str(), r.film.spp);
-  if (!a.checkpoint.empty() && checkpoint_spp != r.film.spp) write_checkpoint(a.checkpoint, key, r.film);
+  RenderResult r = render(devices, s.device, opt, callbacks);
+  if (!a.quiet)
+    for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", r.stop_reason.c_str(), r.film.spp);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
     log.add(ms_since(started) * 1e-3, s, r.kernel_build_ms, r.render_seconds, r.film);
 
   Image image = ConvergenceLog::film_image(r.film);
   if (a.variance) image.variance = r.film.variance;
-  image.attributes = {{"renderer", "pathcl"}, {"device", cl.info.name}, {"seed", std::to_string(opt.seed)},
+  image.attributes = {{"renderer", "pathcl"}, {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
                       {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
-                      {"stop_reason", stop_reason}};
+                      {"stop_reason", r.stop_reason}, {"determinism", r.determinism}};
   make_parent_directory(out);
   write_exr(out, image);
   if (!a.png.empty()) {
@@ -258,26 +276,30 @@ int run_render(const RenderArgs& a) {
     make_parent_directory(log.path);
     write_text(log.path, log.text);
   }
-  double samples = double(pixels) * r.film.spp;
+  double samples = double(pixels) * (r.film.spp - (opt.resume ? opt.resume->spp : 0));
   if (!a.stats.empty()) {
     nlohmann::json j = scene_stats(s);
-    j.update({{"device", cl.info.name},
-              {"platform", cl.info.platform_name},
+    j.update({{"device", used_devices(r)},
+              {"platform", r.devices.front().platform},
+              {"devices", device_stats(r)},
+              {"determinism", r.determinism},
               {"width", r.film.width},
               {"height", r.film.height},
               {"spp", r.film.spp},
               {"seed", opt.seed},
               {"max_depth", opt.max_depth},
               {"sampler", sampler_name(opt.sampler)},
-              {"stop_reason", stop_reason},
+              {"stop_reason", r.stop_reason},
               {"relmse_estimate", estimated_rel_mse(r.film)},
               {"kernel_build_ms", r.kernel_build_ms},
               {"kernel_from_cache", r.kernel_from_cache},
               {"kernel_options", r.kernel_options},
+              {"setup_seconds", r.setup_seconds},
               {"render_seconds", r.render_seconds},
               {"kernel_seconds", r.kernel_ms * 1e-3},
-              {"passes", r.passes},
               {"launches", r.launches},
+              {"horizons", r.horizons},
+              {"duplicate_checks", r.duplicate_checks},
               {"samples_per_second", samples / r.render_seconds},
               {"rays_traced", r.rays},
               {"rays_per_second", double(r.rays) / r.render_seconds},
@@ -290,7 +312,7 @@ int run_render(const RenderArgs& a) {
   if (!a.quiet)
     std::fprintf(stderr, "%s: %ux%u, %u spp in %.2f s (%.2f Msamples/s, %.2f Mrays/s) on %s -> %s\n", a.scene.c_str(),
                  r.film.width, r.film.height, r.film.spp, r.render_seconds, samples / r.render_seconds * 1e-6,
-                 double(r.rays) / r.render_seconds * 1e-6, cl.info.name.c_str(), out.c_str());
+                 double(r.rays) / r.render_seconds * 1e-6, used_devices(r).c_str(), out.c_str());
   if (r.nan_samples + r.inf_samples + r.negative_samples > 0)
     std::fprintf(stderr, "warning: discarded %llu NaN, %llu infinite and %llu negative samples\n",
                  (unsigned long long)r.nan_samples, (unsigned long long)r.inf_samples,
@@ -311,10 +333,12 @@ int run_devices() {
   }
   for (size_t i = 0; i < devices.size(); ++i) {
     const DeviceInfo& d = devices[i];
-    std::printf("[%zu] %s (%s)\n    platform: %s (%s)\n    compute units: %u, memory: %.1f GiB, %s, driver %s\n", i,
-                d.name.c_str(), d.is_gpu ? "GPU" : "CPU", d.platform_name.c_str(), d.platform_version.c_str(),
+    std::printf("[%zu] %s (%s)\n    platform: %s (%s)\n    compute units: %u, memory: %.1f GiB, %s, driver %s\n"
+                "    float: %s divide and sqrt, denormals %s\n",
+                i, d.name.c_str(), d.is_gpu ? "GPU" : "CPU", d.platform_name.c_str(), d.platform_version.c_str(),
                 d.compute_units, double(d.global_memory) / (1u << 30), d.opencl_c_version.c_str(),
-                d.driver_version.c_str());
+                d.driver_version.c_str(), d.correctly_rounded_divide_sqrt ? "correctly rounded" : "not correctly rounded",
+                d.denormals ? "supported" : "may be flushed to zero");
   }
   return 0;
 }
@@ -448,7 +472,11 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--spp", ra.spp, "samples per pixel (overrides the scene)");
   render_cmd->add_option("--seed", ra.seed, "random seed (overrides the scene)");
   render_cmd->add_option("--max-depth", ra.max_depth, "largest number of scattering events (overrides the scene)");
-  render_cmd->add_option("--device", ra.device, "device index or name substring (see `pathcl devices`)");
+  render_cmd->add_option("--device", ra.device,
+                         "device index or name substring (see `pathcl devices`), a comma-separated list of them, or all");
+  render_cmd->add_flag("--allow-mixed-devices", ra.allow_mixed_devices,
+                       "also render on devices whose arithmetic differs from the first device's (the image then "
+                       "depends on the split)");
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");

@@ -13,7 +13,7 @@
 #include <glm/geometric.hpp>
 
 #include "runtime/ray_trace.h"
-#include "scene/device_scene.h"
+#include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
 
 namespace {

@@ -6,7 +6,8 @@
 #include <vector>
 
 #include "fuzz/fuzz_common.h"
-#include "scene/device_scene.h"
+#include "scene/bvh_build.h"
+#include "scene/device_scene_build.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
 

@@ -66,6 +66,11 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   __constant const SceneHeader* h = sc->h;
   Ray ray;
   camera_ray(h, px, py, sample4(h, key, 0), &ray.o, &ray.d);
+#ifdef PC_DEBUG_PERTURB
+  /* Test builds only (DeviceFault::perturb): one operation rounded the other way, as a device of another
+   * arithmetic class would, so that the start-up probe must tell the device apart. */
+  ray.d.x = nextafter(ray.d.x, INFINITY);
+#endif
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
@@ -159,28 +164,36 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   return radiance;
 }
 
-/* The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
- * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself. */
-__kernel void render_pass(__constant const SceneHeader* h, __global const Bvh4Node* nodes,
-                          __global const Primitive* prims, __global const PrimShading* shading,
-                          __global const float4* normals, __global const float4* uvs,
-                          __global const Material* materials, __global const Light* lights,
-                          __global const float* light_cdf, __global const Texture* textures,
-                          __global const float4* texels, __global const float* env_dist, __global float4* film,
-                          __global PassStats* stats, uint sample_begin, uint sample_count) {
-  SceneData sc = {h, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist};
-  uint pixel = get_global_id(0);
-  if (pixel >= h->width * h->height) return;
+/* Adds n to a 64-bit counter held as two words (lo, hi): the word whose addition wrapped around carries
+ * into the other. Integer atomics add in any order to the same total, so the statistics are exact. */
+inline void add_counter64(volatile __global uint* lo_hi, uint n) {
+  uint old = atomic_add(lo_hi, n);
+  if (old + n < old) atomic_inc(lo_hi + 1);
+}
+
+/* One work unit: samples [sample_begin, sample_begin + sample_count) of pixels pixel_begin + i * pixel_stride,
+ * i < pixel_count (stride 1 for the render's units, larger for the start-up probe). Each work item carries
+ * its pixel's accumulators from the film and adds the samples one by one, so any split into units, on any
+ * device, sums in the same order.
+ * The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
+ * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself.
+ * stats (UnitStats): rays (64 bits) and hazard counts, added with integer atomics. */
+__kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats, uint pixel_begin,
+                          uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
+  SceneData sc = PC_SCENE_DATA;
+  uint item = get_global_id(0);
+  if (item >= pixel_count) return;
+  uint pixel = pixel_begin + item * pixel_stride;
   uint px = pixel % h->width, py = pixel / h->width;
   SampleKey key;
   key.pixel = pixel;
   key.seed = h->seed;
-  PassStats st = {0u, 0u, 0u, 0u};
+  uint rays = 0u, nan_samples = 0u, inf_samples = 0u, negative_samples = 0u;
   float4 half_sum[2] = {film[3 * pixel], film[3 * pixel + 1]};
   float4 squares = film[3 * pixel + 2];
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
-    float3 L = trace_path(&sc, key, px, py, &st.rays);
+    float3 L = trace_path(&sc, key, px, py, &rays);
 #ifdef PC_DEBUG_INJECT_HAZARDS
     /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
     if (s % 7u == 3u) L.x = NAN;
@@ -189,13 +202,13 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const Bvh4No
 #endif
     /* A sample that is not a finite non-negative radiance is counted and dropped: it is a bug to find. */
     if (isnan(L.x) || isnan(L.y) || isnan(L.z)) {
-      ++st.nan_samples;
+      ++nan_samples;
       L = (float3)(0.0f);
     } else if (isinf(L.x) || isinf(L.y) || isinf(L.z)) {
-      ++st.inf_samples;
+      ++inf_samples;
       L = (float3)(0.0f);
     } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
-      ++st.negative_samples;
+      ++negative_samples;
       L = (float3)(0.0f);
     }
     half_sum[s & 1u] += (float4)(L, 1.0f);
@@ -204,5 +217,9 @@ __kernel void render_pass(__constant const SceneHeader* h, __global const Bvh4No
   film[3 * pixel] = half_sum[0];
   film[3 * pixel + 1] = half_sum[1];
   film[3 * pixel + 2] = squares;
-  stats[pixel] = st;
+  volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
+  add_counter64(counters, rays);
+  if (nan_samples) atomic_add(counters + 2, nan_samples);
+  if (inf_samples) atomic_add(counters + 3, inf_samples);
+  if (negative_samples) atomic_add(counters + 4, negative_samples);
 }

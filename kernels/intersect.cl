@@ -1,9 +1,9 @@
 /* Ray/box, ray/triangle and ray/sphere tests and BVH traversal (closest hit and any hit).
- * FP_CONTRACT is off: a fused multiply-add would round the two triangles of a shared edge differently
- * and let rays slip through the edge. */
+ * FP_CONTRACT is off for every program (runtime/kernel_program.cpp puts the pragma on its first line): a
+ * fused multiply-add would round the two triangles of a shared edge differently and let rays slip
+ * through the edge. */
 #ifndef PATHCL_INTERSECT_CL
 #define PATHCL_INTERSECT_CL
-#pragma OPENCL FP_CONTRACT OFF
 
 #define PC_BVH_STACK 64 /* = kBvhMaxDepth of scene/bvh_build.h */
 

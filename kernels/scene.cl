@@ -1,21 +1,24 @@
-/* The scene's device arrays, gathered once per work item so that functions take one argument for them. */
+/* The scene's device arrays, gathered once per work item so that functions take one argument for them.
+ * The arrays are PC_SCENE_ARRAYS of shared/types.h; what each holds is written in scene/device_scene.h.
+ *   normals: 3 per primitive (smooth shapes)
+ *   uvs:     2 per primitive, when textures are used: triangle (u0, v0, u1, v1), (u2, v2, -, -);
+ *            sphere (x axis, handedness), (y axis, -)
+ *   env_dist: environment.cl */
 #ifndef PATHCL_SCENE_CL
 #define PATHCL_SCENE_CL
 
+#define PC_SCENE_FIELD(T, name) __global const T* name;
 typedef struct {
   __constant const SceneHeader* h;
-  __global const Bvh4Node* nodes;
-  __global const Primitive* prims;     /* BVH leaf order */
-  __global const PrimShading* shading; /* scene order */
-  __global const float4* normals;      /* 3 per primitive (smooth shapes) */
-  __global const float4* uvs;          /* 2 per primitive, when textures are used: triangle (u0, v0, u1, v1),
-                                          (u2, v2, -, -); sphere (x axis, handedness), (y axis, -) */
-  __global const Material* materials;
-  __global const Light* lights;
-  __global const float* light_cdf;
-  __global const Texture* textures;
-  __global const float4* texels;
-  __global const float* env_dist;      /* environment.cl */
+  PC_SCENE_ARRAYS(PC_SCENE_FIELD)
 } SceneData;
+#undef PC_SCENE_FIELD
+
+/* A kernel's first parameters: the header and every scene array (bound by runtime/scene_buffers.h). */
+#define PC_SCENE_PARAM(T, name) , __global const T* name
+#define PC_SCENE_PARAMS __constant const SceneHeader* h PC_SCENE_ARRAYS(PC_SCENE_PARAM)
+/* SceneData from those parameters: SceneData sc = PC_SCENE_DATA; */
+#define PC_SCENE_ARG(T, name) , name
+#define PC_SCENE_DATA {h PC_SCENE_ARRAYS(PC_SCENE_ARG)}
 
 #endif

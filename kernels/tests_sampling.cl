@@ -96,31 +96,7 @@ __kernel void fresnel_conductor_test(__global const float* cos_i, float4 eta, fl
   out[i] = (float4)(fresnel_conductor(cos_i[i], eta.xyz, k.xyz), 0.0f);
 }
 
-/* ---- Lights ---- */
-
-#define PC_SCENE_PARAMS                                                                                     \
-  __constant const SceneHeader *h, __global const Bvh4Node *nodes, __global const Primitive *prims,           \
-      __global const PrimShading *shading, __global const float4 *normals, __global const float4 *uvs,       \
-      __global const Material *materials, __global const Light *lights, __global const float *light_cdf,     \
-      __global const Texture *textures, __global const float4 *texels, __global const float *env_dist
-
-inline SceneData test_scene(PC_SCENE_PARAMS) {
-  SceneData sc;
-  sc.h = h;
-  sc.nodes = nodes;
-  sc.prims = prims;
-  sc.shading = shading;
-  sc.normals = normals;
-  sc.uvs = uvs;
-  sc.materials = materials;
-  sc.lights = lights;
-  sc.light_cdf = light_cdf;
-  sc.textures = textures;
-  sc.texels = texels;
-  sc.env_dist = env_dist;
-  return sc;
-}
-#define PC_SCENE_ARGS h, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist
+/* ---- Lights (the scene arguments as the render kernel takes them, PC_SCENE_PARAMS of scene.cl) ---- */
 
 /* The density with which light sampling from x produces direction d, found the way a BSDF-sampled ray
  * finds it (as the integrator's MIS does): trace the ray; an emitter hit gives light_pdf there, an
@@ -152,7 +128,7 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
  * the sampled point p, distance to the first hit along wi (+inf for none). */
 __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global float* out) {
   uint i = get_global_id(0);
-  SceneData sc = test_scene(PC_SCENE_ARGS);
+  SceneData sc = PC_SCENE_DATA;
   float3 x = x4.xyz;
   float4 u = test_random4(i, seed);
   LightSample ls;
@@ -184,7 +160,7 @@ __kernel void light_pdf_bins(PC_SCENE_PARAMS, float4 x4, __global const float4* 
                              uint order, __global const float* gl_nodes, __global const float* gl_weights,
                              __global float* out) {
   uint b = get_global_id(0);
-  SceneData sc = test_scene(PC_SCENE_ARGS);
+  SceneData sc = PC_SCENE_DATA;
   float sum = 0.0f;
   uint zeros = 0;
   for (uint i = 0; i < order; ++i) {

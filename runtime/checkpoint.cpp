@@ -28,16 +28,9 @@ uint64_t hash_vector(const std::vector<T>& v, uint64_t h) {
 
 uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
   uint64_t h = fnv1a(&scene.header, sizeof scene.header);
-  h = hash_vector(scene.nodes, h);
-  h = hash_vector(scene.prims, h);
-  h = hash_vector(scene.shading, h);
-  h = hash_vector(scene.normals, h);
-  h = hash_vector(scene.uvs, h);
-  h = hash_vector(scene.materials, h);
-  h = hash_vector(scene.textures, h);
-  h = hash_vector(scene.texels, h);
-  h = hash_vector(scene.lights, h);
-  h = hash_vector(scene.light_cdf, h);
+#define PC_HASH_ARRAY(T, name) h = hash_vector(scene.name, h);
+  PC_SCENE_ARRAYS(PC_HASH_ARRAY)
+#undef PC_HASH_ARRAY
   const uint32_t settings[] = {options.spp, options.max_depth, options.seed, options.rr_depth, options.sampler};
   return fnv1a(settings, sizeof settings, h);
 }

@@ -7,8 +7,9 @@
 
 #include "runtime/renderer.h"
 
-// A hash of the scene content (geometry, BVH, materials, lights, camera) and of the settings that
-// change pixels (spp, max_depth, seed, Russian roulette depth, sampler).
+// A hash of the scene content (the header and every device array: geometry, BVH, materials, lights,
+// textures, camera) and of the settings that change pixels (spp, max_depth, seed, Russian roulette depth,
+// sampler). The device set is not in it: a checkpoint written on some devices resumes on any others.
 uint64_t render_key(const DeviceScene& scene, const RenderOptions& options);
 
 // RuntimeFailure on I/O errors.

@@ -67,6 +67,10 @@ std::vector<DeviceInfo> list_devices() {
       info.global_memory = device_value<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
       info.max_alloc = device_value<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       info.max_work_group = device_value<size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      cl_device_fp_config fp = device_value<cl_device_fp_config>(d, CL_DEVICE_SINGLE_FP_CONFIG);
+      info.correctly_rounded_divide_sqrt = (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+      info.denormals = (fp & CL_FP_DENORM) != 0;
+      info.index = devices.size();
       devices.push_back(info);
     }
   }
@@ -78,11 +82,14 @@ DeviceInfo select_device(const std::string& selector) {
   if (devices.empty())
     throw RuntimeFailure("no OpenCL device found (is an ICD such as pocl-opencl-icd installed?)");
   if (selector.empty()) {
+    auto usable = [](const DeviceInfo& d) { return lower(d.platform_name).find("oclgrind") == std::string::npos; };
     for (const DeviceInfo& d : devices)
-      if (d.is_gpu) return d;
+      if (d.is_gpu && usable(d)) return d;
     for (const DeviceInfo& d : devices)
-      if (d.is_cpu) return d;
-    return devices.front();
+      if (d.is_cpu && usable(d)) return d;
+    for (const DeviceInfo& d : devices)
+      if (usable(d)) return d;
+    throw RuntimeFailure("the only OpenCL device is Oclgrind, which is never the default: name it with --device");
   }
   if (std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); })) {
     size_t index = std::stoul(selector);
@@ -97,6 +104,45 @@ DeviceInfo select_device(const std::string& selector) {
   throw UsageError("--device " + selector + ": no device or platform name contains it (see `pathcl devices`)");
 }
 
+std::vector<DeviceInfo> select_devices(const std::string& selectors) {
+  if (selectors.empty()) return {select_device("")};
+  std::vector<DeviceInfo> chosen;
+  if (lower(selectors) == "all") {
+    chosen = list_devices();
+    if (chosen.empty()) throw RuntimeFailure("no OpenCL device found (is an ICD such as pocl-opencl-icd installed?)");
+    return chosen;
+  }
+  size_t start = 0;
+  while (start <= selectors.size()) {
+    size_t comma = selectors.find(',', start);
+    std::string one = selectors.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (one.empty()) throw UsageError("--device " + selectors + ": an empty selector in the list");
+    DeviceInfo d = select_device(one);
+    for (const DeviceInfo& c : chosen)
+      if (c.index == d.index)
+        throw UsageError("--device " + selectors + ": \"" + one + "\" selects device " + std::to_string(d.index) +
+                         " (" + d.name + ") a second time");
+    chosen.push_back(d);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return chosen;
+}
+
+DeviceInfo partition_device(const DeviceInfo& device, cl_uint units) {
+  if (units == 0 || units >= device.compute_units) return device;
+  cl_device_partition_property props[] = {CL_DEVICE_PARTITION_BY_COUNTS, cl_device_partition_property(units),
+                                          CL_DEVICE_PARTITION_BY_COUNTS_LIST_END, 0};
+  cl_device_id sub = nullptr;
+  cl_uint count = 0;
+  if (clCreateSubDevices(device.device, props, 1, &sub, &count) != CL_SUCCESS || count != 1) return device;
+  DeviceInfo info = device;
+  info.device = sub;
+  info.compute_units = units;
+  info.sub_device = true;
+  return info;
+}
+
 ClContext::ClContext(const DeviceInfo& device) : info(device) {
   cl_context_properties props[] = {CL_CONTEXT_PLATFORM, cl_context_properties(device.platform), 0};
   context = CL_CHECKED(clCreateContext, props, 1, &info.device, nullptr, nullptr);
@@ -106,6 +152,7 @@ ClContext::ClContext(const DeviceInfo& device) : info(device) {
 ClContext::~ClContext() {
   if (queue) clReleaseCommandQueue(queue);
   if (context) clReleaseContext(context);
+  if (info.sub_device) clReleaseDevice(info.device);
 }
 
 ClBuffer::ClBuffer(ClContext& cl, cl_mem_flags flags, size_t bytes, const void* host) {

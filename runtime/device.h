@@ -13,14 +13,28 @@ struct DeviceInfo {
   cl_uint compute_units = 0;
   cl_ulong global_memory = 0, max_alloc = 0;
   size_t max_work_group = 0;
+  // CL_DEVICE_SINGLE_FP_CONFIG: correctly rounded float divide and sqrt (then every kernel is built with
+  // -cl-fp32-correctly-rounded-divide-sqrt), and denormals (else they may be flushed to zero).
+  bool correctly_rounded_divide_sqrt = false, denormals = false;
+  bool sub_device = false;  // a partition of `device` made by partition_device (released with its context)
+  size_t index = 0;         // in list_devices()
 };
 
 // Every device of every platform, in platform order; the index is what `--device N` takes.
 std::vector<DeviceInfo> list_devices();
 
 // "" picks the first GPU, else the first CPU device; a number picks by index; anything else is a
-// case-insensitive substring of the device or platform name. No match is a UsageError.
+// case-insensitive substring of the device or platform name. No match is a UsageError. The default
+// never picks Oclgrind (an interpreter for debugging that calls itself a GPU): it must be named.
 DeviceInfo select_device(const std::string& selector);
+
+// A comma-separated list of selectors as select_device takes them, or "all" for every device; each device
+// at most once, in the order given. "" is the default device alone.
+std::vector<DeviceInfo> select_devices(const std::string& selectors);
+
+// A sub-device of a CPU device with `units` of its compute units (clCreateSubDevices by counts), so that
+// the rest stay free for the host, or the device itself when it cannot be partitioned.
+DeviceInfo partition_device(const DeviceInfo& device, cl_uint units);
 
 // A context and an in-order profiling queue on one device.
 struct ClContext {

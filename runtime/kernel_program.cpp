@@ -1,5 +1,6 @@
 #include "runtime/kernel_program.h"
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -103,8 +104,10 @@ void store_cached(const fs::path& file, const std::vector<unsigned char>& binary
   std::error_code ec;
   fs::create_directories(file.parent_path(), ec);
   if (ec) return;  // the cache is an optimisation: an unwritable directory only costs build time
+  // Unique per process and thread: several devices of one render may build the same program at once.
+  static std::atomic<unsigned> counter{0};
   fs::path tmp = file;
-  tmp += ".tmp." + std::to_string(::getpid());
+  tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
   {
     uint64_t checksum = fnv1a(binary.data(), binary.size());
     std::ofstream out(tmp, std::ios::binary);
@@ -119,7 +122,10 @@ void store_cached(const fs::path& file, const std::vector<unsigned char>& binary
 
 std::string assemble_kernel_source(const std::string& main_file) {
   std::set<std::string> seen;
-  std::string out;
+  // In force from the first line of every program: a fused multiply-add rounds once where the source
+  // rounds twice, and drivers differ in where they fuse, so contraction would make the bits depend on
+  // the OpenCL implementation (and let rays slip through shared triangle edges).
+  std::string out = "#pragma OPENCL FP_CONTRACT OFF\n";
   expand(main_file, seen, out);
   return out;
 }
@@ -153,10 +159,14 @@ KernelProgram::~KernelProgram() {
 
 cl_kernel KernelProgram::kernel(const char* name) const { return CL_CHECKED(clCreateKernel, program, name); }
 
-KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, const std::string& options) {
+KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, const std::string& requested) {
   auto start = std::chrono::steady_clock::now();
   std::string source = assemble_kernel_source(main_file);
   KernelProgram result;
+  // Correctly rounded division and sqrt where the device offers them (OpenCL's default allows 2.5 and
+  // 3 ulp): with contraction off, every operation of the kernels is then exactly defined.
+  std::string options = requested;
+  if (cl.info.correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   result.options = options;
   const DeviceInfo& d = cl.info;
   std::string identity = source + '\x1f' + options + '\x1f' + d.platform_name + '\x1f' + d.platform_version + '\x1f' +

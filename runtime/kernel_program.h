@@ -24,6 +24,8 @@ struct KernelProgram {
 // The cache directory is $PATHCL_KERNEL_CACHE, else $XDG_CACHE_HOME/pathcl/kernels, else
 // ~/.cache/pathcl/kernels; an empty PATHCL_KERNEL_CACHE turns caching off. A cached binary that the
 // driver rejects is rebuilt from source. A failed build throws RuntimeFailure with the build log.
+// Where the device has correctly rounded divide and sqrt, -cl-fp32-correctly-rounded-divide-sqrt is
+// added to the options (KernelProgram::options has it).
 KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, const std::string& options);
 
 // A kernel object released with its owner.

@@ -2,198 +2,446 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
+#include "runtime/checkpoint.h"
 #include "runtime/kernel_program.h"
 
 namespace {
 
-Film read_film(ClContext& cl, const ClBuffer& film_buf, uint32_t width, uint32_t height) {
-  std::vector<pc_float4> acc(3 * size_t(width) * height);
-  CL_CHECK(clEnqueueReadBuffer(cl.queue, film_buf.mem, CL_TRUE, 0, acc.size() * sizeof(pc_float4), acc.data(), 0,
-                               nullptr, nullptr));
-  return film_from_accumulators(width, height, std::move(acc));
-}
+using Clock = std::chrono::steady_clock;
 
-}  // namespace
+constexpr uint32_t kProbePixels = 64, kProbeSamples = 4;
+constexpr double kGpuUnitSeconds = 0.075;  // 50-100 ms: long enough to amortise a launch, short for watchdogs
+constexpr double kCpuUnitSeconds = 0.25;
 
-Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_float4> acc) {
-  size_t pixels = size_t(width) * height;
-  Film f;
-  f.width = width;
-  f.height = height;
-  f.mean.resize(3 * pixels);
-  f.variance.resize(3 * pixels);
-  f.even_mean.resize(3 * pixels);
-  f.odd_mean.resize(3 * pixels);
-  for (size_t p = 0; p < pixels; ++p) {
-    const pc_float4 &even = acc[3 * p], &odd = acc[3 * p + 1], &sq = acc[3 * p + 2];
-    double n = double(even.w) + odd.w;
-    f.spp = uint32_t(n);
-    const float e[3] = {even.x, even.y, even.z}, o[3] = {odd.x, odd.y, odd.z}, s[3] = {sq.x, sq.y, sq.z};
-    for (int c = 0; c < 3; ++c) {
-      double sum = double(e[c]) + o[c];
-      double mean = n > 0 ? sum / n : 0;
-      f.mean[3 * p + c] = float(mean);
-      f.even_mean[3 * p + c] = even.w > 0 ? e[c] / even.w : 0.0f;
-      f.odd_mean[3 * p + c] = odd.w > 0 ? o[c] / odd.w : 0.0f;
-      double sample_variance = n > 1 ? std::max(0.0, (s[c] - sum * mean) / (n - 1)) : 0.0;
-      f.variance[3 * p + c] = float(n > 0 ? sample_variance / n : 0.0);
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// What a device's thread reports to the render loop.
+struct Event {
+  enum Kind { ready, done, failed } kind = ready;
+  uint32_t device = 0;
+  uint64_t unit = 0;       // done, failed (0: the set-up failed)
+  UnitOutput output;       // done
+  uint64_t probe_hash = 0; // ready
+  double probe_seconds = 0;
+  std::string error;       // failed
+  bool usage_error = false;
+};
+
+class EventQueue {
+ public:
+  void push(Event e) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      events_.push_back(std::move(e));
+    }
+    cv_.notify_one();
+  }
+  // The next event, waiting at most until `deadline`.
+  std::optional<Event> pop(Clock::time_point deadline) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!cv_.wait_until(lock, deadline, [&] { return !events_.empty(); })) return std::nullopt;
+    Event e = std::move(events_.front());
+    events_.pop_front();
+    return e;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Event> events_;
+};
+
+// A device's thread: prepares its worker (and probes it when the render has several devices), then runs
+// the units it is given, one at a time, until told to stop.
+class WorkerThread {
+ public:
+  struct Setup {
+    const DeviceScene* scene;
+    SceneHeader header;
+    WorkerSettings settings;
+    bool probe;
+  };
+  WorkerThread(std::unique_ptr<DeviceWorker> worker, uint32_t index, EventQueue& events, Setup setup)
+      : worker_(std::move(worker)), index_(index), events_(events) {
+    thread_ = std::thread([this, setup] { run(setup); });
+  }
+  ~WorkerThread() { stop(); }
+  void submit(WorkUnit unit, std::vector<pc_float4> input) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      job_ = Job{unit, std::move(input)};
+    }
+    cv_.notify_one();
+  }
+  // Ends the thread after the unit it runs, if any.
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    cv_.notify_one();
+    if (thread_.joinable()) thread_.join();
+  }
+  DeviceWorker& worker() { return *worker_; }
+
+ private:
+  struct Job {
+    WorkUnit unit;
+    std::vector<pc_float4> input;
+  };
+  void run(const Setup& setup) {
+    Event ready;
+    ready.device = index_;
+    try {
+      worker_->prepare(*setup.scene, setup.header, setup.settings);
+      if (setup.probe) {
+        auto start = Clock::now();
+        ready.probe_hash = worker_->probe(kProbePixels, kProbeSamples);
+        ready.probe_seconds = seconds_since(start);
+      }
+    } catch (const std::exception& e) {
+      ready.kind = Event::failed;
+      ready.error = e.what();
+      ready.usage_error = dynamic_cast<const UsageError*>(&e) != nullptr;
+      events_.push(std::move(ready));
+      return;
+    }
+    events_.push(std::move(ready));
+    for (;;) {
+      Job job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return quit_ || job_.has_value(); });
+        if (!job_) return;  // quit, and nothing left to run
+        job = std::move(*job_);
+        job_.reset();
+      }
+      Event e;
+      e.device = index_;
+      e.unit = job.unit.id;
+      try {
+        e.output = worker_->run(job.unit, job.unit.upload ? &job.input : nullptr);
+        e.kind = Event::done;
+      } catch (const std::exception& ex) {
+        e.kind = Event::failed;
+        e.error = ex.what();
+      }
+      events_.push(std::move(e));
     }
   }
-  f.accumulators = std::move(acc);
-  return f;
+
+  std::unique_ptr<DeviceWorker> worker_;
+  uint32_t index_;
+  EventQueue& events_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::optional<Job> job_;
+  bool quit_ = false;
+  std::thread thread_;
+};
+
+uint32_t next_power_of_two_above(uint32_t s) {
+  uint64_t p = 1;
+  while (p <= s) p *= 2;
+  return uint32_t(std::min<uint64_t>(p, UINT32_MAX));
 }
 
-LaunchSize adapt_launch_size(LaunchSize size, double slowest_launch_ms, size_t pixels) {
-  // Too slow: fewer samples per launch first, then fewer pixels (in steps of 1024, at least 1024).
-  // Too fast: more pixels first (up to the whole film), then more samples (up to 256).
-  if (slowest_launch_ms > 100 && size.pass_spp > 1) size.pass_spp /= 2;
-  else if (slowest_launch_ms > 100) size.launch_pixels = std::max<size_t>(size.launch_pixels / 2 / 1024 * 1024, 1024);
-  else if (slowest_launch_ms < 50 && size.launch_pixels < pixels) size.launch_pixels = std::min(pixels, size.launch_pixels * 2);
-  else if (slowest_launch_ms < 50 && size.pass_spp < 256) size.pass_spp *= 2;
-  return size;
-}
+bool is_power_of_two(uint32_t s) { return s > 0 && (s & (s - 1)) == 0; }
 
-double estimated_rel_mse(const Film& film) {
-  size_t n = film.mean.size();
-  if (n == 0 || film.spp < 2) return 0;
-  // With n_e even and n_o odd samples, Var(even - odd) = s^2 (1/n_e + 1/n_o) and Var(mean) = s^2 / n.
-  double n_even = (film.spp + 1) / 2, n_odd = film.spp / 2;
-  double scale = 1.0 / (film.spp * (1.0 / n_even + 1.0 / n_odd));
-  double sum = 0;
-  for (size_t i = 0; i < n; ++i) {
-    double d = double(film.even_mean[i]) - film.odd_mean[i];
-    double m = film.mean[i];
-    sum += d * d * scale / (m * m + 0.01);
-  }
-  return sum / n;
-}
-
-RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
-                    const PassObserver& observer) {
+RenderResult render_on(std::vector<std::unique_ptr<DeviceWorker>> workers, const DeviceScene& scene,
+                       const RenderOptions& options, const RenderCallbacks& callbacks) {
   RenderResult result;
+  auto setup_start = Clock::now();
   SceneHeader header = scene.header;
   header.max_depth = options.max_depth;
   header.seed = options.seed;
   header.rr_depth = options.rr_depth;
   header.sampler = options.sampler;
   header.spp = options.spp;
-  const size_t pixels = size_t(header.width) * header.height;
+  const uint32_t pixels = header.width * header.height;
+  const size_t n = workers.size();
 
-  std::string build_options = kernel_options(options.all_features ? kFeatureAll : scene.features);
-  if (options.debug_inject_hazards) build_options += " -DPC_DEBUG_INJECT_HAZARDS";
-  KernelProgram program = build_kernel_program(cl, "integrator.cl", build_options);
-  result.kernel_build_ms = program.build_ms;
-  result.kernel_from_cache = program.from_cache;
-  result.kernel_options = program.options;
-
-  // Everything the render keeps on the device must fit in its memory.
-  size_t scene_bytes = sizeof(SceneHeader) + scene.nodes.size() * sizeof(Bvh4Node) + scene.prims.size() * sizeof(Primitive) +
-                       scene.shading.size() * sizeof(PrimShading) + scene.normals.size() * sizeof(pc_float4) +
-                       scene.uvs.size() * sizeof(pc_float4) + scene.materials.size() * sizeof(Material) +
-                       scene.lights.size() * sizeof(Light) + scene.light_cdf.size() * sizeof(float) +
-                       scene.textures.size() * sizeof(Texture) + scene.texels.size() * sizeof(pc_float4) +
-                       scene.env_dist.size() * sizeof(float);
-  size_t film_bytes = pixels * (3 * sizeof(pc_float4) + sizeof(PassStats));
-  if (scene_bytes + film_bytes > cl.info.global_memory)
-    throw RuntimeFailure("the render needs " + std::to_string((scene_bytes + film_bytes) >> 20) + " MiB on the device (scene " +
-                         std::to_string(scene_bytes >> 20) + " MiB, film " + std::to_string(film_bytes >> 20) + " MiB), " +
-                         cl.info.name + " has " + std::to_string(cl.info.global_memory >> 20) + " MiB");
-
-  auto start = std::chrono::steady_clock::now();
-  ClBuffer header_buf(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof header, &header);
-  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
-           normals = upload(cl, scene.normals), uvs = upload(cl, scene.uvs), materials = upload(cl, scene.materials),
-           lights = upload(cl, scene.lights), cdf = upload(cl, scene.light_cdf), textures = upload(cl, scene.textures),
-           texels = upload(cl, scene.texels), env_dist = upload(cl, scene.env_dist);
-  ClBuffer film(cl, CL_MEM_READ_WRITE, 3 * pixels * sizeof(pc_float4));
-  ClBuffer stats(cl, CL_MEM_WRITE_ONLY, pixels * sizeof(PassStats));
-  uint32_t done = 0;
+  uint32_t start_spp = 0;
+  std::vector<pc_float4> film(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
   if (options.resume) {
-    if (options.resume->accumulators.size() != 3 * pixels)
+    if (options.resume->accumulators.size() != film.size())
       throw RuntimeFailure("the film to resume from has " + std::to_string(options.resume->accumulators.size() / 3) +
                            " pixels, the render " + std::to_string(pixels));
-    CL_CHECK(clEnqueueWriteBuffer(cl.queue, film.mem, CL_TRUE, 0, 3 * pixels * sizeof(pc_float4),
-                                  options.resume->accumulators.data(), 0, nullptr, nullptr));
-    done = options.resume->spp;
-  } else {
-    const pc_float4 zero{0, 0, 0, 0};
-    CL_CHECK(clEnqueueFillBuffer(cl.queue, film.mem, &zero, sizeof zero, 0, 3 * pixels * sizeof zero, 0, nullptr,
-                                 nullptr));
+    film = options.resume->accumulators;
+    start_spp = options.resume->spp;
   }
 
-  ClKernel kernel(program.kernel("render_pass"));
-  cl_mem args[] = {header_buf.mem, nodes.mem,    prims.mem,  shading.mem,  normals.mem,
-                   uvs.mem,        materials.mem, lights.mem, cdf.mem,      textures.mem,
-                   texels.mem,     env_dist.mem,  film.mem,   stats.mem};
-  const cl_uint arg_count = sizeof args / sizeof args[0];
-  for (cl_uint i = 0; i < arg_count; ++i) kernel.arg(i, args[i]);
+  // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices
+  // the probe that tells their arithmetic classes apart.
+  std::string build_options = kernel_options(options.all_features ? kFeatureAll : scene.features);
+  if (options.debug_inject_hazards) build_options += " -DPC_DEBUG_INJECT_HAZARDS";
+  EventQueue events;
+  std::vector<std::unique_ptr<WorkerThread>> threads;
+  result.devices.resize(n);
+  std::vector<ScheduleDevice> schedule_devices(n);
+  for (size_t d = 0; d < n; ++d) {
+    const DeviceInfo& info = workers[d]->cl().info;
+    DeviceReport& report = result.devices[d];
+    report.name = info.name;
+    report.platform = info.platform_name;
+    report.sub_device = info.sub_device;
+    report.compute_units = info.compute_units;
+    double target = info.is_gpu ? kGpuUnitSeconds : kCpuUnitSeconds;
+    if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
+    schedule_devices[d].target_seconds = target;
+    WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
+    if (d < options.faults.size()) setup.settings.fault = options.faults[d];
+    threads.push_back(std::make_unique<WorkerThread>(std::move(workers[d]), uint32_t(d), events, setup));
+  }
+  std::vector<bool> ready(n, false);
+  std::vector<uint64_t> probe(n, 0);
+  std::string first_error;
+  bool usage_error = false;
+  for (size_t pending = n; pending > 0; --pending) {
+    Event e = *events.pop(Clock::time_point::max());
+    DeviceReport& report = result.devices[e.device];
+    if (e.kind == Event::failed) {
+      report.used = false;
+      report.note = "failed to start: " + e.error;
+      if (first_error.empty()) first_error = e.error;
+      usage_error |= e.usage_error;
+      continue;
+    }
+    ready[e.device] = true;
+    probe[e.device] = e.probe_hash;
+    report.probe_seconds = e.probe_seconds;
+    const KernelProgram& program = threads[e.device]->worker().program();
+    report.kernel_build_ms = program.build_ms;
+    report.kernel_from_cache = program.from_cache;
+    report.kernel_options = program.options;
+    if (e.probe_seconds > 0) schedule_devices[e.device].rate = double(kProbePixels) * kProbeSamples / e.probe_seconds;
+  }
+  if (std::none_of(ready.begin(), ready.end(), [](bool r) { return r; })) {
+    if (usage_error) throw UsageError(first_error);
+    throw RuntimeFailure(first_error);
+  }
+  result.kernel_from_cache = true;
+  for (size_t d = 0; d < n; ++d) {
+    if (!ready[d]) continue;
+    const DeviceReport& r = result.devices[d];
+    result.kernel_build_ms = std::max(result.kernel_build_ms, r.kernel_build_ms);
+    result.kernel_from_cache &= r.kernel_from_cache;
+    if (result.kernel_options.empty()) result.kernel_options = r.kernel_options;
+  }
 
-  // Launch sizing. On a GPU, unless the caller fixed pass_spp, the samples and pixels per launch adapt
-  // so that a launch takes 50-100 ms: long enough to amortise it, short enough that a desktop
-  // watchdog never kills it. A CPU device has no watchdog, and PoCL compiles a new work-group function
-  // for every new launch shape, so there a pass covers the whole film with about 2^20 samples. Any
-  // sizing gives the same pixels.
-  const bool adaptive = options.pass_spp == 0 && cl.info.is_gpu;
-  uint32_t pass_spp = options.pass_spp;
-  if (pass_spp == 0)
-    pass_spp = adaptive || options.max_pass_seconds > 0 ? 1 : uint32_t(std::clamp<size_t>((size_t(1) << 20) / std::max<size_t>(pixels, 1), 1, 64));
-  size_t launch_pixels = std::min(pixels, options.max_pixels_per_launch > 0 ? options.max_pixels_per_launch : pixels);
-  std::vector<PassStats> pass_stats(pixels);
-  std::optional<Film> last_film;
-  auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  while (done < options.spp) {
-    uint32_t count = std::min(pass_spp, options.spp - done);
-    if (options.power_of_two_passes) {
-      uint32_t next_power = 1;
-      while (next_power <= done) next_power *= 2;
-      count = std::min(count, next_power - done);
+  // Arithmetic classes: devices whose probe differs from the first ready device's compute other bits.
+  size_t reference = std::find(ready.begin(), ready.end(), true) - ready.begin();
+  std::vector<uint64_t> classes{probe[reference]};
+  for (size_t d = 0; d < n; ++d) {
+    if (!ready[d]) continue;
+    auto it = std::find(classes.begin(), classes.end(), probe[d]);
+    result.devices[d].arithmetic_class = uint32_t(it - classes.begin());
+    if (it == classes.end()) classes.push_back(probe[d]);
+  }
+  if (options.allow_mixed_devices && classes.size() > 1) result.determinism = "mixed";
+  for (size_t d = 0; d < n; ++d) schedule_devices[d].mixed_class = result.devices[d].arithmetic_class != 0;
+  RenderSchedule schedule(pixels, options.tile_pixels > 0 ? options.tile_pixels : RenderSchedule::default_tile_pixels(pixels),
+                          start_spp, schedule_devices);
+  for (size_t d = 0; d < n; ++d) {
+    DeviceReport& report = result.devices[d];
+    if (!ready[d]) {
+      schedule.remove_device(uint32_t(d), report.note);
+      result.warnings.push_back(report.name + ": " + report.note + "; rendering on the other devices");
+    } else if (report.arithmetic_class != 0 && !options.allow_mixed_devices) {
+      report.used = false;
+      report.note = "left out: its probe render differs from " + result.devices[reference].name +
+                    "'s (another arithmetic class); --allow-mixed-devices uses it anyway";
+      schedule.remove_device(uint32_t(d), report.note);
+      result.warnings.push_back(report.name + ": " + report.note);
     }
-    kernel.arg(arg_count, done);
-    kernel.arg(arg_count + 1, count);
-    double slowest_launch_ms = 0, pass_ms = 0;
-    for (size_t first = 0; first < pixels; first += launch_pixels) {
-      size_t n = std::min(launch_pixels, pixels - first);
-      double ms = run_kernel(cl, kernel.k, n, options.work_group, first);
-      result.kernel_ms += ms;
-      pass_ms += ms;
-      slowest_launch_ms = std::max(slowest_launch_ms, ms);
-      result.launches++;
+  }
+  if (options.pass_spp > 0) schedule.fix_samples_per_unit(options.pass_spp);
+  if (options.max_unit_pixels > 0) schedule.limit_unit_pixels(options.max_unit_pixels);
+  result.setup_seconds = seconds_since(setup_start);
+
+  // The render: hand units to idle devices, copy finished ones into the film, stop at a horizon.
+  auto start = Clock::now();
+  auto now = [&] { return seconds_since(start); };
+  auto next_horizon = [&](uint32_t s) {
+    uint32_t h = options.spp;
+    if (options.power_of_two_horizons || options.target_error > 0) h = std::min(h, next_power_of_two_above(s));
+    return std::max(h, s);
+  };
+  schedule.set_horizon(next_horizon(start_spp));
+  std::map<uint64_t, std::vector<pc_float4>> kept;  // committed results whose copies still run
+  std::vector<bool> busy(n, false);
+  double last_checkpoint = 0;
+  bool closing = false;
+  const uint64_t samples_total = uint64_t(pixels) * options.spp;
+  auto samples_done = [&] {
+    uint64_t s = 0;
+    for (uint32_t t = 0; t < schedule.tile_count(); ++t)
+      s += uint64_t(schedule.level_of_tile(t)) * std::min(schedule.tile_pixels(), pixels - t * schedule.tile_pixels());
+    return s;
+  };
+  auto checkpoint_due = [&] { return !options.checkpoint.empty() && now() - last_checkpoint >= options.checkpoint_every; };
+  auto stop_requested = [&] {
+    return (options.interrupt && *options.interrupt) || (options.time_budget > 0 && now() >= options.time_budget) ||
+           checkpoint_due();
+  };
+  auto make_film = [&] { return film_from_accumulators(header.width, header.height, film); };
+  auto write_checkpoint_now = [&](const Film& f) {
+    write_checkpoint(options.checkpoint, options.checkpoint_key, f);
+    last_checkpoint = now();
+    result.checkpoint_spp = f.spp;
+  };
+  auto handle = [&](Event& e) {
+    busy[e.device] = false;
+    DeviceReport& report = result.devices[e.device];
+    if (e.kind == Event::failed) {
+      const WorkUnit* u = schedule.running(e.unit);
+      if (u) schedule.fail(e.unit, "failed: " + e.error);
+      report.note = "failed after " + std::to_string(report.units) + " units: " + e.error;
+      result.warnings.push_back(report.name + " " + report.note + "; its units go to the other devices");
+      return;
     }
-    CL_CHECK(clEnqueueReadBuffer(cl.queue, stats.mem, CL_TRUE, 0, pixels * sizeof(PassStats), pass_stats.data(), 0,
-                                 nullptr, nullptr));
-    for (const PassStats& s : pass_stats) {
-      result.rays += s.rays;
+    const WorkUnit unit = *schedule.running(e.unit);
+    UnitFinish f = schedule.finish(e.unit, e.output.seconds);
+    report.kernel_seconds += e.output.kernel_ms * 1e-3;
+    report.transfer_seconds += e.output.transfer_ms * 1e-3;
+    result.kernel_ms += e.output.kernel_ms;
+    result.launches++;
+    // The worker's read-back buffer stays valid until its next unit, which is given only after this.
+    const std::vector<pc_float4>& accumulators = threads[e.device]->worker().result();
+    if (f.outcome == UnitOutcome::committed) {
+      std::copy(accumulators.begin(), accumulators.end(), film.begin() + 3 * size_t(unit.pixel_begin));
+      const UnitStats& s = e.output.stats;
+      result.rays += uint64_t(s.rays_hi) << 32 | s.rays_lo;
       result.nan_samples += s.nan_samples;
       result.inf_samples += s.inf_samples;
       result.negative_samples += s.negative_samples;
+      if (f.twin != 0) kept[e.unit] = accumulators;
+      if (callbacks.progress) callbacks.progress(samples_done(), samples_total, now());
+    } else if (f.outcome == UnitOutcome::compare) {
+      auto twin = kept.find(f.twin);
+      const std::vector<pc_float4>& a = twin->second;
+      const std::vector<pc_float4>& b = accumulators;
+      if (a.size() != b.size() || std::memcmp(a.data(), b.data(), a.size() * sizeof(pc_float4)) != 0)
+        throw RuntimeFailure(report.name + " and another device of the same arithmetic class computed different bits "
+                             "for pixels " + std::to_string(unit.pixel_begin) + "-" +
+                             std::to_string(unit.pixel_begin + unit.pixel_count - 1) + ", samples " +
+                             std::to_string(unit.sample_begin) + "-" +
+                             std::to_string(unit.sample_begin + unit.sample_count - 1) + ": a determinism bug");
+      kept.erase(twin);
+      result.duplicate_checks++;
+    } else if (f.twin != 0) {
+      kept.erase(f.twin);
     }
-    done += count;
-    result.passes++;
-    if (adaptive && count == pass_spp) {
-      LaunchSize next = adapt_launch_size({pass_spp, launch_pixels}, slowest_launch_ms, pixels);
-      pass_spp = next.pass_spp;
-      launch_pixels = next.launch_pixels;
+  };
+
+  for (;;) {
+    for (size_t d = 0; d < n; ++d) {
+      if (!ready[d] || busy[d]) continue;
+      std::optional<WorkUnit> u = schedule.next_unit(uint32_t(d), now());
+      if (!u) continue;
+      std::vector<pc_float4> input;
+      if (u->upload)
+        input.assign(film.begin() + 3 * size_t(u->pixel_begin), film.begin() + 3 * size_t(u->pixel_begin + u->pixel_count));
+      busy[d] = true;
+      threads[d]->submit(*u, std::move(input));
     }
-    if (options.max_pass_seconds > 0 && count == pass_spp) {  // passes of about half to all of the limit
-      if (pass_ms > 1e3 * options.max_pass_seconds && pass_spp > 1)
-        pass_spp = std::max<uint32_t>(1, uint32_t(pass_spp * 1e3 * options.max_pass_seconds / pass_ms));
-      else if (pass_ms < 0.5e3 * options.max_pass_seconds && pass_spp < 64)
-        pass_spp *= 2;
+    if (schedule.at_horizon()) {
+      result.horizons++;
+      uint32_t spp = schedule.horizon();
+      std::optional<Film> f;
+      auto film_now = [&]() -> const Film& {
+        if (!f) f = make_film();
+        return *f;
+      };
+      if (callbacks.horizon && is_power_of_two(spp) && options.power_of_two_horizons) callbacks.horizon(film_now(), now(), result.kernel_build_ms);
+      std::string stop;
+      if (spp >= options.spp) stop = "spp";
+      else if (options.interrupt && *options.interrupt) stop = "interrupted";
+      // The half-image estimate needs a few samples in each half before it can be trusted.
+      else if (options.target_error > 0 && spp >= 8 && is_power_of_two(spp) && estimated_rel_mse(film_now()) < options.target_error)
+        stop = "target_error";
+      else if (options.time_budget > 0 && now() >= options.time_budget) stop = "time";
+      if (!options.checkpoint.empty() && (checkpoint_due() || (!stop.empty() && result.checkpoint_spp != spp)))
+        write_checkpoint_now(film_now());
+      if (!stop.empty()) {
+        result.stop_reason = stop;
+        break;
+      }
+      schedule.set_horizon(next_horizon(spp));
+      closing = false;
+      continue;
     }
-    // The observer may read the film several times in a pass (checkpoint, convergence log); it is read
-    // from the device once, and the last pass's read is also the result.
-    auto film_now = [&] {
-      if (!last_film || last_film->spp != done) last_film = read_film(cl, film, header.width, header.height);
-      return *last_film;
-    };
-    if (observer && !observer({done, options.spp, seconds(), result.kernel_build_ms}, film_now) && done < options.spp) {
-      result.stopped_early = true;
-      break;
+    if (schedule.idle()) {
+      if (!schedule.any_active_device()) {
+        std::string why;
+        for (const DeviceReport& r : result.devices) why += "\n  " + r.name + ": " + r.note;
+        throw RuntimeFailure("every device failed:" + why);
+      }
+      throw std::logic_error("render loop: no unit running, none to start, and the film is not at the horizon");
+    }
+    // Wake for the next event, or when a deadline asks for the pass to be closed.
+    Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(closing ? 1000 : 20);
+    if (options.time_budget > 0 && !closing)
+      deadline = std::min(deadline, start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.time_budget)));
+    if (std::optional<Event> e = events.pop(deadline)) handle(*e);
+    if (!closing && stop_requested()) {
+      schedule.close_pass();
+      closing = true;
     }
   }
-  result.film = last_film && last_film->spp == done ? std::move(*last_film) : read_film(cl, film, header.width, header.height);
-  result.render_seconds = seconds();
+  // Copies still running are waited for and compared: they are the identity check.
+  while (!schedule.idle()) {
+    Event e = *events.pop(Clock::time_point::max());
+    handle(e);
+  }
+  result.render_seconds = now();
+  for (auto& t : threads) t->stop();
+
+  result.film = make_film();
+  const auto& stats = schedule.device_stats();
+  for (size_t d = 0; d < n; ++d) {
+    DeviceReport& r = result.devices[d];
+    const ScheduleDeviceStats& s = stats[d];
+    r.units = s.units;
+    r.samples = s.samples;
+    r.duplicates_run = s.duplicates_run;
+    r.duplicates_won = s.duplicates_won;
+    r.failures = s.failures;
+    r.busy_seconds = s.busy_seconds;
+    r.idle_seconds = r.used ? std::max(0.0, result.render_seconds - s.busy_seconds) : 0;
+    if (s.dropped) r.note = s.left_because;
+    if (r.used && s.finished == 0 && r.note.empty()) r.note = "no unit was left for it";
+  }
   return result;
+}
+
+}  // namespace
+
+RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& scene, const RenderOptions& options,
+                    const RenderCallbacks& callbacks) {
+  if (devices.empty()) throw UsageError("no device to render on");
+  // With a GPU in the set, CPU devices leave one core to the host threads that feed it.
+  bool has_gpu = std::any_of(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.is_gpu; });
+  std::vector<std::unique_ptr<DeviceWorker>> workers;
+  for (const DeviceInfo& d : devices) {
+    DeviceInfo use = has_gpu && d.is_cpu && d.compute_units > 1 ? partition_device(d, d.compute_units - 1) : d;
+    workers.push_back(std::make_unique<DeviceWorker>(use));
+  }
+  return render_on(std::move(workers), scene, options, callbacks);
+}
+
+RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
+                    const RenderCallbacks& callbacks) {
+  std::vector<std::unique_ptr<DeviceWorker>> workers;
+  workers.push_back(std::make_unique<DeviceWorker>(cl));
+  return render_on(std::move(workers), scene, options, callbacks);
 }

@@ -1,15 +1,20 @@
-// Progressive rendering of a device scene: uploads it, builds the specialised megakernel, launches
-// passes of samples and reads the film back.
+// The render loop: renders a device scene on one or several OpenCL devices at once and owns everything
+// that decides when a render stops or shows its film: the schedule of work units (runtime/render_schedule.h),
+// the horizons at which every pixel has the same samples, checkpoints, time and error budgets, interrupts.
+// Each device is a DeviceWorker (runtime/device_worker.h) in a thread of its own. The film is a pure
+// function of scene, settings and seed: the same bits for any device set of one arithmetic class, any
+// split into units and any timing.
 #pragma once
+#include <csignal>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "runtime/device.h"
+#include "runtime/device_worker.h"
+#include "runtime/film.h"
 #include "scene/device_scene.h"
-
-struct Film;
 
 struct RenderOptions {
   uint32_t spp = 16;
@@ -19,64 +24,75 @@ struct RenderOptions {
   // Independent samples here, so that a film's per-pixel variance is an unbiased estimate of its error
   // (the statistical tests rely on it); a scene file's default is sobol (scene/scene_description.h).
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
-  uint32_t pass_spp = 0;       // samples per pixel per kernel launch; 0 adapts launches to 50-100 ms
-  double max_pass_seconds = 0;  // > 0: shrink passes that take longer (keeps a time budget's overrun small)
-  size_t max_pixels_per_launch = 0;  // 0: the whole film (adaptive sizing may still split it)
-  bool power_of_two_passes = false;  // also end a pass at every power of two spp (for convergence rows)
-  size_t work_group = 0;       // 0 lets the driver choose
   bool all_features = false;   // build the unspecialised kernel
   const Film* resume = nullptr; // continue from this film (its accumulators and spp), e.g. a checkpoint
-  bool debug_inject_hazards = false;  // tests only: make some samples NaN, infinite or negative
+
+  // When to stop before spp, and when to show the whole film at one spp.
+  double time_budget = 0;       // > 0: stop at the first horizon after this many seconds of rendering
+  double target_error = 0;      // > 0: stop at the first power of two spp (at least 8) whose estimated relMSE is below
+  bool power_of_two_horizons = false;  // also a horizon at every power of two spp (convergence rows)
+  std::string checkpoint;       // non-empty: keep the render state in this file
+  double checkpoint_every = 60; // seconds between checkpoints (0: at every pass)
+  uint64_t checkpoint_key = 0;  // render_key() of the scene and settings (runtime/checkpoint.h)
+  const volatile std::sig_atomic_t* interrupt = nullptr;  // non-zero: stop at the next horizon
+
+  // Work units (runtime/render_schedule.h); any choice gives the same pixels.
+  uint32_t pass_spp = 0;        // samples per unit; 0 adapts units to the devices' rates
+  uint32_t tile_pixels = 0;     // pixels per tile; 0: about 256 tiles
+  uint32_t max_unit_pixels = 0; // 0: as the devices' rates allow
+  size_t work_group = 0;        // 0: 64 (or the kernel's limit)
+
+  // Several devices.
+  bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's
+  // Tests only.
+  bool debug_inject_hazards = false;   // make some samples NaN, infinite or negative
+  std::vector<DeviceFault> faults;     // per device index (in the order given), if present
 };
 
-// The film as read back: per pixel RGB, row 0 at the top.
-struct Film {
-  uint32_t width = 0, height = 0, spp = 0;
-  std::vector<float> mean;      // the mean of all samples
-  std::vector<float> variance;  // the estimated variance of that mean (sample variance / spp)
-  std::vector<float> even_mean, odd_mean;  // means of the even- and odd-numbered samples
-  // The device's accumulators, 3 per pixel: even-sample sum (w: count), odd-sample sum, sum of squares.
-  std::vector<pc_float4> accumulators;
+// What each device did.
+struct DeviceReport {
+  std::string name, platform;
+  uint32_t arithmetic_class = 0;  // 0: the first device's; devices of other classes are left out unless mixed
+  bool used = true;               // rendered units (false: left out, or failed before its first unit)
+  std::string note;               // why it left or was left out
+  bool sub_device = false;
+  uint32_t compute_units = 0;
+  uint64_t units = 0, samples = 0, duplicates_run = 0, duplicates_won = 0, failures = 0;
+  double kernel_seconds = 0, transfer_seconds = 0, busy_seconds = 0, idle_seconds = 0;
+  double kernel_build_ms = 0;
+  bool kernel_from_cache = false;
+  std::string kernel_options;
+  double probe_seconds = 0;
 };
-
-// Derives the means and variances from accumulators (3 per pixel).
-Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_float4> accumulators);
-
-// The relative MSE of the film's mean, estimated from the difference of its two half images:
-// mean over pixels and channels of E[(even - odd)^2] scaled to one full mean, over (mean^2 + 0.01).
-double estimated_rel_mse(const Film& film);
-
-// GPU launch sizing (RenderOptions::pass_spp = 0 on a GPU): after each pass, the samples per pass and
-// pixels per launch move towards a slowest launch of 50-100 ms, long enough to amortise a launch and
-// short enough that a desktop watchdog never kills one.
-struct LaunchSize {
-  uint32_t pass_spp = 1;
-  size_t launch_pixels = 0;
-};
-LaunchSize adapt_launch_size(LaunchSize size, double slowest_launch_ms, size_t pixels);
 
 struct RenderResult {
   Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;
-  double kernel_build_ms = 0;
-  bool kernel_from_cache = false;
-  std::string kernel_options;
-  double render_seconds = 0;  // wall time of the passes, upload and read-back included
-  double kernel_ms = 0;       // device time of the render passes
-  uint32_t passes = 0;    // sample ranges, each over every pixel
-  uint32_t launches = 0;  // kernel launches (a pass may be split into pixel ranges)
-  bool stopped_early = false; // the observer ended the render before options.spp
+  double kernel_build_ms = 0;  // the slowest device's build (they build at once)
+  bool kernel_from_cache = false;  // every device loaded its kernel from the cache
+  std::string kernel_options;      // the first device's
+  double setup_seconds = 0;        // builds, uploads and probes, before the first unit
+  double render_seconds = 0;       // from the first unit to the end
+  double kernel_ms = 0;            // device time of the units, all devices
+  uint32_t launches = 0;           // units run (copies included)
+  uint32_t horizons = 0;           // times the whole film was at one spp
+  std::string stop_reason = "spp"; // spp, time, target_error or interrupted
+  std::string determinism = "bitwise";  // or "mixed" (--allow-mixed-devices with several classes)
+  uint32_t checkpoint_spp = 0;     // samples in the checkpoint written last (0: none)
+  uint64_t duplicate_checks = 0;   // copies compared bit for bit with their twins (all equal, or it throws)
+  std::vector<DeviceReport> devices;
+  std::vector<std::string> warnings;
 };
 
-struct PassInfo {
-  uint32_t spp_done = 0, spp_total = 0;
-  double seconds = 0;  // since the render started (after the kernel build)
-  double kernel_build_ms = 0;
+// Called after every committed unit (progress bars), and at every power-of-two horizon with the film
+// there when RenderOptions::power_of_two_horizons (convergence rows). Neither decides anything.
+struct RenderCallbacks {
+  std::function<void(uint64_t samples_done, uint64_t samples_total, double seconds)> progress;
+  std::function<void(const Film& film, double seconds, double kernel_build_ms)> horizon;
 };
 
-// Called after each pass. read_film() reads the film back (costly: call it only when needed).
-// Returning false stops the render after this pass.
-using PassObserver = std::function<bool(const PassInfo& pass, const std::function<Film()>& read_film)>;
-
+RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& scene, const RenderOptions& options,
+                    const RenderCallbacks& callbacks = {});
+// One device whose context the caller keeps (tests).
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
-                    const PassObserver& observer = {});
+                    const RenderCallbacks& callbacks = {});

@@ -6,6 +6,7 @@
 #include <glm/vec3.hpp>
 
 #include "kernels/shared/types.h"
+#include "scene/device_scene.h"
 
 // One node of the binary tree, flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4)
 // = 32 bytes. Interior node (prim_count == 0): the left child is the next node, the right child is
@@ -31,13 +32,9 @@ constexpr uint32_t kBvhMaxDepth = 64;
 // Leaves hold at most this many primitives (a 4-bit count in Bvh4Node references).
 constexpr uint32_t kBvhMaxLeafSize = 16;
 
-struct Bvh {
+struct Bvh : BvhStats {
   std::vector<BvhNode> nodes;       // nodes[0] is the root
   std::vector<uint32_t> prim_order; // leaf slot -> primitive index
-  uint32_t node_count = 0;          // binary nodes (nodes may be dropped after collapsing)
-  double sah_cost = 0;              // expected traversal + intersection cost (C_trav = C_isect = 1)
-  uint32_t depth = 0, leaf_count = 0, max_leaf_size = 0;
-  double build_ms = 0;
 };
 
 Bvh build_bvh(const std::vector<Aabb>& prim_boxes);

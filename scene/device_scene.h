@@ -1,5 +1,6 @@
 // The flattened, device-ready scene: plain arrays of the shared structs, no pointers. This is all that
-// runtime/ sees of a scene.
+// runtime/ sees of a scene: neither the scene description nor the binary BVH comes with it (they are
+// scene/device_scene_build.h's and scene/bvh_build.h's).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -8,8 +9,6 @@
 #include <glm/vec3.hpp>
 
 #include "kernels/shared/types.h"
-#include "scene/bvh_build.h"
-#include "scene/scene_description.h"
 
 // Scene features that select kernel code (-D flags); per-render settings never appear here.
 enum : uint32_t {
@@ -40,34 +39,35 @@ enum : uint32_t {
 // read the same files, so their scenes keep the world origin and the rays are traced as written.
 enum class DeviceOrigin { camera, world };
 
+// Figures of the binary SAH tree the device's 4-wide BVH was collapsed from (scene/bvh_build.h).
+struct BvhStats {
+  uint32_t node_count = 0;  // binary nodes
+  double sah_cost = 0;      // expected traversal + intersection cost (C_trav = C_isect = 1)
+  uint32_t depth = 0, leaf_count = 0, max_leaf_size = 0;
+  double build_ms = 0;      // binary build and collapse
+};
+
+// The arrays (PC_SCENE_ARRAYS of kernels/shared/types.h):
+//   nodes      the 4-wide BVH (collapse_to_bvh4 of the binary tree)
+//   prims      geometry in BVH leaf order
+//   shading    per primitive in scene order (the primitive index of hits and ray files)
+//   normals    3 per primitive in scene order, only for smooth shapes
+//   uvs        2 per primitive in scene order (kernels/scene.cl), only with textures
+//   materials
+//   lights     area lights first (in primitive order), then the others
+//   light_cdf  light_count + 1 entries, light_cdf[0] = 0, last = 1
+//   textures, texels
+//   env_dist   the environment map's sampling distribution (kernels/environment.cl)
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
   glm::dvec3 origin{0};              // world position of the device coordinates' origin (DeviceOrigin)
-  std::vector<Bvh4Node> nodes;      // the 4-wide BVH (collapse_to_bvh4 of bvh)
-  std::vector<Primitive> prims;      // BVH leaf order
-  std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims
-  std::vector<PrimShading> shading;  // scene order (the primitive index of hits and ray files)
-  std::vector<pc_float4> normals;    // 3 per primitive in scene order, only for smooth shapes
-  std::vector<pc_float4> uvs;        // 2 per primitive in scene order (kernels/scene.cl), only with textures
-  std::vector<Material> materials;
-  std::vector<Light> lights;         // area lights first (in primitive order), then the others
-  std::vector<float> light_cdf;      // light_count + 1 entries, light_cdf[0] = 0, last = 1
-  std::vector<Texture> textures;
-  std::vector<pc_float4> texels;
-  std::vector<float> env_dist;       // the environment map's sampling distribution (kernels/environment.cl)
+#define PC_DEVICE_SCENE_VECTOR(T, name) std::vector<T> name;
+  PC_SCENE_ARRAYS(PC_DEVICE_SCENE_VECTOR)
+#undef PC_DEVICE_SCENE_VECTOR
+  std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims (host only)
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;
   uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
-  Bvh bvh;                           // the binary tree's statistics; its nodes are dropped once collapsed
+  BvhStats bvh;
   uint32_t wide_depth = 0;           // depth of the 4-wide tree
 };
-
-// Flattens the scene: primitives in scene order (shapes in file order, triangles of a mesh in mesh
-// order), the BVH over them, the light distribution (proportional to power), the camera basis; every
-// position relative to `origin`, converted to float only after that subtraction. Throws SceneError when
-// geometry lies farther than kMaxSceneExtent from the origin.
-DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
-
-// Geometry of a scene-order primitive as the device sees it (world minus DeviceScene::origin), for tests
-// and ray generation.
-Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index);

@@ -1,4 +1,4 @@
-#include "scene/device_scene.h"
+#include "scene/device_scene_build.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +11,7 @@
 #include <glm/matrix.hpp>
 #include <glm/trigonometric.hpp>
 
+#include "scene/bvh_build.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -224,19 +225,19 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   if (boxes.size() >= PC_BVH4_MAX_LEAF_FIRST)
     throw SceneError(scene.path + ": " + std::to_string(boxes.size()) + " primitives; at most " +
                      std::to_string(PC_BVH4_MAX_LEAF_FIRST - 1) + " are supported");
-  out.bvh = build_bvh(boxes);
+  Bvh bvh = build_bvh(boxes);
   auto collapse_start = std::chrono::steady_clock::now();
-  Bvh4 wide = collapse_to_bvh4(out.bvh.nodes);
-  out.bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
-  out.bvh.node_count = uint32_t(out.bvh.nodes.size());
-  out.bvh.nodes = {};  // only the wide tree goes to the device
+  Bvh4 wide = collapse_to_bvh4(bvh.nodes);  // only the wide tree goes to the device
+  bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
+  bvh.node_count = uint32_t(bvh.nodes.size());
+  out.bvh = bvh;
   out.nodes = std::move(wide.nodes);
   out.wide_depth = wide.depth;
   out.prims.reserve(prims.size());
   out.leaf_slot.resize(prims.size());
   for (uint32_t slot = 0; slot < prims.size(); ++slot) {
-    out.prims.push_back(prims[out.bvh.prim_order[slot]]);
-    out.leaf_slot[out.bvh.prim_order[slot]] = slot;
+    out.prims.push_back(prims[bvh.prim_order[slot]]);
+    out.leaf_slot[bvh.prim_order[slot]] = slot;
   }
   // The scene's bounding sphere sizes the power of lights at infinity.
   Aabb bounds;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/ray_trace.h"
+#include "scene/bvh_build.h"
 #include "test_support.h"
 
 namespace {

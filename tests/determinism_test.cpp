@@ -45,15 +45,18 @@ TEST(Determinism, PassSplitDoesNotChangePixels) {
   for (uint32_t pass_spp : {0u, 1u, 5u, 7u}) EXPECT_TRUE(bitwise_equal(reference, render_with(scene, 9, pass_spp, 0))) << pass_spp;
 }
 
-TEST(Determinism, SplittingPixelsIntoLaunchesDoesNotChangePixels) {
+TEST(Determinism, SplittingPixelsIntoUnitsDoesNotChangePixels) {
   DeviceScene scene = small_cornell();
   RenderOptions opt;
   opt.spp = 6;
   opt.max_depth = 6;
   opt.seed = 9;
   opt.pass_spp = 2;
+  opt.tile_pixels = 1920;  // 48 x 40 pixels: one tile, a unit over the whole film
   RenderResult whole = render(test_device(), scene, opt);
-  opt.max_pixels_per_launch = 333;  // 48 x 40 = 1920 pixels: 6 launches per pass, the last one short
+  EXPECT_EQ(whole.launches, 3u);
+  opt.tile_pixels = 111;
+  opt.max_unit_pixels = 333;  // 6 units per pass, the last one short
   RenderResult split = render(test_device(), scene, opt);
   EXPECT_EQ(split.launches, 3u * 6u);
   EXPECT_TRUE(bitwise_equal(whole.film.mean, split.film.mean));

@@ -10,7 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "scene/device_scene.h"
+#include "scene/bvh_build.h"
+#include "scene/device_scene_build.h"
 #include "scene/mesh_clean.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"

@@ -33,33 +33,6 @@ std::string scene_json(const std::string& shapes, const std::string& lights = ""
          shapes + "]" + (lights.empty() ? "" : R"(, "lights": [)" + lights + "]") + "}";
 }
 
-// A device scene uploaded as the test kernels take it (PC_SCENE_PARAMS in kernels/tests_sampling.cl).
-struct SceneBuffers {
-  ClBuffer header, nodes, prims, shading, normals, uvs, materials, lights, light_cdf, textures, texels, env_dist;
-  explicit SceneBuffers(const DeviceScene& s) {
-    ClContext& cl = test_device();
-    header = upload(cl, std::vector<SceneHeader>{s.header});
-    nodes = upload(cl, s.nodes);
-    prims = upload(cl, s.prims);
-    shading = upload(cl, s.shading);
-    normals = upload(cl, s.normals);
-    uvs = upload(cl, s.uvs);
-    materials = upload(cl, s.materials);
-    lights = upload(cl, s.lights);
-    light_cdf = upload(cl, s.light_cdf);
-    textures = upload(cl, s.textures);
-    texels = upload(cl, s.texels);
-    env_dist = upload(cl, s.env_dist);
-  }
-  // Sets arguments 0..11; returns the next index.
-  cl_uint set(ClKernel& k) const {
-    const ClBuffer* all[] = {&header, &nodes, &prims, &shading, &normals, &uvs, &materials, &lights, &light_cdf,
-                             &textures, &texels, &env_dist};
-    for (cl_uint i = 0; i < 12; ++i) k.arg(i, all[i]->mem);
-    return 12;
-  }
-};
-
 // Light samples as light_sample_test writes them, 12 floats each.
 struct LightSamples {
   std::vector<float> v;
@@ -78,7 +51,7 @@ LightSamples sample_lights(const SceneBuffers& sb, const glm::dvec3& x, uint32_t
   ClContext& cl = test_device();
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, n * 12 * sizeof(float));
   ClKernel k(sampling_test_program().kernel("light_sample_test"));
-  cl_uint a = sb.set(k);
+  cl_uint a = sb.bind(k);
   k.arg(a++, f4(x));
   k.arg(a++, cl_uint(seed));
   k.arg(a++, out.mem);
@@ -89,7 +62,7 @@ LightSamples sample_lights(const SceneBuffers& sb, const glm::dvec3& x, uint32_t
 BinIntegrator light_pdf_integrator(const SceneBuffers& sb, const glm::dvec3& x, const SphereBinning& binning) {
   return [&sb, x, binning](const std::vector<uint32_t>& bins, int order) {
     ClKernel k(sampling_test_program().kernel("light_pdf_bins"));
-    cl_uint a = sb.set(k);
+    cl_uint a = sb.bind(k);
     k.arg(a++, f4(x));
     return run_pdf_bins_kernel(k, a, binning, bins, order);
   };
@@ -115,7 +88,7 @@ struct LightOutcome {
 // light it claims (hit distance = distance to the sampled point, radiance seen = Le = emission) with the
 // density the integrator would find for that direction.
 LightOutcome run_light_chi2(const LightCase& c, uint32_t seed, size_t n = kChi2Samples) {
-  SceneBuffers sb(c.scene);
+  SceneBuffers sb = test_scene_buffers(c.scene);
   LightSamples s = sample_lights(sb, c.x, seed, n);
   LightOutcome r;
   std::vector<double> observed(c.binning.count() + 1, 0);
@@ -226,7 +199,7 @@ TEST(LightSampling, OneSidedLightsSeenFromBehindGiveNoSamples) {
   glm::dvec3 a(-1, -0.5, 2), b(0.2, 1.2, 1.8), c(1.5, -1, 2.5);
   for (const std::string& shape :
        {triangle_json(a, c, b, R"("emission": [1, 1, 1])"), sphere_json({0, 0, 0.5}, 2, R"("emission": [1, 1, 1])")}) {
-    SceneBuffers sb(load_world_scene(write_temp_file("behind.json", scene_json(shape))));
+    SceneBuffers sb = test_scene_buffers(load_world_scene(write_temp_file("behind.json", scene_json(shape))));
     LightSamples s = sample_lights(sb, {0.1, 0.2, 0}, 3, 10000);
     for (size_t i = 0; i < s.n; ++i) ASSERT_EQ(s.status(i), 0) << shape;
   }
@@ -332,7 +305,7 @@ TEST(LightChi2, EnvironmentMap) {
   for (size_t k = 0; k < cases.size(); ++k) {
     const LightCase& c = cases[k];
     SCOPED_TRACE(c.name);
-    SceneBuffers sb(c.scene);
+    SceneBuffers sb = test_scene_buffers(c.scene);
     LightSamples s = sample_lights(sb, c.x, 6000 + uint32_t(k), kChi2Samples);
     std::vector<double> observed(c.binning.count() + 1, 0);
     size_t dark_hits = 0, mismatches = 0, failed = 0;
@@ -395,7 +368,7 @@ TEST(LightSampling, EnvironmentSampleRadianceAndDensityComeFromOneTexel) {
     img.rgb.insert(img.rgb.end(), {v, 0.8f * v, 1.2f * v});
   }
   const double scale = 1;
-  SceneBuffers sb(env_scene(img, scale));
+  SceneBuffers sb = test_scene_buffers(env_scene(img, scale));
   // Each texel's probability: its row's, times its own within the row, from luminance x sin(theta).
   std::vector<double> row_sum(img.height, 0);
   double total = 0;
@@ -452,7 +425,7 @@ TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
                 R"({"type": "spot", "position": [%.9g, %.9g, %.9g], "direction": [%.9g, %.9g, %.9g],
                     "intensity": [%g, %g, %g], "inner_angle_degrees": %g, "outer_angle_degrees": %g})",
                 pos.x, pos.y, pos.z, axis.x, axis.y, axis.z, intensity, 2 * intensity, intensity, inner, outer);
-  SceneBuffers sb(load_world_scene(write_temp_file("spot.json", scene_json(
+  SceneBuffers sb = test_scene_buffers(load_world_scene(write_temp_file("spot.json", scene_json(
       R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})", lights))));
   SphereBinning frame = SphereBinning::about(axis, M_PI);
   for (double angle : {0.0, 10.0, 24.9, 25.1, 28.0, 32.5, 37.0, 39.9, 40.1, 60.0, 150.0})
@@ -490,7 +463,7 @@ TEST(LightSampling, SpotLightFallsOffSmoothlyBetweenItsCones) {
 }
 
 TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
-  SceneBuffers sb(load_world_scene(write_temp_file(
+  SceneBuffers sb = test_scene_buffers(load_world_scene(write_temp_file(
       "sun.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
                              R"({"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [3, 2, 1]})"))));
   glm::dvec3 towards_light = -glm::normalize(glm::dvec3(0.3, -1, 0.2));
@@ -504,7 +477,7 @@ TEST(LightSampling, DirectionalLightArrivesFromOneDirectionAtInfinity) {
 }
 
 TEST(LightSampling, PointLightFollowsTheInverseSquareLaw) {
-  SceneBuffers sb(load_world_scene(write_temp_file(
+  SceneBuffers sb = test_scene_buffers(load_world_scene(write_temp_file(
       "point.json", scene_json(R"({"type": "sphere", "center": [0, 100, 0], "radius": 0.1, "material": "lamp"})",
                                R"({"type": "point", "position": [1, 2, 3], "intensity": [5, 5, 5]})"))));
   for (glm::dvec3 x : {glm::dvec3(0, 0, 0), glm::dvec3(1, 2, 3.5), glm::dvec3(-10, 4, 20)}) {

@@ -9,7 +9,8 @@
 #include "runtime/device.h"
 #include "runtime/kernel_program.h"
 #include "runtime/renderer.h"
-#include "scene/device_scene.h"
+#include "runtime/scene_buffers.h"
+#include "scene/device_scene_build.h"
 #include "chi2.h"
 
 // The device named by $PATHCL_TEST_DEVICE (default: pathcl's own default), one per test process.
@@ -17,6 +18,9 @@ ClContext& test_device();
 
 // The test kernels of kernels/tests_sampling.cl, all features on, built once per process.
 const KernelProgram& sampling_test_program();
+
+// A device scene uploaded to the test device as the kernels take it (PC_SCENE_PARAMS of kernels/scene.cl).
+inline SceneBuffers test_scene_buffers(const DeviceScene& scene) { return SceneBuffers(test_device(), scene, scene.header); }
 
 // Reads n elements of a device buffer.
 template <class T>

@@ -167,14 +167,17 @@ typedef struct {
   pc_uint env_light;     /* index of the environment light in lights, or PC_INVALID */
 } SceneHeader;
 
-/* Statistics one work item writes per pass (not accumulated, so any split gives the same totals):
- * rays (4) + nan (4) + inf (4) + negative (4) = 16 bytes. */
+/* Statistics of one work unit, added up by its work items with integer atomics (in any order to the same
+ * totals): rays_lo (4) + rays_hi (4) (the 64-bit ray count) + nan (4) + inf (4) + negative (4) + pad (12)
+ * = 32 bytes. */
 typedef struct {
-  pc_uint rays;
+  pc_uint rays_lo;
+  pc_uint rays_hi;
   pc_uint nan_samples;
   pc_uint inf_samples;
   pc_uint negative_samples;
-} PassStats;
+  pc_uint pad[3];
+} UnitStats;
 
 /* Ray file record (pathcl rays): origin (12) + tmin (4) + direction (12) + tmax (4) = 32 bytes. */
 typedef struct {
@@ -192,9 +195,18 @@ typedef struct {
   float v;
 } HitRecord;
 
+/* Every scene array the render kernels read, as X(element type, name), in kernel-argument order after the
+ * SceneHeader. Everything that lists the arrays expands this one list: the kernels' parameters and
+ * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
+ * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
+#define PC_SCENE_ARRAYS(X)                                                                              \
+  X(Bvh4Node, nodes) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
+  X(Material, materials) X(Light, lights) X(float, light_cdf) X(Texture, textures) X(pc_float4, texels)  \
+  X(float, env_dist)
+
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(Bvh4Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(PassStats) X(RayRecord) X(HitRecord)
+  X(Bvh4Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Primitive, a)                \
@@ -207,8 +219,8 @@ typedef struct {
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
   X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(SceneHeader, lens_radius) X(SceneHeader, focus_distance) X(SceneHeader, filter)  \
-  X(SceneHeader, filter_radius) X(SceneHeader, filter_sigma) X(SceneHeader, env_light) X(PassStats, rays) X(PassStats, nan_samples)         \
-  X(PassStats, inf_samples) X(PassStats, negative_samples) X(RayRecord, org) X(RayRecord, tmin)            \
+  X(SceneHeader, filter_radius) X(SceneHeader, filter_sigma) X(SceneHeader, env_light) X(UnitStats, rays_lo) X(UnitStats, rays_hi) X(UnitStats, nan_samples)         \
+  X(UnitStats, inf_samples) X(UnitStats, negative_samples) X(RayRecord, org) X(RayRecord, tmin)            \
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
 #ifndef __OPENCL_VERSION__
@@ -219,7 +231,7 @@ static_assert(sizeof(Material) == 80, "Material is 80 bytes");
 static_assert(sizeof(Light) == 80, "Light is 80 bytes");
 static_assert(sizeof(Texture) == 16, "Texture is 16 bytes");
 static_assert(sizeof(SceneHeader) == 128, "SceneHeader is 128 bytes");
-static_assert(sizeof(PassStats) == 16, "PassStats is 16 bytes");
+static_assert(sizeof(UnitStats) == 32, "UnitStats is 32 bytes");
 static_assert(sizeof(RayRecord) == 32, "RayRecord is 32 bytes");
 static_assert(sizeof(HitRecord) == 16, "HitRecord is 16 bytes");
 #endif

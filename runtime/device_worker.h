@@ -1,0 +1,76 @@
+// One device of a render: its context, the render kernel built for it, the scene uploaded to it and a copy
+// of the film's accumulators. It runs work units (runtime/render_schedule.h) one at a time and knows
+// nothing of the others; runtime/renderer.cpp runs one per device, each in a thread of its own.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "runtime/device.h"
+#include "runtime/kernel_program.h"
+#include "runtime/render_schedule.h"
+#include "runtime/scene_buffers.h"
+
+// Test-only misbehaviour of one device (RenderOptions::faults).
+struct DeviceFault {
+  double delay_seconds = 0;     // added before every unit: a device that lags
+  int64_t fail_after_units = -1;  // >= 0: every unit after this many throws, as a lost device would
+  bool perturb = false;         // build with PC_DEBUG_PERTURB: a device whose arithmetic differs in one operation
+};
+
+// What a unit gives back: its statistics and timings; the accumulators of its pixels (3 per pixel) are in
+// the worker's read-back buffer (DeviceWorker::result), valid until its next unit.
+struct UnitOutput {
+  UnitStats stats{};
+  double seconds = 0;      // the unit's wall time on this device: upload, launch, read-back
+  double kernel_ms = 0;    // the launch alone, from profiling events
+  double transfer_ms = 0;  // upload and read-back
+};
+
+struct WorkerSettings {
+  std::string build_options;  // kernel_options(features) and debug flags
+  size_t work_group = 0;      // 0: 64, or the kernel's limit if lower
+  DeviceFault fault;
+};
+
+class DeviceWorker {
+ public:
+  explicit DeviceWorker(const DeviceInfo& device);  // a context of its own
+  explicit DeviceWorker(ClContext& borrowed);       // the caller's context (tests)
+  ClContext& cl() { return *cl_; }
+
+  // Builds the render kernel (or loads it from the cache), uploads the scene with this render's header,
+  // and clears the film copy. UsageError for a work-group size the device cannot run.
+  void prepare(const DeviceScene& scene, const SceneHeader& header, const WorkerSettings& settings);
+  // Samples [0, spp) of up to `count` pixels spread evenly over the film, from cleared accumulators; a hash
+  // of the accumulators and ray count. Clears the film copy again.
+  uint64_t probe(uint32_t count, uint32_t spp);
+  // Runs a unit. input: the film's accumulators of the unit's pixels when unit.upload, else nullptr.
+  UnitOutput run(const WorkUnit& unit, const std::vector<pc_float4>* input);
+  // The accumulators of the last unit's pixels. One buffer reused by every unit: no allocation, and no
+  // page faults, per unit.
+  const std::vector<pc_float4>& result() const { return result_; }
+
+  const KernelProgram& program() const { return *program_; }
+  size_t work_group() const { return work_group_; }
+
+ private:
+  double launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
+                uint32_t sample_count);
+  void clear_film();
+
+  std::unique_ptr<ClContext> owned_;
+  ClContext* cl_;
+  std::optional<KernelProgram> program_;
+  std::unique_ptr<SceneBuffers> scene_;
+  std::unique_ptr<ClKernel> kernel_;
+  ClBuffer film_, stats_;
+  std::vector<pc_float4> result_;
+  uint32_t pixels_ = 0;
+  size_t work_group_ = 0;
+  cl_uint first_unit_arg_ = 0;
+  DeviceFault fault_;
+  uint64_t units_run_ = 0;
+};

@@ -1,0 +1,21 @@
+// A device scene's header and arrays (PC_SCENE_ARRAYS of kernels/shared/types.h) uploaded to one device,
+// and bound as the first arguments of a kernel that takes PC_SCENE_PARAMS (kernels/scene.cl).
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "runtime/device.h"
+#include "runtime/kernel_program.h"
+#include "scene/device_scene.h"
+
+// Bytes of device memory the header and the arrays take.
+size_t scene_bytes(const DeviceScene& scene);
+
+struct SceneBuffers {
+  ClBuffer header;
+  std::vector<ClBuffer> arrays;  // in PC_SCENE_ARRAYS order
+  // header: the scene's header with this render's settings filled in.
+  SceneBuffers(ClContext& cl, const DeviceScene& scene, const SceneHeader& header);
+  // Sets the kernel's arguments 0 .. arrays.size(); returns the index of the next argument.
+  cl_uint bind(ClKernel& kernel) const;
+};

@@ -1,0 +1,16 @@
+// Flattening a scene description into the device scene (scene/device_scene.h).
+#pragma once
+#include <cstdint>
+
+#include "scene/device_scene.h"
+#include "scene/scene_description.h"
+
+// Flattens the scene: primitives in scene order (shapes in file order, triangles of a mesh in mesh
+// order), the BVH over them, the light distribution (proportional to power), the camera basis; every
+// position relative to `origin`, converted to float only after that subtraction. Throws SceneError when
+// geometry lies farther than kMaxSceneExtent from the origin.
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
+
+// Geometry of a scene-order primitive as the device sees it (world minus DeviceScene::origin), for tests
+// and ray generation.
+Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index);
