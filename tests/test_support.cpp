@@ -59,17 +59,18 @@ DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin) {
   return build_device_scene(load_scene(path), origin);
 }
 
+std::string read_text_file(const std::string& path) {
+  std::stringstream ss;
+  ss << std::ifstream(path).rdbuf();
+  return ss.str();
+}
+
 int run_pathcl(const std::string& args, std::string* err, std::string* out) {
   std::string err_file = temp_dir() + "/stderr.txt", out_file = temp_dir() + "/stdout.txt";
   std::string command = std::string(PATHCL_BINARY) + " " + args + " >" + out_file + " 2>" + err_file;
   int status = std::system(command.c_str());
-  auto slurp = [](const std::string& path) {
-    std::stringstream ss;
-    ss << std::ifstream(path).rdbuf();
-    return ss.str();
-  };
-  if (err) *err = slurp(err_file);
-  if (out) *out = slurp(out_file);
+  if (err) *err = read_text_file(err_file);
+  if (out) *out = read_text_file(out_file);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

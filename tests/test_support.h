@@ -42,6 +42,9 @@ std::string write_temp_png(const std::string& name, int width, int height, const
 // Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).
 DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera);
 
+// The whole file ("" if it cannot be read).
+std::string read_text_file(const std::string& path);
+
 // Runs the pathcl binary with arguments (shell words); returns the exit code, stderr in *err and
 // stdout in *out when given.
 int run_pathcl(const std::string& args, std::string* err = nullptr, std::string* out = nullptr);
