@@ -5,6 +5,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -70,9 +71,12 @@ class WorkerThread {
     WorkerSettings settings;
     bool probe;
   };
-  WorkerThread(std::unique_ptr<DeviceWorker> worker, uint32_t index, EventQueue& events, Setup setup)
-      : worker_(std::move(worker)), index_(index), events_(events) {
-    thread_ = std::thread([this, setup] { run(setup); });
+  // make_worker runs in the new thread: the device's context is created, used and released there
+  // (Oclgrind's uninitialised-value checker keeps thread-local state per context and crashes otherwise).
+  WorkerThread(std::function<std::unique_ptr<DeviceWorker>()> make_worker, uint32_t index, EventQueue& events,
+               Setup setup)
+      : index_(index), events_(events) {
+    thread_ = std::thread([this, make_worker, setup] { run(make_worker, setup); });
   }
   ~WorkerThread() { stop(); }
   void submit(WorkUnit unit, std::vector<pc_float4> input) {
@@ -98,10 +102,11 @@ class WorkerThread {
     WorkUnit unit;
     std::vector<pc_float4> input;
   };
-  void run(const Setup& setup) {
+  void run(const std::function<std::unique_ptr<DeviceWorker>()>& make_worker, const Setup& setup) {
     Event ready;
     ready.device = index_;
     try {
+      worker_ = make_worker();
       worker_->prepare(*setup.scene, setup.header, setup.settings);
       if (setup.probe) {
         auto start = Clock::now();
@@ -121,7 +126,10 @@ class WorkerThread {
       {
         std::unique_lock<std::mutex> lock(mutex_);
         cv_.wait(lock, [&] { return quit_ || job_.has_value(); });
-        if (!job_) return;  // quit, and nothing left to run
+        if (!job_) {  // quit, and nothing left to run
+          worker_.reset();
+          return;
+        }
         job = std::move(*job_);
         job_.reset();
       }
@@ -157,7 +165,13 @@ uint32_t next_power_of_two_above(uint32_t s) {
 
 bool is_power_of_two(uint32_t s) { return s > 0 && (s & (s - 1)) == 0; }
 
-RenderResult render_on(std::vector<std::unique_ptr<DeviceWorker>> workers, const DeviceScene& scene,
+// A device to render on, and how its thread makes its worker.
+struct WorkerSource {
+  DeviceInfo info;
+  std::function<std::unique_ptr<DeviceWorker>()> make;
+};
+
+RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceScene& scene,
                        const RenderOptions& options, const RenderCallbacks& callbacks) {
   RenderResult result;
   auto setup_start = Clock::now();
@@ -189,7 +203,7 @@ RenderResult render_on(std::vector<std::unique_ptr<DeviceWorker>> workers, const
   result.devices.resize(n);
   std::vector<ScheduleDevice> schedule_devices(n);
   for (size_t d = 0; d < n; ++d) {
-    const DeviceInfo& info = workers[d]->cl().info;
+    const DeviceInfo& info = workers[d].info;
     DeviceReport& report = result.devices[d];
     report.name = info.name;
     report.platform = info.platform_name;
@@ -200,7 +214,7 @@ RenderResult render_on(std::vector<std::unique_ptr<DeviceWorker>> workers, const
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
     if (d < options.faults.size()) setup.settings.fault = options.faults[d];
-    threads.push_back(std::make_unique<WorkerThread>(std::move(workers[d]), uint32_t(d), events, setup));
+    threads.push_back(std::make_unique<WorkerThread>(workers[d].make, uint32_t(d), events, setup));
   }
   std::vector<bool> ready(n, false);
   std::vector<uint64_t> probe(n, 0);
@@ -431,17 +445,15 @@ RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& s
   if (devices.empty()) throw UsageError("no device to render on");
   // With a GPU in the set, CPU devices leave one core to the host threads that feed it.
   bool has_gpu = std::any_of(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.is_gpu; });
-  std::vector<std::unique_ptr<DeviceWorker>> workers;
+  std::vector<WorkerSource> workers;
   for (const DeviceInfo& d : devices) {
     DeviceInfo use = has_gpu && d.is_cpu && d.compute_units > 1 ? partition_device(d, d.compute_units - 1) : d;
-    workers.push_back(std::make_unique<DeviceWorker>(use));
+    workers.push_back({use, [use] { return std::make_unique<DeviceWorker>(use); }});
   }
-  return render_on(std::move(workers), scene, options, callbacks);
+  return render_on(workers, scene, options, callbacks);
 }
 
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks) {
-  std::vector<std::unique_ptr<DeviceWorker>> workers;
-  workers.push_back(std::make_unique<DeviceWorker>(cl));
-  return render_on(std::move(workers), scene, options, callbacks);
+  return render_on({{cl.info, [&cl] { return std::make_unique<DeviceWorker>(cl); }}}, scene, options, callbacks);
 }
