@@ -137,8 +137,11 @@ inline float spot_falloff(Light light, float3 from_light) {
 /* u: x chooses the light, yz the point on it. */
 inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* out) {
   Light light = sc->lights[find_interval(sc->light_cdf, sc->h->light_count, u.x)];
+  /* Every field is set: lights at infinity have no point, and a field left undefined is undefined
+     behaviour that a vectorising compiler may exploit (Intel's CPU runtime did). */
   out->delta = false;
   out->infinite = false;
+  out->p = x;
   out->n = (float3)(0.0f);
   out->p_err = (float3)(0.0f);
   switch (light.type) {
