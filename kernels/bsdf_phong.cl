@@ -11,12 +11,12 @@ inline float phong_specular_probability(Material m) {
   return d + s > 0.0f ? s / (d + s) : 0.0f;
 }
 
-inline float phong_cos_alpha(float3 wo, float3 wi) { return dot(reflect_local(wo), wi); }
+inline float phong_cos_alpha(float3 wo, float3 wi) { return pc_dot(reflect_local(wo), wi); }
 
 inline float3 phong_eval(Material m, float3 wo, float3 wi) {
   if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
   float c = phong_cos_alpha(wo, wi);
-  float spec = c > 0.0f ? (m.exponent + 2.0f) * (0.5f * PC_INV_PI) * pow(c, m.exponent) : 0.0f;
+  float spec = c > 0.0f ? (m.exponent + 2.0f) * (0.5f * PC_INV_PI) * pc_powr(c, m.exponent) : 0.0f;
   return m.color.xyz * PC_INV_PI + m.specular.xyz * spec;
 }
 
@@ -24,7 +24,7 @@ inline float phong_pdf(Material m, float3 wo, float3 wi) {
   if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
   float ps = phong_specular_probability(m);
   float c = phong_cos_alpha(wo, wi);
-  float lobe = c > 0.0f ? (m.exponent + 1.0f) * (0.5f * PC_INV_PI) * pow(c, m.exponent) : 0.0f;
+  float lobe = c > 0.0f ? (m.exponent + 1.0f) * (0.5f * PC_INV_PI) * pc_powr(c, m.exponent) : 0.0f;
   return (1.0f - ps) * wi.z * PC_INV_PI + ps * lobe;
 }
 
@@ -32,12 +32,13 @@ inline bool phong_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   s->delta = false;
   if (u.z < phong_specular_probability(m)) {
     /* cos^n lobe about the mirror direction: cos(alpha) = u^(1 / (n + 1)). */
-    float cos_a = pow(u.x, 1.0f / (m.exponent + 1.0f));
+    float cos_a = pc_powr(u.x, 1.0f / (m.exponent + 1.0f));
     float sin_a = sqrt(fmax(0.0f, 1.0f - cos_a * cos_a));
     float phi = 2.0f * PC_PI * u.y;
     float3 r = reflect_local(wo), t, b;
     make_frame(r, &t, &b);
-    s->wi = normalize(sin_a * cos(phi) * t + sin_a * sin(phi) * b + cos_a * r);
+    float cos_phi, sin_phi = pc_sincos(phi, &cos_phi);
+    s->wi = pc_normalize(sin_a * cos_phi * t + sin_a * sin_phi * b + cos_a * r);
   } else {
     s->wi = sample_cosine_hemisphere(u.xy);
   }

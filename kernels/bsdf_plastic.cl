@@ -21,8 +21,8 @@ inline float3 plastic_eval(Material m, float3 wo, float3 wi) {
   if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
   float3 f = plastic_base_eval(m, wo, wi);
   if (m.alpha > 0.0f) {
-    float3 h = normalize(wo + wi);
-    f += fresnel_dielectric(dot(wo, h), m.ior) * ggx_d(h, m.alpha) * ggx_g2(wo, wi, m.alpha) / (4.0f * wo.z * wi.z);
+    float3 h = pc_normalize(wo + wi);
+    f += fresnel_dielectric(pc_dot(wo, h), m.ior) * ggx_d(h, m.alpha) * ggx_g2(wo, wi, m.alpha) / (4.0f * wo.z * wi.z);
   }
   return f;
 }

@@ -6,8 +6,8 @@
 
 inline float3 rough_conductor_eval(Material m, float3 wo, float3 wi) {
   if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-  float3 h = normalize(wo + wi);
-  float3 f = fresnel_conductor(dot(wo, h), m.specular.xyz, m.k.xyz);
+  float3 h = pc_normalize(wo + wi);
+  float3 f = fresnel_conductor(pc_dot(wo, h), m.specular.xyz, m.k.xyz);
   return f * (ggx_d(h, m.alpha) * ggx_g2(wo, wi, m.alpha) / (4.0f * wo.z * wi.z));
 }
 

@@ -7,7 +7,7 @@
 
 /* Inverse error function, single precision (Giles 2010). */
 inline float erf_inverse(float x) {
-  float w = -log(fmax((1.0f - x) * (1.0f + x), FLT_MIN)), p;
+  float w = -pc_log(fmax((1.0f - x) * (1.0f + x), FLT_MIN)), p;
   if (w < 5.0f) {
     w -= 2.5f;
     p = 2.81022636e-08f;
@@ -41,7 +41,7 @@ inline float sample_filter_1d(__constant const SceneHeader* h, float u) {
   if (h->filter == PC_FILTER_GAUSSIAN) {
     /* Truncated to [-r, r] by inverting the normal CDF between its values there. */
     float s = h->filter_sigma * sqrt(2.0f);
-    float e = erf(r / s);
+    float e = pc_erf(r / s);
     return clamp(s * erf_inverse((2.0f * u - 1.0f) * e), -r, r);
   }
   return u - 0.5f;
@@ -58,12 +58,12 @@ inline void camera_ray(__constant const SceneHeader* h, uint px, uint py, float4
   if (h->lens_radius > 0.0f) {
     /* Thin lens: rays through the lens meet where the pinhole ray meets the plane in focus. */
     float2 lens = h->lens_radius * sample_concentric_disk(u.zw);
-    float3 offset = lens.x * normalize(h->cam_right.xyz) + lens.y * normalize(h->cam_up.xyz);
+    float3 offset = lens.x * pc_normalize(h->cam_right.xyz) + lens.y * pc_normalize(h->cam_up.xyz);
     *o = h->cam_position.xyz + offset;
-    *d = normalize(h->focus_distance * pinhole - offset);
+    *d = pc_normalize(h->focus_distance * pinhole - offset);
     return;
   }
-  *d = normalize(pinhole);
+  *d = pc_normalize(pinhole);
 }
 
 #endif

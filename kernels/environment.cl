@@ -10,16 +10,16 @@
 
 inline float3 env_direction(float2 uv) {
   float phi = 2.0f * PC_PI * uv.x, theta = PC_PI * uv.y;
-  float s = sin(theta);
-  return (float3)(s * cos(phi), cos(theta), s * sin(phi));
+  float2 c, s = pc_sincos((float2)(theta, phi), &c); /* one call for both angles */
+  return (float3)(s.x * c.y, c.x, s.x * s.y);
 }
 
 /* theta from atan2, not acos(d.y): near a pole a float d.y keeps few digits of theta (within 0.05 degrees
  * of it, sin(theta) and with it env_pdf came out 1 % off), while d.x and d.z keep sin(theta) exactly. */
 inline float2 env_uv(float3 d) {
-  float u = atan2(d.z, d.x) * (0.5f * PC_INV_PI);
+  float u = pc_atan2(d.z, d.x) * (0.5f * PC_INV_PI);
   if (u < 0.0f) u += 1.0f;
-  return (float2)(fmin(u, 1.0f), atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
+  return (float2)(fmin(u, 1.0f), pc_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
 }
 
 inline uint2 env_texel(Texture t, float2 uv) {
@@ -43,7 +43,7 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
     float2 uv = env_uv(d);
-    float sin_theta = sin(PC_PI * uv.y);
+    float sin_theta = pc_sin(PC_PI * uv.y);
     if (sin_theta <= 0.0f) return 0.0f;
     uint2 c = env_texel(t, uv);
     __global const float* row = dist + t.height + 1 + c.y * (t.width + 1);
@@ -74,7 +74,7 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
     uu = clamp(uu, (float)c / (float)t.width, nextafter((float)(c + 1) / (float)t.width, 0.0f));
     v = clamp(v, (float)r / (float)t.height, nextafter((float)(r + 1) / (float)t.height, 0.0f));
     float3 d = env_direction((float2)(uu, v));
-    float sin_theta = sin(PC_PI * v);
+    float sin_theta = pc_sin(PC_PI * v);
     *pdf = sin_theta > 0.0f ? dr * dc * (float)(t.width * t.height) / (2.0f * PC_PI * PC_PI * sin_theta) : 0.0f;
     *le = light.emission.xyz * texels[t.offset + r * t.width + c].xyz;
     return d;

@@ -36,11 +36,11 @@ inline float3 reflect_local(float3 wo) { return (float3)(-wo.x, -wo.y, wo.z); }
 /* Refraction of wo through the interface with normal n on wo's side; eta = n_t / n_i. false under total
  * internal reflection. */
 inline bool refract_dir(float3 wo, float3 n, float eta, float3* wt) {
-  float cos_i = dot(wo, n);
+  float cos_i = pc_dot(wo, n);
   float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
   if (sin2_t >= 1.0f) return false;
   float cos_t = sqrt(1.0f - sin2_t);
-  *wt = normalize(-wo / eta + (cos_i / eta - cos_t) * n);
+  *wt = pc_normalize(-wo / eta + (cos_i / eta - cos_t) * n);
   return true;
 }
 

@@ -26,12 +26,12 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
   float4 a = sc->uvs[2 * s->prim], b = sc->uvs[2 * s->prim + 1];
 #ifdef PC_HAS_SPHERES
   if (sc->shading[s->prim].kind == PC_PRIM_SPHERE) {
-    float3 d = normalize(s->p - sc->prims[hit->slot].a.xyz);
-    float3 x = a.xyz, y = b.xyz, z = a.w * cross(x, y);
-    float dx = dot(d, x), dy = dot(d, y), dz = dot(d, z);
-    float u = atan2(-dz, dx) * (0.5f * PC_INV_PI);
+    float3 d = pc_normalize(s->p - sc->prims[hit->slot].a.xyz);
+    float3 x = a.xyz, y = b.xyz, z = a.w * pc_cross(x, y);
+    float dx = pc_dot(d, x), dy = pc_dot(d, y), dz = pc_dot(d, z);
+    float u = pc_atan2(-dz, dx) * (0.5f * PC_INV_PI);
     if (u < 0.0f) u += 1.0f;
-    return (float2)(u, 1.0f - acos(clamp(dy, -1.0f, 1.0f)) * PC_INV_PI);
+    return (float2)(u, 1.0f - pc_acos(clamp(dy, -1.0f, 1.0f)) * PC_INV_PI);
   }
 #endif
   return (1.0f - hit->u - hit->v) * a.xy + hit->u * a.zw + hit->v * b.xy;
@@ -102,19 +102,19 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
     /* Local shading frame about the front-side shading normal. */
     float3 t, b;
     make_frame(s.ns, &t, &b);
-    float3 wo_local = (float3)(dot(wo, t), dot(wo, b), dot(wo, s.ns));
-    float wo_ng = dot(wo, s.ng);
+    float3 wo_local = (float3)(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
+    float wo_ng = pc_dot(wo, s.ng);
     float4 u_light = sample4(h, key, 1 + 2 * depth);
     float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
 
     /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
     LightSample ls;
     if (h->light_count > 0 && !bsdf_is_delta(m) && sample_light(sc, s.p, u_light.xyz, &ls)) {
-      float3 wi_local = (float3)(dot(ls.wi, t), dot(ls.wi, b), dot(ls.wi, s.ns));
+      float3 wi_local = (float3)(pc_dot(ls.wi, t), pc_dot(ls.wi, b), pc_dot(ls.wi, s.ns));
       float3 f = bsdf_eval(m, wo_local, wi_local);
       /* Only reflection here (no transmissive material takes light samples): the light must be on
          wo's side of the geometric surface, so shading normals cannot leak light through it. */
-      if (dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
+      if (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
         Ray shadow;
         if (ls.infinite) {
           shadow.o = offset_ray_origin(s.p, s.p_err, s.ng, ls.wi);
@@ -140,7 +140,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
     /* Reflection must stay on wo's side of the geometric surface and transmission must cross it:
        with shading normals the two can disagree, and then the path stops rather than leak light. */
     bool transmitted = bs.wi.z * wo_local.z < 0.0f;
-    if ((dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) break;
+    if ((pc_dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) break;
     throughput *= bs.weight;
     eta_scale *= bs.eta2;
     prev_bsdf_pdf = bs.pdf;

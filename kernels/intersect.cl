@@ -118,11 +118,11 @@ __attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPreco
 inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center, float radius,
                        bool from_surface, float* t_out) {
   float3 oc = o - center;
-  float a = dot(d, d);
-  float b = 2.0f * dot(d, oc);
-  float c = dot(oc, oc) - radius * radius;
+  float a = pc_dot(d, d);
+  float b = 2.0f * pc_dot(d, oc);
+  float c = pc_dot(oc, oc) - radius * radius;
   float3 v = oc - (b / (2.0f * a)) * d;
-  float len = length(v);
+  float len = pc_length(v);
   float discrim = 4.0f * a * (radius + len) * (radius - len);
   if (discrim < 0.0f) return false;
   float root = sqrt(discrim);
@@ -134,7 +134,7 @@ inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center
     t1 = t;
   }
   if (from_surface) {
-    if (dot(d, oc) >= 0.0f) return false;
+    if (pc_dot(d, oc) >= 0.0f) return false;
     t0 = t1;
   }
   float t = t0 > tmin ? t0 : t1;

@@ -20,14 +20,14 @@ typedef struct {
 
 /* Radiance from light point y with normal ny towards x. */
 inline float3 emitted_towards(float3 emission, uint flags, float3 ny, float3 y, float3 x) {
-  return ((flags & PC_FLAG_TWO_SIDED) || dot(ny, x - y) > 0.0f) ? emission : (float3)(0.0f);
+  return ((flags & PC_FLAG_TWO_SIDED) || pc_dot(ny, x - y) > 0.0f) ? emission : (float3)(0.0f);
 }
 
 /* From inside (or on) a sphere every point is visible and area sampling is used. The tolerance keeps
  * points on the surface itself on the inside branch in both sampling and pdf evaluation. */
 inline bool sphere_sampled_by_area(float3 x, float3 c, float r) {
   float3 d = x - c;
-  return dot(d, d) <= r * r * 1.0001f;
+  return pc_dot(d, d) <= r * r * 1.0001f;
 }
 
 /* 1 - cos(theta_max) of the cone a sphere subtends, accurate for small cones. */
@@ -37,8 +37,8 @@ inline float sphere_cone_one_minus_cos(float sin2_max) {
 
 inline float area_to_solid_angle(float3 x, float3 y, float3 ny, float area_pdf) {
   float3 d = y - x;
-  float dist2 = dot(d, d);
-  float cos_y = fabs(dot(ny, d)) / sqrt(dist2);
+  float dist2 = pc_dot(d, d);
+  float cos_y = fabs(pc_dot(ny, d)) / sqrt(dist2);
   return cos_y > 0.0f ? area_pdf * dist2 / cos_y : 0.0f;
 }
 
@@ -51,7 +51,7 @@ inline float sphere_light_pdf(Primitive sp, float3 x, float3 y, float3 ny) {
   float r = sp.b.x;
   if (sphere_sampled_by_area(x, c, r)) return area_to_solid_angle(x, y, ny, 1.0f / (4.0f * PC_PI * r * r));
   float3 d = c - x;
-  float sin2_max = r * r / dot(d, d);
+  float sin2_max = r * r / pc_dot(d, d);
   return 1.0f / (2.0f * PC_PI * sphere_cone_one_minus_cos(sin2_max));
 }
 
@@ -71,7 +71,7 @@ inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
   float3 c = sp.a.xyz;
   float r = sp.b.x;
   float3 d = x - c;
-  float dc2 = dot(d, d), dc = sqrt(dc2);
+  float dc2 = pc_dot(d, d), dc = sqrt(dc2);
   float sin2_max = r * r / dc2;
   float one_minus_cos_max = sphere_cone_one_minus_cos(sin2_max);
   float cos_theta = 1.0f - u.x * one_minus_cos_max;
@@ -87,7 +87,8 @@ inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
   float3 w = d / dc, t, b;
   make_frame(w, &t, &b);
   *pdf = 1.0f / (2.0f * PC_PI * one_minus_cos_max);
-  return c + r * (cos_alpha * w + sin_alpha * (cos(phi) * t + sin(phi) * b));
+  float cos_phi, sin_phi = pc_sincos(phi, &cos_phi);
+  return c + r * (cos_alpha * w + sin_alpha * (cos_phi * t + sin_phi * b));
 }
 
 inline void sample_area_light(Light light, __global const Primitive* prims, __global const PrimShading* shading,
@@ -120,14 +121,14 @@ inline void sample_area_light(Light light, __global const Primitive* prims, __gl
     pdf = triangle_light_pdf(light, x, out->p, ny);
   }
   out->n = ny;
-  out->wi = normalize(out->p - x);
+  out->wi = pc_normalize(out->p - x);
   out->pdf = light.select_pdf * pdf;
   out->Le = emitted_towards(light.emission.xyz, flags, ny, out->p, x);
 }
 
 /* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). */
 inline float spot_falloff(Light light, float3 from_light) {
-  float c = dot(light.direction.xyz, from_light);
+  float c = pc_dot(light.direction.xyz, from_light);
   if (c >= light.cos_inner) return 1.0f;
   if (c <= light.cos_outer) return 0.0f;
   float t = (c - light.cos_outer) / (light.cos_inner - light.cos_outer);
@@ -154,7 +155,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
     case PC_LIGHT_POINT:
     case PC_LIGHT_SPOT: {
       float3 d = light.position.xyz - x;
-      float dist2 = dot(d, d);
+      float dist2 = pc_dot(d, d);
       if (!(dist2 > 0.0f)) return false; /* the shading point is the light's position */
       out->p = light.position.xyz;
       out->wi = d / sqrt(dist2);

@@ -2,6 +2,8 @@
 #ifndef PATHCL_MATH_CL
 #define PATHCL_MATH_CL
 
+#include "exact_math.cl"
+
 #define PC_PI 3.14159265358979323846f
 #define PC_INV_PI 0.31830988618379067154f
 #define PC_MACHINE_EPSILON (FLT_EPSILON * 0.5f)
@@ -24,9 +26,9 @@ inline void make_frame(float3 n, float3* t, float3* b) {
 /* Moves p off the surface with normal n, by the error bound err, to the side of direction w, and rounds
  * away from the surface (pbrt-v4 OffsetRayOrigin), so a spawned ray cannot re-hit the surface it left. */
 inline float3 offset_ray_origin(float3 p, float3 err, float3 n, float3 w) {
-  float d = dot(fabs(n), err);
+  float d = pc_dot(fabs(n), err);
   float3 offset = d * n;
-  if (dot(w, n) < 0.0f) offset = -offset;
+  if (pc_dot(w, n) < 0.0f) offset = -offset;
   float3 po = p + offset;
   po.x = offset.x > 0.0f ? nextafter(po.x, INFINITY) : offset.x < 0.0f ? nextafter(po.x, -INFINITY) : po.x;
   po.y = offset.y > 0.0f ? nextafter(po.y, INFINITY) : offset.y < 0.0f ? nextafter(po.y, -INFINITY) : po.y;

@@ -27,32 +27,33 @@ inline float ggx_g2(float3 wo, float3 wi, float alpha) {
 
 /* Density of visible normal h seen from wo (wo.z > 0). */
 inline float ggx_visible_pdf(float3 wo, float3 h, float alpha) {
-  float cos_oh = dot(wo, h);
+  float cos_oh = pc_dot(wo, h);
   if (cos_oh <= 0.0f || wo.z <= 0.0f) return 0.0f;
   return ggx_g1(wo, alpha) * cos_oh * ggx_d(h, alpha) / wo.z;
 }
 
 /* A visible normal for wo (wo.z > 0). */
 inline float3 ggx_sample_visible(float3 wo, float alpha, float2 u) {
-  float3 vh = normalize((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+  float3 vh = pc_normalize((float3)(alpha * wo.x, alpha * wo.y, wo.z));
   float len2 = vh.x * vh.x + vh.y * vh.y;
   float3 t1 = len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) / sqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
-  float3 t2 = cross(vh, t1);
+  float3 t2 = pc_cross(vh, t1);
   float r = sqrt(u.x), phi = 2.0f * PC_PI * u.y;
-  float p1 = r * cos(phi), p2 = r * sin(phi);
+  float cos_phi, sin_phi = pc_sincos(phi, &cos_phi);
+  float p1 = r * cos_phi, p2 = r * sin_phi;
   float s = 0.5f * (1.0f + vh.z);
   p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
   float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
-  return normalize((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
+  return pc_normalize((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
 }
 
 /* Reflection off microfacet h: wi = reflect(wo, h); pdf(wi) = visible_pdf(h) / (4 |wo.h|). */
-inline float3 reflect_about(float3 wo, float3 h) { return 2.0f * dot(wo, h) * h - wo; }
+inline float3 reflect_about(float3 wo, float3 h) { return 2.0f * pc_dot(wo, h) * h - wo; }
 
 inline float ggx_reflection_pdf(float3 wo, float3 wi, float alpha) {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
-  float3 h = normalize(wo + wi);
-  return ggx_visible_pdf(wo, h, alpha) / (4.0f * dot(wo, h));
+  float3 h = pc_normalize(wo + wi);
+  return ggx_visible_pdf(wo, h, alpha) / (4.0f * pc_dot(wo, h));
 }
 
 #endif

@@ -14,7 +14,8 @@ inline float2 sample_concentric_disk(float2 u) {
     r = o.y;
     phi = (PC_PI / 2.0f) - (PC_PI / 4.0f) * (o.x / o.y);
   }
-  return (float2)(r * cos(phi), r * sin(phi));
+  float c, s = pc_sincos(phi, &c);
+  return (float2)(r * c, r * s);
 }
 
 /* Cosine-weighted direction about +z (Malley's method). */
@@ -27,7 +28,8 @@ inline float3 sample_uniform_sphere(float2 u) {
   float z = 1.0f - 2.0f * u.x;
   float r = sqrt(fmax(0.0f, 1.0f - z * z));
   float phi = 2.0f * PC_PI * u.y;
-  return (float3)(r * cos(phi), r * sin(phi), z);
+  float c, s = pc_sincos(phi, &c);
+  return (float3)(r * c, r * s, z);
 }
 
 /* Uniform barycentrics over a triangle: weights of vertices a, b (c gets the rest). */

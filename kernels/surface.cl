@@ -10,7 +10,7 @@ typedef struct {
   uint prim;    /* scene-order primitive index */
 } Surface;
 
-inline float3 triangle_normal(Primitive p) { return normalize(cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz)); }
+inline float3 triangle_normal(Primitive p) { return pc_normalize(pc_cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz)); }
 
 /* Outward normal at a point of a sphere, inward when the sphere's normals are flipped. */
 inline float3 sphere_normal(Primitive p, float3 at, uint flags) {
@@ -28,7 +28,7 @@ inline Surface surface_at(__global const Primitive* prims, __global const PrimSh
     /* Re-project onto the sphere (pbrt-v4): the error is then a few ulps of the offset from the centre. */
     float3 c = p.a.xyz;
     float3 rel = ray->o + hit->t * ray->d - c;
-    rel *= p.b.x / length(rel);
+    rel *= p.b.x / pc_length(rel);
     s.p = c + rel;
     s.p_err = error_gamma(5) * fabs(rel) + error_gamma(1) * fabs(s.p);
     s.ng = sphere_normal(p, s.p, shading[s.prim].flags);
@@ -46,8 +46,8 @@ inline Surface surface_at(__global const Primitive* prims, __global const PrimSh
   if (shading[s.prim].flags & PC_FLAG_SMOOTH) {
     float3 n = b0 * normals[3 * s.prim].xyz + hit->u * normals[3 * s.prim + 1].xyz +
                hit->v * normals[3 * s.prim + 2].xyz;
-    float len = length(n);
-    if (len > 0.0f) s.ns = dot(n, s.ng) < 0.0f ? -n / len : n / len;
+    float len = pc_length(n);
+    if (len > 0.0f) s.ns = pc_dot(n, s.ng) < 0.0f ? -n / len : n / len;
   }
 #endif
   return s;

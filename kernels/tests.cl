@@ -105,7 +105,7 @@ __kernel void spawn_test(__global const Bvh4Node* nodes, __global const Primitiv
   ray.tmin = 0.0f;
   ray.skip_prim = s.prim;
   if (mode == 0u) {
-    ray.d = normalize(vload3(0, q + 3));
+    ray.d = pc_normalize(vload3(0, q + 3));
     ray.o = offset_ray_origin(s.p, s.p_err, s.ng, ray.d);
     ray.tmax = INFINITY;
   } else {

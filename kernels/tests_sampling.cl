@@ -31,9 +31,10 @@ inline float3 bin_node(__global const float4* binning, uint bin, __global const 
   float dt = binning[3].x / (float)theta_bins, dp = 2.0f * PC_PI / (float)phi_bins;
   float theta = ((float)(bin / phi_bins) + nodes[i]) * dt;
   float phi = ((float)(bin % phi_bins) + nodes[j]) * dp;
-  float s = sin(theta);
+  float2 c, s2 = pc_sincos((float2)(theta, phi), &c);
+  float s = s2.x;
   *w = weights[i] * weights[j] * s * dt * dp;
-  return s * cos(phi) * binning[0].xyz + s * sin(phi) * binning[1].xyz + cos(theta) * binning[2].xyz;
+  return s * c.y * binning[0].xyz + s * s2.y * binning[1].xyz + c.x * binning[2].xyz;
 }
 
 /* ---- BSDFs ---- */
@@ -143,7 +144,7 @@ __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
   o[5] = ls.delta ? 0.0f : direction_light_pdf(&sc, x, ls.wi, &le);
   vstore3(ls.Le, 0, o + 6);
   o[9] = ls.delta ? 0.0f : le;
-  o[10] = ls.infinite ? INFINITY : length(ls.p - x);
+  o[10] = ls.infinite ? INFINITY : pc_length(ls.p - x);
   Ray ray;
   ray.o = x;
   ray.d = ls.wi;
