@@ -77,12 +77,14 @@ std::vector<DeviceInfo> list_devices() {
   return devices;
 }
 
+bool is_oclgrind(const DeviceInfo& device) { return lower(device.platform_name).find("oclgrind") != std::string::npos; }
+
 DeviceInfo select_device(const std::string& selector) {
   std::vector<DeviceInfo> devices = list_devices();
   if (devices.empty())
     throw RuntimeFailure("no OpenCL device found (is an ICD such as pocl-opencl-icd installed?)");
   if (selector.empty()) {
-    auto usable = [](const DeviceInfo& d) { return lower(d.platform_name).find("oclgrind") == std::string::npos; };
+    auto usable = [](const DeviceInfo& d) { return !is_oclgrind(d); };
     for (const DeviceInfo& d : devices)
       if (d.is_gpu && usable(d)) return d;
     for (const DeviceInfo& d : devices)

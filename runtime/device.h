@@ -28,6 +28,10 @@ std::vector<DeviceInfo> list_devices();
 // never picks Oclgrind (an interpreter for debugging that calls itself a GPU): it must be named.
 DeviceInfo select_device(const std::string& selector);
 
+// Oclgrind: an interpreter for debugging that calls itself a GPU. Never a default device, and its 21.10
+// cannot run optimised kernels (runtime/kernel_program.cpp).
+bool is_oclgrind(const DeviceInfo& device);
+
 // A comma-separated list of selectors as select_device takes them, or "all" for every device; each device
 // at most once, in the order given. "" is the default device alone.
 std::vector<DeviceInfo> select_devices(const std::string& selectors);

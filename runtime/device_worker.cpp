@@ -6,14 +6,6 @@
 
 #include "runtime/hash.h"
 
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-}  // namespace
-
 DeviceWorker::DeviceWorker(const DeviceInfo& device)
     : owned_(std::make_unique<ClContext>(device)), cl_(owned_.get()) {}
 
@@ -104,7 +96,6 @@ UnitOutput DeviceWorker::run(const WorkUnit& u, const std::vector<pc_float4>* in
   result_.resize(3 * size_t(u.pixel_count));
   CL_CHECK(clEnqueueReadBuffer(cl_->queue, film_.mem, CL_FALSE, offset, bytes, result_.data(), 0, nullptr, nullptr));
   CL_CHECK(clEnqueueReadBuffer(cl_->queue, stats_.mem, CL_TRUE, 0, sizeof out.stats, &out.stats, 0, nullptr, nullptr));
-  out.seconds = ms_since(start) * 1e-3;
-  out.transfer_ms = std::max(0.0, out.seconds * 1e3 - out.kernel_ms);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

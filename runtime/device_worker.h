@@ -24,9 +24,8 @@ struct DeviceFault {
 // the worker's read-back buffer (DeviceWorker::result), valid until its next unit.
 struct UnitOutput {
   UnitStats stats{};
-  double seconds = 0;      // the unit's wall time on this device: upload, launch, read-back
-  double kernel_ms = 0;    // the launch alone, from profiling events
-  double transfer_ms = 0;  // upload and read-back
+  double seconds = 0;    // the unit's wall time on this device: upload, launch, read-back
+  double kernel_ms = 0;  // the launch alone, from profiling events
 };
 
 struct WorkerSettings {

@@ -169,7 +169,7 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   if (cl.info.correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   // Oclgrind 21.10 cannot execute the llvm.bitreverse that clang's optimiser makes of sampler.cl's bit
   // reversal; unoptimised, the same source computes the same bits.
-  if (cl.info.platform_name.find("Oclgrind") != std::string::npos) options += " -cl-opt-disable";
+  if (is_oclgrind(cl.info)) options += " -cl-opt-disable";
   result.options = options;
   const DeviceInfo& d = cl.info;
   std::string identity = source + '\x1f' + options + '\x1f' + d.platform_name + '\x1f' + d.platform_version + '\x1f' +

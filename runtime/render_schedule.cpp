@@ -58,6 +58,12 @@ bool RenderSchedule::at_horizon() const {
   return std::all_of(level_.begin(), level_.end(), [&](uint32_t l) { return l >= horizon_; });
 }
 
+uint64_t RenderSchedule::samples_done() const {
+  uint64_t samples = 0;
+  for (uint32_t t = 0; t < level_.size(); ++t) samples += uint64_t(level_[t]) * tile_size(t);
+  return samples;
+}
+
 uint32_t RenderSchedule::lowest_level() const { return *std::min_element(level_.begin(), level_.end()); }
 
 bool RenderSchedule::any_active_device() const {

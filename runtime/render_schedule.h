@@ -121,10 +121,8 @@ class RenderSchedule {
   const std::vector<ScheduleDeviceStats>& device_stats() const { return stats_; }
   const std::vector<ScheduleDevice>& devices() const { return devices_; }
   uint32_t tile_count() const { return uint32_t(level_.size()); }
-  uint32_t tile_pixels() const { return tile_pixels_; }
-  uint32_t level_of_tile(uint32_t tile) const { return level_[tile]; }
+  uint64_t samples_done() const;  // committed samples over the whole film
   const WorkUnit* running(uint64_t unit) const;  // nullptr once finished
-  uint64_t pixels_total() const { return pixels_; }
 
  private:
   struct Running {

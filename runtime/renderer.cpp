@@ -296,17 +296,9 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   double last_checkpoint = 0;
   bool closing = false;
   const uint64_t samples_total = uint64_t(pixels) * options.spp;
-  auto samples_done = [&] {
-    uint64_t s = 0;
-    for (uint32_t t = 0; t < schedule.tile_count(); ++t)
-      s += uint64_t(schedule.level_of_tile(t)) * std::min(schedule.tile_pixels(), pixels - t * schedule.tile_pixels());
-    return s;
-  };
   auto checkpoint_due = [&] { return !options.checkpoint.empty() && now() - last_checkpoint >= options.checkpoint_every; };
-  auto stop_requested = [&] {
-    return (options.interrupt && *options.interrupt) || (options.time_budget > 0 && now() >= options.time_budget) ||
-           checkpoint_due();
-  };
+  auto interrupted = [&] { return options.interrupt && *options.interrupt; };
+  auto time_is_up = [&] { return options.time_budget > 0 && now() >= options.time_budget; };
   auto make_film = [&] { return film_from_accumulators(header.width, header.height, film); };
   auto write_checkpoint_now = [&](const Film& f) {
     write_checkpoint(options.checkpoint, options.checkpoint_key, f);
@@ -326,7 +318,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     const WorkUnit unit = *schedule.running(e.unit);
     UnitFinish f = schedule.finish(e.unit, e.output.seconds);
     report.kernel_seconds += e.output.kernel_ms * 1e-3;
-    report.transfer_seconds += e.output.transfer_ms * 1e-3;
+    report.transfer_seconds += std::max(0.0, e.output.seconds - e.output.kernel_ms * 1e-3);
     result.kernel_ms += e.output.kernel_ms;
     result.launches++;
     // The worker's read-back buffer stays valid until its next unit, which is given only after this.
@@ -339,7 +331,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       result.inf_samples += s.inf_samples;
       result.negative_samples += s.negative_samples;
       if (f.twin != 0) kept[e.unit] = accumulators;
-      if (callbacks.progress) callbacks.progress(samples_done(), samples_total, now());
+      if (callbacks.progress) callbacks.progress(schedule.samples_done(), samples_total, now());
     } else if (f.outcome == UnitOutcome::compare) {
       auto twin = kept.find(f.twin);
       const std::vector<pc_float4>& a = twin->second;
@@ -379,11 +371,11 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       if (callbacks.horizon && is_power_of_two(spp) && options.power_of_two_horizons) callbacks.horizon(film_now(), now(), result.kernel_build_ms);
       std::string stop;
       if (spp >= options.spp) stop = "spp";
-      else if (options.interrupt && *options.interrupt) stop = "interrupted";
+      else if (interrupted()) stop = "interrupted";
       // The half-image estimate needs a few samples in each half before it can be trusted.
       else if (options.target_error > 0 && spp >= 8 && is_power_of_two(spp) && estimated_rel_mse(film_now()) < options.target_error)
         stop = "target_error";
-      else if (options.time_budget > 0 && now() >= options.time_budget) stop = "time";
+      else if (time_is_up()) stop = "time";
       if (!options.checkpoint.empty() && (checkpoint_due() || (!stop.empty() && result.checkpoint_spp != spp)))
         write_checkpoint_now(film_now());
       if (!stop.empty()) {
@@ -407,7 +399,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     if (options.time_budget > 0 && !closing)
       deadline = std::min(deadline, start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.time_budget)));
     if (std::optional<Event> e = events.pop(deadline)) handle(*e);
-    if (!closing && stop_requested()) {
+    if (!closing && (interrupted() || time_is_up() || checkpoint_due())) {
       schedule.close_pass();
       closing = true;
     }
