@@ -184,15 +184,10 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   const uint32_t pixels = header.width * header.height;
   const size_t n = workers.size();
 
-  uint32_t start_spp = 0;
-  std::vector<pc_float4> film(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
-  if (options.resume) {
-    if (options.resume->accumulators.size() != film.size())
-      throw RuntimeFailure("the film to resume from has " + std::to_string(options.resume->accumulators.size() / 3) +
-                           " pixels, the render " + std::to_string(pixels));
-    film = options.resume->accumulators;
-    start_spp = options.resume->spp;
-  }
+  uint32_t start_spp = options.resume ? options.resume->spp : 0;
+  if (options.resume && options.resume->accumulators.size() != 3 * size_t(pixels))
+    throw RuntimeFailure("the film to resume from has " + std::to_string(options.resume->accumulators.size() / 3) +
+                         " pixels, the render " + std::to_string(pixels));
 
   // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices
   // the probe that tells their arithmetic classes apart.
@@ -243,6 +238,10 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     if (usage_error) throw UsageError(first_error);
     throw RuntimeFailure(first_error);
   }
+  // The host's film only now: a film too large for every device has been refused without the seconds
+  // that allocating and clearing gigabytes on the host take.
+  std::vector<pc_float4> film = options.resume ? options.resume->accumulators
+                                               : std::vector<pc_float4>(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
   result.kernel_from_cache = true;
   for (size_t d = 0; d < n; ++d) {
     if (!ready[d]) continue;
