@@ -19,12 +19,17 @@
 #include "runtime/device.h"
 #include "runtime/errors.h"
 #include "runtime/image_compare.h"
+#include "runtime/atomic_file.h"
 #include "runtime/image_io.h"
+#include "runtime/interrupt.h"
 #include "runtime/kernel_program.h"
+#include "runtime/output_files.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
 #include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
+#include "scene/scene_limits.h"
+#include "git_revision.h"
 
 namespace {
 
@@ -53,22 +58,21 @@ LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::ca
   return s;
 }
 
-// Writes a text file through a temporary file and a rename.
-void write_text(const std::string& path, const std::string& text) {
-  std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!(out << text)) throw RuntimeFailure(path + ": cannot write");
-  }
-  std::filesystem::rename(tmp, path);
+void write_json(const std::string& path, const nlohmann::json& j) { write_text_file(path, j.dump(2) + "\n"); }
+
+// A count given on the command line, within the limits the scene file has for the same setting.
+uint32_t count_option(const std::string& option, int64_t value, uint32_t lo, uint32_t hi) {
+  if (value < int64_t(lo) || value > int64_t(hi))
+    throw UsageError(option + " " + std::to_string(value) + ": expected an integer in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "]");
+  return uint32_t(value);
 }
 
-void write_json(const std::string& path, const nlohmann::json& j) { write_text(path, j.dump(2) + "\n"); }
-
-void make_parent_directory(const std::string& path) {
-  std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  std::error_code ec;
-  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+// A number of seconds or an error given on the command line: finite and > 0 (or >= 0).
+double positive_option(const std::string& option, double value, bool allow_zero, const char* what) {
+  if (!std::isfinite(value) || value < 0 || (!allow_zero && value == 0))
+    throw UsageError(option + ": expected " + what);
+  return value;
 }
 
 nlohmann::json scene_stats(const LoadedScene& s) {
@@ -91,22 +95,12 @@ void print_progress(uint64_t done, uint64_t total, double seconds, size_t pixels
   if (done == total) std::fprintf(stderr, "\n");
 }
 
-// The first SIGINT or SIGTERM asks the render to stop at the end of the current pass and write what it
-// has; the handler then restores the default action, so a second signal ends the process at once
-// (outputs are written through temporary files and renames, so none is left half-written).
-volatile std::sig_atomic_t g_stop_signal = 0;
-
-void on_stop_signal(int signal) {
-  g_stop_signal = signal;
-  std::signal(signal, SIG_DFL);
-}
-
 struct RenderArgs {
   std::string scene, out, png, stats, device, sampler, reference, convergence, checkpoint, resume;
   double checkpoint_every = 60;
-  std::optional<uint32_t> spp, seed, max_depth;
+  std::optional<int64_t> spp, seed, max_depth;
   std::optional<double> time_budget, target_error;
-  uint32_t pass_spp = 0;
+  int64_t pass_spp = 0;
   size_t work_group = 0;
   bool quiet = false, all_features = false, variance = false, allow_mixed_devices = false;
 };
@@ -198,28 +192,35 @@ nlohmann::json device_stats(const RenderResult& r) {
 
 int run_render(const RenderArgs& a) {
   auto started = std::chrono::steady_clock::now();
-  LoadedScene s = load(a.scene);
-  if (!a.quiet) warn_about_clean_up(s);
+  // Everything the command line can get wrong is refused before the scene is loaded.
   RenderOptions opt;
   bool budgeted = a.time_budget || a.target_error;
-  // A time or error budget without --spp renders until the budget ends.
-  opt.spp = a.spp.value_or(budgeted ? (1u << 24) : s.description.render.spp);
-  opt.seed = a.seed.value_or(s.description.render.seed);
-  opt.max_depth = a.max_depth.value_or(s.description.render.max_depth);
-  opt.sampler = s.description.render.sampler;
+  if (a.spp) opt.spp = count_option("--spp", *a.spp, 1, kMaxSpp);
+  if (a.seed) opt.seed = count_option("--seed", *a.seed, 0, 0xffffffffu);
+  if (a.max_depth) opt.max_depth = count_option("--max-depth", *a.max_depth, 0, kMaxDepth);
+  opt.pass_spp = count_option("--pass-spp", a.pass_spp, 0, kMaxSpp);
   if (!a.sampler.empty() && !sampler_from_name(a.sampler, &opt.sampler))
     throw UsageError("--sampler " + a.sampler + ": expected independent, stratified, sobol or halton");
-  opt.pass_spp = a.pass_spp;
+  if (a.time_budget) opt.time_budget = positive_option("--time", *a.time_budget, false, "a finite number of seconds > 0");
+  if (a.target_error) opt.target_error = positive_option("--target-error", *a.target_error, false, "a finite relMSE > 0");
+  opt.checkpoint_every = positive_option("--checkpoint-every", a.checkpoint_every, true, "a finite number of seconds >= 0");
+  std::string out = a.out.empty() ? std::filesystem::path(a.scene).stem().string() + ".exr" : a.out;
+  if (a.variance && image_format("-o", out) != ImageFormat::exr)
+    throw UsageError("--variance: the variance layer needs an EXR output, not -o " + out);
+  check_output_files({{"-o", out, true}, {"--png", a.png, true}, {"--stats", a.stats},
+                      {"--convergence", a.convergence}, {"--checkpoint", a.checkpoint}});
+
+  LoadedScene s = load(a.scene);
+  warn_about_clean_up(s);
+  // A time or error budget without --spp renders until the budget ends.
+  if (!a.spp) opt.spp = budgeted ? kMaxSpp : s.description.render.spp;
+  if (!a.seed) opt.seed = s.description.render.seed;
+  if (!a.max_depth) opt.max_depth = s.description.render.max_depth;
+  if (a.sampler.empty()) opt.sampler = s.description.render.sampler;
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
   opt.power_of_two_horizons = !a.convergence.empty();
   opt.allow_mixed_devices = a.allow_mixed_devices;
-  if (opt.spp == 0) throw UsageError("--spp: expected at least 1 sample per pixel");
-  if (a.time_budget && !(*a.time_budget > 0)) throw UsageError("--time: expected a number of seconds > 0");
-  if (a.target_error && !(*a.target_error > 0)) throw UsageError("--target-error: expected a relMSE > 0");
-  opt.time_budget = a.time_budget.value_or(0);
-  opt.target_error = a.target_error.value_or(0);
-  std::string out = a.out.empty() ? std::filesystem::path(a.scene).stem().string() + ".exr" : a.out;
   ConvergenceLog log;
   log.path = a.convergence;
   if (!a.reference.empty()) {
@@ -230,21 +231,18 @@ int run_render(const RenderArgs& a) {
                        std::to_string(s.device.header.width) + "x" + std::to_string(s.device.header.height));
   }
 
-  if (!(a.checkpoint_every >= 0)) throw UsageError("--checkpoint-every: expected a number of seconds >= 0");
   opt.checkpoint = a.checkpoint;
-  opt.checkpoint_every = a.checkpoint_every;
   opt.checkpoint_key = render_key(s.device, opt);
   Film resumed;
   if (!a.resume.empty()) {
     resumed = read_checkpoint(a.resume, opt.checkpoint_key, s.device.header.width, s.device.header.height);
     opt.resume = &resumed;
   }
-  if (!a.checkpoint.empty()) make_parent_directory(a.checkpoint);
 
   std::vector<DeviceInfo> devices = select_devices(a.device);
   bool show = !a.quiet && isatty(STDERR_FILENO);
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
-  opt.interrupt = &g_stop_signal;
+  opt.interrupt = stop_signal();
   RenderCallbacks callbacks;
   if (show && !budgeted)
     callbacks.progress = [&](uint64_t done, uint64_t total, double seconds) { print_progress(done, total, seconds, pixels); };
@@ -252,11 +250,11 @@ int run_render(const RenderArgs& a) {
     callbacks.horizon = [&](const Film& film, double seconds, double kernel_build_ms) {
       log.add(ms_since(started) * 1e-3, s, kernel_build_ms, seconds, film);
     };
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
+  install_stop_handlers(out + " is not written; " +
+                        (a.checkpoint.empty() ? std::string("the render is lost (--checkpoint keeps its state)")
+                                              : "the checkpoint " + a.checkpoint + " holds the render as of its last save"));
   RenderResult r = render(devices, s.device, opt, callbacks);
-  if (!a.quiet)
-    for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", r.stop_reason.c_str(), r.film.spp);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
     log.add(ms_since(started) * 1e-3, s, r.kernel_build_ms, r.render_seconds, r.film);
@@ -266,16 +264,9 @@ int run_render(const RenderArgs& a) {
   image.attributes = {{"renderer", "pathcl"}, {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
                       {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
                       {"stop_reason", r.stop_reason}, {"determinism", r.determinism}};
-  make_parent_directory(out);
-  write_exr(out, image);
-  if (!a.png.empty()) {
-    make_parent_directory(a.png);
-    write_png(a.png, image);
-  }
-  if (!log.path.empty()) {
-    make_parent_directory(log.path);
-    write_text(log.path, log.text);
-  }
+  write_image(out, image);
+  if (!a.png.empty()) write_png(a.png, image);
+  if (!log.path.empty()) write_text_file(log.path, log.text);
   double samples = double(pixels) * (r.film.spp - (opt.resume ? opt.resume->spp : 0));
   if (!a.stats.empty()) {
     nlohmann::json j = scene_stats(s);
@@ -306,7 +297,6 @@ int run_render(const RenderArgs& a) {
               {"nan_samples", r.nan_samples},
               {"inf_samples", r.inf_samples},
               {"negative_samples", r.negative_samples}});
-    make_parent_directory(a.stats);
     write_json(a.stats, j);
   }
   if (!a.quiet)
@@ -317,10 +307,10 @@ int run_render(const RenderArgs& a) {
     std::fprintf(stderr, "warning: discarded %llu NaN, %llu infinite and %llu negative samples\n",
                  (unsigned long long)r.nan_samples, (unsigned long long)r.inf_samples,
                  (unsigned long long)r.negative_samples);
-  if (g_stop_signal) {
-    std::fprintf(stderr, "interrupted after %u spp%s\n", r.film.spp,
-                 a.checkpoint.empty() ? "" : (": resume with --resume " + a.checkpoint).c_str());
-    return 128 + g_stop_signal;
+  if (int signal = *stop_signal()) {
+    std::fprintf(stderr, "interrupted after %u spp, wrote %s%s\n", r.film.spp, out.c_str(),
+                 a.checkpoint.empty() ? "" : ("; resume with --resume " + a.checkpoint).c_str());
+    return 128 + signal;
   }
   return 0;
 }
@@ -360,7 +350,7 @@ std::string cleaned_obj(const SceneDescription& d) {
       continue;
     }
     text += "o shapes[" + std::to_string(i) + "]\n";
-    for (const glm::vec3& p : shape.mesh.positions) {
+    for (const glm::dvec3& p : shape.mesh.positions) {
       std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
       text += line;
     }
@@ -374,11 +364,9 @@ std::string cleaned_obj(const SceneDescription& d) {
 }
 
 int run_info(const std::string& path, const std::string& dump_obj) {
+  check_output_files({{"--dump-obj", dump_obj}});
   LoadedScene s = load(path);
-  if (!dump_obj.empty()) {
-    make_parent_directory(dump_obj);
-    write_text(dump_obj, cleaned_obj(s.description));
-  }
+  if (!dump_obj.empty()) write_text_file(dump_obj, cleaned_obj(s.description));
   const SceneDescription& d = s.description;
   std::printf("scene: %s\ncamera: %ux%u, fov_y %.1f degrees\nmaterials: %zu\n", path.c_str(), d.camera.width,
               d.camera.height, d.camera.fov_y_degrees, d.materials.size());
@@ -417,27 +405,28 @@ int run_info(const std::string& path, const std::string& dump_obj) {
 
 struct RaysArgs {
   std::string scene, rays, hits, device, stats;
-  int repeat = 5;
+  int64_t repeat = 5;
   size_t work_group = 0;
 };
 
 int run_rays(const RaysArgs& a) {
+  count_option("--repeat", a.repeat, 1, 1000000);
+  check_output_files({{"--hits", a.hits}, {"--stats", a.stats}});
   LoadedScene s = load(a.scene, DeviceOrigin::world);  // ray files are in world coordinates
   std::vector<RayRecord> rays = read_ray_file(a.rays);
-  if (a.repeat < 1) throw UsageError("--repeat: expected at least 1");
-  ClContext cl(select_device(a.device));
+  std::vector<DeviceInfo> devices = select_devices(a.device);
+  if (devices.size() > 1) throw UsageError("--device " + a.device + ": rays traces on one device, this selects " +
+                                           std::to_string(devices.size()));
+  ClContext cl(devices.front());
   TraceTiming timing;
   std::vector<HitRecord> hits = trace_ray_records(cl, s.device, rays, a.repeat, timing, a.work_group);
   size_t hit_count = std::count_if(hits.begin(), hits.end(), [](const HitRecord& h) { return h.prim != PC_INVALID; });
   double kernel_ms = median(timing.kernel_ms), wall_ms = median(timing.wall_ms);
   double n = double(rays.size());
   std::printf("%s: %zu rays, %zu hits, median of %d: kernel %.2f ms (%.3f Mrays/s), wall %.2f ms (%.3f Mrays/s) on %s\n",
-              a.rays.c_str(), rays.size(), hit_count, a.repeat, kernel_ms, n / kernel_ms * 1e-3, wall_ms,
+              a.rays.c_str(), rays.size(), hit_count, int(a.repeat), kernel_ms, n / kernel_ms * 1e-3, wall_ms,
               n / wall_ms * 1e-3, cl.info.name.c_str());
-  if (!a.hits.empty()) {
-    make_parent_directory(a.hits);
-    write_hit_file(a.hits, hits);
-  }
+  if (!a.hits.empty()) write_hit_file(a.hits, hits);
   if (!a.stats.empty()) {
     nlohmann::json j = scene_stats(s);
     j.update({{"device", cl.info.name},
@@ -452,10 +441,28 @@ int run_rays(const RaysArgs& a) {
               {"rays_per_second_wall", n / wall_ms * 1e3},
               {"kernel_build_ms", timing.kernel_build_ms},
               {"kernel_from_cache", timing.kernel_from_cache}});
-    make_parent_directory(a.stats);
     write_json(a.stats, j);
   }
   return 0;
+}
+
+// `pathcl --version`: the version, the git revision built and the OpenCL platforms this machine has.
+std::string version_text() {
+  std::string text = std::string("pathcl ") + PATHCL_VERSION + " (git " + PATHCL_GIT_REVISION + ")\nOpenCL platforms:";
+  std::vector<DeviceInfo> devices;
+  try {
+    devices = list_devices();
+  } catch (const std::exception& e) {
+    return text + " none (" + e.what() + ")";
+  }
+  if (devices.empty()) return text + " none (is an ICD such as pocl-opencl-icd installed?)";
+  std::string last;
+  for (const DeviceInfo& d : devices) {
+    if (d.platform_name != last) text += "\n  " + d.platform_name + " (" + d.platform_version + "):";
+    text += (d.platform_name == last ? ", " : " ") + d.name;
+    last = d.platform_name;
+  }
+  return text;
 }
 
 }  // namespace
@@ -463,6 +470,7 @@ int run_rays(const RaysArgs& a) {
 int main(int argc, char** argv) {
   CLI::App app{"pathcl: a Monte-Carlo path tracer on OpenCL"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", version_text, "print the version, the git revision and the OpenCL platforms");
 
   RenderArgs ra;
   CLI::App* render_cmd = app.add_subcommand("render", "render a scene to EXR (and PNG)");
@@ -473,7 +481,8 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--seed", ra.seed, "random seed (overrides the scene)");
   render_cmd->add_option("--max-depth", ra.max_depth, "largest number of scattering events (overrides the scene)");
   render_cmd->add_option("--device", ra.device,
-                         "device index or name substring (see `pathcl devices`), a comma-separated list of them, or all");
+                         "device index or name substring (see `pathcl devices`), cpu, gpu, a comma-separated list of "
+                         "them, or all");
   render_cmd->add_flag("--allow-mixed-devices", ra.allow_mixed_devices,
                        "also render on devices whose arithmetic differs from the first device's (the image then "
                        "depends on the split)");
@@ -515,8 +524,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    int code = app.exit(e);
-    return code == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "error: %s (see --help)\n", e.what());
+    return 2;
   }
   try {
     if (render_cmd->parsed()) return run_render(ra);

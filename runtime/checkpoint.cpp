@@ -1,5 +1,6 @@
 #include "runtime/checkpoint.h"
 
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -7,6 +8,7 @@
 
 #include <unistd.h>
 
+#include "runtime/atomic_file.h"
 #include "runtime/hash.h"
 
 namespace {
@@ -44,23 +46,16 @@ void write_checkpoint(const std::string& path, uint64_t key, const Film& film) {
   header.spp = film.spp;
   uint64_t checksum = fnv1a(&header, sizeof header);
   checksum = hash_vector(film.accumulators, checksum);
-  std::string tmp = path + ".partial." + std::to_string(::getpid());
-  {
+  write_file_atomically(path, "the checkpoint", [&](const std::string& tmp) {
+    errno = 0;
     std::ofstream out(tmp, std::ios::binary);
     out.write(reinterpret_cast<const char*>(&header), sizeof header);
     out.write(reinterpret_cast<const char*>(film.accumulators.data()),
               std::streamsize(film.accumulators.size() * sizeof(pc_float4)));
     out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
     out.flush();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw RuntimeFailure(path + ": cannot write the checkpoint");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw RuntimeFailure(path + ": cannot write the checkpoint: " + ec.message());
+    if (!out) throw std::runtime_error(errno ? std::strerror(errno) : "the write failed");
+  });
 }
 
 Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height) {

@@ -106,6 +106,23 @@ DeviceInfo select_device(const std::string& selector) {
   throw UsageError("--device " + selector + ": no device or platform name contains it (see `pathcl devices`)");
 }
 
+namespace {
+
+std::vector<DeviceInfo> select_by_type_or_name(const std::string& selector) {
+  std::string type = lower(selector);
+  if (type != "cpu" && type != "gpu") return {select_device(selector)};
+  std::vector<DeviceInfo> of_type;
+  for (const DeviceInfo& d : list_devices())
+    if ((type == "gpu" ? d.is_gpu : d.is_cpu) && !is_oclgrind(d) && (type == "gpu" || of_type.empty()))
+      of_type.push_back(d);
+  if (of_type.empty())
+    throw UsageError("--device " + selector + ": no " + (type == "gpu" ? "GPU" : "CPU") +
+                     " device found (see `pathcl devices`)");
+  return of_type;
+}
+
+}  // namespace
+
 std::vector<DeviceInfo> select_devices(const std::string& selectors) {
   if (selectors.empty()) return {select_device("")};
   std::vector<DeviceInfo> chosen;
@@ -119,12 +136,13 @@ std::vector<DeviceInfo> select_devices(const std::string& selectors) {
     size_t comma = selectors.find(',', start);
     std::string one = selectors.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (one.empty()) throw UsageError("--device " + selectors + ": an empty selector in the list");
-    DeviceInfo d = select_device(one);
-    for (const DeviceInfo& c : chosen)
-      if (c.index == d.index)
-        throw UsageError("--device " + selectors + ": \"" + one + "\" selects device " + std::to_string(d.index) +
-                         " (" + d.name + ") a second time");
-    chosen.push_back(d);
+    for (const DeviceInfo& d : select_by_type_or_name(one)) {
+      for (const DeviceInfo& c : chosen)
+        if (c.index == d.index)
+          throw UsageError("--device " + selectors + ": \"" + one + "\" selects device " + std::to_string(d.index) +
+                           " (" + d.name + ") a second time");
+      chosen.push_back(d);
+    }
     if (comma == std::string::npos) break;
     start = comma + 1;
   }

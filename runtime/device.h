@@ -32,8 +32,10 @@ DeviceInfo select_device(const std::string& selector);
 // cannot run optimised kernels (runtime/kernel_program.cpp).
 bool is_oclgrind(const DeviceInfo& device);
 
-// A comma-separated list of selectors as select_device takes them, or "all" for every device; each device
-// at most once, in the order given. "" is the default device alone.
+// A comma-separated list of selectors as select_device takes them, "gpu" (every GPU), "cpu" (the first CPU
+// device: the CPU devices of several platforms are the same cores, which would only compete), or "all"
+// for every device; each device at most once, in the order given. "" is the default device alone. The
+// types never pick Oclgrind.
 std::vector<DeviceInfo> select_devices(const std::string& selectors);
 
 // A sub-device of a CPU device with `units` of its compute units (clCreateSubDevices by counts), so that

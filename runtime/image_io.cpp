@@ -14,19 +14,10 @@
 #include <ImfStringAttribute.h>
 #include <png.h>
 
+#include "runtime/atomic_file.h"
 #include "runtime/errors.h"
 
 namespace {
-
-// Renames tmp over path, or removes tmp and throws.
-void commit_file(const std::string& tmp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw RuntimeFailure(path + ": cannot write: " + ec.message());
-  }
-}
 
 uint8_t to_srgb8(float linear) {
   float c = std::clamp(std::isfinite(linear) ? linear : 0.0f, 0.0f, 1.0f);
@@ -52,11 +43,10 @@ bool has_rgb_channels(const Imf::ChannelList& channels, const std::string& prefi
 }  // namespace
 
 void write_exr(const std::string& path, const Image& image) {
-  std::string tmp = path + ".partial.exr";
-  try {
-    bool variance = !image.variance.empty();
-    if (variance && image.variance.size() != image.rgb.size())
-      throw std::invalid_argument("the variance buffer does not match the image size");
+  bool variance = !image.variance.empty();
+  if (variance && image.variance.size() != image.rgb.size())
+    throw RuntimeFailure(path + ": the variance buffer does not match the image size");
+  write_file_atomically(path, "the EXR file", [&](const std::string& tmp) {
     Imf::Header header(int(image.width), int(image.height));
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     if (variance)
@@ -70,29 +60,20 @@ void write_exr(const std::string& path, const Image& image) {
     Imf::OutputFile file(tmp.c_str(), header);
     file.setFrameBuffer(fb);
     file.writePixels(int(image.height));
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw RuntimeFailure(path + ": cannot write the EXR file: " + e.what());
-  }
-  commit_file(tmp, path);
+  });
 }
 
 void write_png(const std::string& path, const Image& image) {
   std::vector<uint8_t> pixels(image.rgb.size());
   std::transform(image.rgb.begin(), image.rgb.end(), pixels.begin(), to_srgb8);
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  png.width = image.width;
-  png.height = image.height;
-  png.format = PNG_FORMAT_RGB;
-  std::string tmp = path + ".partial.png";
-  if (!png_image_write_to_file(&png, tmp.c_str(), 0, pixels.data(), 0, nullptr)) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw RuntimeFailure(path + ": cannot write the PNG file: " + png.message);
-  }
-  commit_file(tmp, path);
+  write_file_atomically(path, "the PNG file", [&](const std::string& tmp) {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    png.width = image.width;
+    png.height = image.height;
+    png.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&png, tmp.c_str(), 0, pixels.data(), 0, nullptr)) throw std::runtime_error(png.message);
+  });
 }
 
 Image read_exr(const std::string& path) {

@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include "runtime/atomic_file.h"
 #include "runtime/hash.h"
 #include "runtime/kernel_sources.h"
 #include "scene/device_scene.h"
@@ -99,23 +100,19 @@ cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& o
   return program;
 }
 
-// Writes through a temporary file and a rename, so concurrent processes never read half a binary.
+// Written atomically (runtime/atomic_file.h), so concurrent processes never read half a binary.
 void store_cached(const fs::path& file, const std::vector<unsigned char>& binary) {
   std::error_code ec;
   fs::create_directories(file.parent_path(), ec);
-  if (ec) return;  // the cache is an optimisation: an unwritable directory only costs build time
-  // Unique per process and thread: several devices of one render may build the same program at once.
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = file;
-  tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-  {
-    uint64_t checksum = fnv1a(binary.data(), binary.size());
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()));
-    if (!out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum)) return;
+  std::vector<unsigned char> bytes = binary;
+  uint64_t checksum = fnv1a(binary.data(), binary.size());
+  bytes.insert(bytes.end(), reinterpret_cast<const unsigned char*>(&checksum),
+               reinterpret_cast<const unsigned char*>(&checksum) + sizeof checksum);
+  try {
+    write_binary_file(file.string(), bytes.data(), bytes.size());
+  } catch (const RuntimeFailure&) {
+    // The cache is an optimisation: an unwritable directory only costs build time.
   }
-  fs::rename(tmp, file, ec);
-  if (ec) fs::remove(tmp, ec);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "runtime/atomic_file.h"
 #include "runtime/kernel_program.h"
 
 std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
@@ -64,13 +65,5 @@ std::vector<RayRecord> read_ray_file(const std::string& path) {
 }
 
 void write_hit_file(const std::string& path, const std::vector<HitRecord>& hits) {
-  std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out.write(reinterpret_cast<const char*>(hits.data()), std::streamsize(hits.size() * sizeof(HitRecord)))) {
-      std::filesystem::remove(tmp);
-      throw RuntimeFailure(path + ": cannot write the hit file");
-    }
-  }
-  std::filesystem::rename(tmp, path);
+  write_binary_file(path, hits.data(), hits.size() * sizeof(HitRecord));
 }

@@ -1,10 +1,12 @@
 // The command line: exit codes, messages, and that bad input never leaves an output file.
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "runtime/cl_check.h"
 #include "runtime/image_io.h"
 #include "test_support.h"
 
@@ -72,10 +74,13 @@ TEST(Cli, RenderWritesExrPngAndStats) {
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>());
 }
 
-TEST(Cli, UnwritableOutputIsARuntimeFailure) {
+// Checked before the scene is loaded, so no render is lost at its end to a path that cannot be written.
+TEST(Cli, UnwritableOutputIsRefusedBeforeRendering) {
   std::string err;
-  EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 -o /proc/pathcl-cannot-write.exr", &err), 1) << err;
-  EXPECT_NE(err.find("cannot write"), std::string::npos) << err;
+  EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 -o /proc/pathcl-cannot-write.exr", &err), 2) << err;
+  EXPECT_NE(err.find("-o /proc/pathcl-cannot-write.exr: cannot write into the directory /proc"), std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("spp in"), std::string::npos) << err;  // nothing was rendered
 }
 
 TEST(Cli, DevicesInfoAndRays) {
@@ -172,4 +177,136 @@ TEST(Cli, DamagedKernelCacheEntryIsDetectedAndRebuilt) {
   ASSERT_EQ(run_pathcl(render, &err), 0) << err;  // and stored again
   EXPECT_TRUE(from_cache());
   if (previous) setenv("PATHCL_KERNEL_CACHE", saved.c_str(), 1); else unsetenv("PATHCL_KERNEL_CACHE");
+}
+
+// The command line refuses what the scene file refuses: one set of limits (scene/scene_limits.h).
+TEST(Cli, OptionsHaveTheSceneFilesLimits) {
+  struct Case {
+    std::string args, message;
+  } cases[] = {
+      {"--spp 16777217", "--spp 16777217: expected an integer in [1, 16777216]"},
+      {"--spp 0", "--spp 0: expected an integer in [1, 16777216]"},
+      {"--spp -1", "--spp -1: expected an integer in [1, 16777216]"},
+      {"--spp 3.5", "Could not convert: --spp = 3.5"},
+      {"--max-depth 1025", "--max-depth 1025: expected an integer in [0, 1024]"},
+      {"--max-depth -1", "--max-depth -1: expected an integer in [0, 1024]"},
+      {"--seed 4294967296", "--seed 4294967296: expected an integer in [0, 4294967295]"},
+      {"--pass-spp 16777217", "--pass-spp 16777217: expected an integer in [0, 16777216]"},
+      {"--time nan", "--time: expected a finite number of seconds > 0"},
+      {"--time inf", "--time: expected a finite number of seconds > 0"},
+      {"--time 0", "--time: expected a finite number of seconds > 0"},
+      {"--target-error -1", "--target-error: expected a finite relMSE > 0"},
+      {"--checkpoint-every -1", "--checkpoint-every: expected a finite number of seconds >= 0"},
+      {"--work-group 100000", "--work-group 100000: "},
+  };
+  for (const Case& c : cases) {
+    std::string out = temp_dir() + "/limits.exr", err;
+    EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " " + c.args + " -o " + out, &err), 2) << c.args << "\n" << err;
+    EXPECT_NE(err.find("error: " + c.message), std::string::npos) << c.args << "\n" << err;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+  std::string err, out = temp_dir() + "/limits.exr";
+  EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 16777216 --time 0.05 --max-depth 1024 -o " + out, &err), 0)
+      << err;
+  EXPECT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays x.rays --repeat 0", &err), 2);
+  EXPECT_NE(err.find("--repeat 0: expected an integer in [1, 1000000]"), std::string::npos) << err;
+}
+
+// Outputs are checked before rendering: the format comes from the extension, a directory or a second
+// use of one file is refused, and nothing is written.
+TEST(Cli, OutputNamesAreCheckedBeforeRendering) {
+  std::string dir = temp_dir() + "/outputs";
+  fs::create_directories(dir + "/a-directory");
+  struct Case {
+    std::string args, message;
+  } cases[] = {
+      {"-o " + dir + "/a-directory", "-o " + dir + "/a-directory: is a directory; expected a file name ending in .exr or .png"},
+      {"-o " + dir + "/new-directory/", "-o " + dir + "/new-directory/: is a directory; expected a file name"},
+      {"-o " + dir + "/img.jpg", "-o " + dir + "/img.jpg: pathcl does not write .jpg files; expected a name ending in .exr (OpenEXR) or .png"},
+      {"-o " + dir + "/img", "-o " + dir + "/img: no file extension"},
+      {"-o " + dir + "/a.exr --png " + dir + "/b.jpg", "--png " + dir + "/b.jpg: pathcl does not write .jpg files; expected a name ending in .png"},
+      {"-o " + dir + "/a.exr --png " + dir + "/a.exr", "--png " + dir + "/a.exr: pathcl does not write .exr files"},
+      {"-o " + dir + "/a.png --png " + dir + "/./a.png", "--png " + dir + "/./a.png: the same file as -o " + dir + "/a.png"},
+      {"-o " + dir + "/a.exr --stats " + dir + "/a.exr", "--stats " + dir + "/a.exr: the same file as -o"},
+      {"-o " + dir + "/a.exr --checkpoint " + dir + "/a.exr", "--checkpoint " + dir + "/a.exr: the same file as -o"},
+      {"-o " + dir + "/a.png --variance", "--variance: the variance layer needs an EXR output"},
+      {"-o " + dir + "/a.exr --stats " + dir + "/a-directory", "--stats " + dir + "/a-directory: is a directory; expected a file name"},
+  };
+  for (const Case& c : cases) {
+    std::string err;
+    EXPECT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 " + c.args, &err), 2) << c.args << "\n" << err;
+    EXPECT_NE(err.find("error: " + c.message), std::string::npos) << c.args << "\n" << err;
+    EXPECT_EQ(err.find("spp in"), std::string::npos) << c.args << "\n" << err;  // nothing was rendered
+  }
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    EXPECT_TRUE(entry.is_directory()) << entry.path() << " was written";
+
+  // -o NAME.png writes a PNG, -o NAME.EXR an EXR.
+  std::string err;
+  ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 -o " + dir + "/img.png", &err), 0) << err;
+  std::ifstream png(dir + "/img.png", std::ios::binary);
+  char magic[8] = {};
+  png.read(magic, 8);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 -o " + dir + "/IMG.EXR", &err), 0) << err;
+  EXPECT_EQ(read_exr(dir + "/IMG.EXR").spp, 1);
+  ASSERT_EQ(run_pathcl("info " + scene("tiny.json") + " --dump-obj " + dir + "/a-directory", &err), 2) << err;
+  EXPECT_NE(err.find("--dump-obj " + dir + "/a-directory: is a directory"), std::string::npos) << err;
+}
+
+// -q drops the progress bar and the summary line, never the warnings.
+TEST(Cli, QuietKeepsTheWarnings) {
+  // A degenerate triangle beside a real one: the clean-up removes it with a warning.
+  std::string file = write_temp_file("degenerate.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0],
+    "width": 8, "height": 8}, "materials": {"m": {"type": "diffuse"}},
+    "shapes": [{"type": "triangles", "positions": [[0,0,0], [1,0,0], [0,1,0], [2,2,0]],
+                "indices": [[0,1,2], [0,1,1]], "material": "m", "emission": [1,1,1]}]})");
+  std::string err, out = temp_dir() + "/quiet.exr";
+  ASSERT_EQ(run_pathcl("render " + file + " --spp 1 -q -o " + out, &err), 0) << err;
+  EXPECT_NE(err.find("warning: shapes[0]"), std::string::npos) << err;
+  EXPECT_EQ(err.find("spp in"), std::string::npos) << err;
+}
+
+TEST(Cli, VersionNamesTheRevisionAndThePlatforms) {
+  std::string out, err;
+  ASSERT_EQ(run_pathcl("--version", &err, &out), 0) << err;
+  EXPECT_EQ(out.rfind("pathcl " PATHCL_VERSION " (git ", 0), 0u) << out;
+  EXPECT_NE(out.find("OpenCL platforms:\n  "), std::string::npos) << out;
+  EXPECT_NE(out.find("Portable Computing Language"), std::string::npos) << out;  // PoCL, as every test machine has
+}
+
+// --device cpu and gpu select by type; a type this machine lacks is bad usage naming the type.
+TEST(Cli, DevicesByType) {
+  std::string devices, err, stats = temp_dir() + "/by-type.json";
+  ASSERT_EQ(run_pathcl("devices", &err, &devices), 0) << err;
+  ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " --spp 1 --device cpu --stats " + stats + " -o " +
+                           temp_dir() + "/cpu.exr", &err),
+            0)
+      << err;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+  EXPECT_EQ(j["devices"].size(), 1u);
+  EXPECT_NE(devices.find(j["device"].get<std::string>() + " (CPU)"), std::string::npos) << devices;
+  int gpu = run_pathcl("render " + scene("tiny.json") + " --spp 1 --device gpu -o " + temp_dir() + "/gpu.exr", &err);
+  bool has_gpu = false;  // a GPU other than Oclgrind (an interpreter calling itself a GPU)
+  std::istringstream lines(devices);
+  for (std::string line; std::getline(lines, line);)
+    has_gpu = has_gpu || (line.find(" (GPU)") != std::string::npos && line.find("Oclgrind") == std::string::npos);
+  if (!has_gpu) {
+    EXPECT_EQ(gpu, 2) << err;
+    EXPECT_NE(err.find("--device gpu: no GPU device found"), std::string::npos) << err;
+  } else {
+    EXPECT_EQ(gpu, 0) << err;
+  }
+}
+
+// Messages name the source file relative to the tree (runtime/device.cpp:118), not the build machine's path.
+TEST(Cli, OpenClErrorsNameSourceFilesRelativeToTheTree) {
+  try {
+    CL_CHECK(CL_INVALID_VALUE);
+    FAIL() << "CL_CHECK did not throw";
+  } catch (const RuntimeFailure& e) {
+    std::string message = e.what();
+    EXPECT_NE(message.find("CL_INVALID_VALUE (-30) at tests/cli_test.cpp:"), std::string::npos) << message;
+    EXPECT_EQ(message.find(PATHCL_SOURCE_DIR), std::string::npos) << message;
+  }
 }
