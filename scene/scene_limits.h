@@ -3,6 +3,6 @@
 #pragma once
 #include <cstdint>
 
-constexpr uint32_t kMaxSpp = 1u << 24;        // samples per pixel; the sampler's sample index is 24 bits
+constexpr uint32_t kMaxSpp = 1u << 24;        // samples per pixel: the film counts them in floats, exact to 2^24
 constexpr uint32_t kMaxDepth = 1024;          // scattering events of a path
 constexpr uint32_t kMaxFilmSide = 16384;      // camera.width and camera.height, in pixels
