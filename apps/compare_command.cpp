@@ -1,5 +1,6 @@
 #include "apps/compare_command.h"
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -60,14 +61,16 @@ void add_compare_command(CLI::App& app) {
   a.command->add_option("test", a.test, "EXR under test (variance.R/G/B channels enable the z-test)")->required();
   a.command->add_option("--mask", a.mask, "EXR whose R channel > 0 selects the pixels to compare");
   a.command->add_flag("--json", a.json, "print JSON instead of text");
-  a.command->add_option("--z-threshold", a.z_threshold, "per-pixel |z| above which a pixel fails (default 3.29)")
-      ->check(CLI::PositiveNumber);
+  a.command->add_option("--z-threshold", a.z_threshold, "per-pixel |z| above which a pixel fails (default 3.29)");
 }
 
 bool compare_command_parsed() { return args().command && args().command->parsed(); }
 
 int run_compare_command() {
   const CompareArgs& a = args();
+  // CLI::PositiveNumber lets NaN and infinity through.
+  if (!(std::isfinite(a.z_threshold) && a.z_threshold > 0))
+    throw UsageError("--z-threshold: expected a finite number > 0");
   Image reference = read_exr(a.reference), test = read_exr(a.test);
   std::optional<Image> mask;
   if (!a.mask.empty()) mask = read_exr(a.mask);

@@ -210,6 +210,10 @@ TEST(Cli, OptionsHaveTheSceneFilesLimits) {
       << err;
   EXPECT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays x.rays --repeat 0", &err), 2);
   EXPECT_NE(err.find("--repeat 0: expected an integer in [1, 1000000]"), std::string::npos) << err;
+  for (const char* z : {"nan", "inf", "0", "-1"}) {
+    EXPECT_EQ(run_pathcl("compare " + out + " " + out + " --z-threshold " + z, &err), 2) << z;
+    EXPECT_NE(err.find("--z-threshold"), std::string::npos) << z << ": " << err;
+  }
 }
 
 // Outputs are checked before rendering: the format comes from the extension, a directory or a second
