@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "apps/bench_command.h"
 #include "apps/compare_command.h"
 #include "runtime/checkpoint.h"
 #include "runtime/device.h"
@@ -520,6 +521,7 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: the driver's choice)");
 
   add_compare_command(app);
+  add_bench_command(app);
 
   try {
     app.parse(argc, argv);
@@ -533,6 +535,7 @@ int main(int argc, char** argv) {
     if (info_cmd->parsed()) return run_info(info_scene, info_dump_obj);
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();
+    if (bench_command_parsed()) return run_bench_command(std::string(PATHCL_VERSION) + " (git " + PATHCL_GIT_REVISION + ")");
     return run_devices();
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -193,6 +193,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   // the probe that tells their arithmetic classes apart.
   std::string build_options = kernel_options(options.all_features ? kFeatureAll : scene.features);
   if (options.debug_inject_hazards) build_options += " -DPC_DEBUG_INJECT_HAZARDS";
+  if (options.debug_bias_diffuse) build_options += " -DPC_DEBUG_BIAS_DIFFUSE";
   EventQueue events;
   std::vector<std::unique_ptr<WorkerThread>> threads;
   result.devices.resize(n);

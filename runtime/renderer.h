@@ -46,6 +46,7 @@ struct RenderOptions {
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's
   // Tests only.
   bool debug_inject_hazards = false;   // make some samples NaN, infinite or negative
+  bool debug_bias_diffuse = false;     // diffuse reflectance 1 % too high (the bench gate's test)
   std::vector<DeviceFault> faults;     // per device index (in the order given), if present
 };
 
