@@ -144,7 +144,7 @@ int run_bench_command(const std::string& pathcl_version) {
   char pattern[] = "/tmp/pathcl-bench-XXXXXX";
   if (!mkdtemp(pattern)) throw RuntimeFailure("cannot make a temporary directory for the benchmark");
   options.work_dir = pattern;
-  install_stop_handlers("the benchmark is not finished; nothing is written");
+  install_stop_handlers("the benchmark is not finished" + (a.json.empty() ? std::string() : "; " + a.json + " is not written"));
   options.interrupt = stop_signal();
   bool tty = isatty(STDERR_FILENO);
   std::string current;
@@ -158,12 +158,14 @@ int run_bench_command(const std::string& pathcl_version) {
   if (devices.size() > 1) runs.push_back(devices);
   std::printf("pathcl bench: suite %s (version %d), pathcl %s\n", options.suite.name.c_str(), kBenchSuiteVersion,
               pathcl_version.c_str());
+  std::fflush(stdout);  // the signal handlers are in place from here on
   for (const auto& run : runs) {
     if (*stop_signal()) break;
     current = run.size() == 1 ? run.front().name : "together";
     results.push_back(run_bench(run, options));
     if (tty) std::fprintf(stderr, "\r\033[K");
     print_result(results.back());
+    std::fflush(stdout);
   }
   std::error_code ec;
   std::filesystem::remove_all(options.work_dir, ec);
@@ -175,10 +177,10 @@ int run_bench_command(const std::string& pathcl_version) {
                         {"suite", {{"name", options.suite.name}, {"version", kBenchSuiteVersion}}},
                         {"scenes_run", options.only.empty() ? bench_scene_names() : options.only},
                         {"results", list}};
-    if (!*stop_signal()) write_text_file(a.json, j.dump(2) + "\n");
+    write_text_file(a.json, j.dump(2) + "\n");  // also when interrupted: what was measured, marked so
   }
   if (int signal = *stop_signal()) {
-    std::fprintf(stderr, "interrupted: the figures above were measured%s\n", a.json.empty() ? "" : "; no JSON written");
+    std::fprintf(stderr, "interrupted: the figures above are what was measured; no score\n");
     return 128 + signal;
   }
   bool failed = std::any_of(results.begin(), results.end(), [](const BenchDeviceResult& r) { return !r.passed; });

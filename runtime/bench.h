@@ -20,6 +20,7 @@ struct BenchSuiteSettings {
   std::string name;                 // quick or standard
   uint32_t throughput_size = 0;     // samples/s and rays/s on a film this wide and high
   uint32_t throughput_spp = 0;
+  uint32_t ray_size = 0;            // camera rays: one per pixel of a film this wide and high
   int ray_repeats = 0;              // timed traversals, the median counts
   double convergence_seconds = 0;   // at most this long towards relMSE 1e-2 (then extrapolated)
 };

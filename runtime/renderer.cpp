@@ -194,6 +194,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   std::string build_options = kernel_options(options.all_features ? kFeatureAll : scene.features);
   if (options.debug_inject_hazards) build_options += " -DPC_DEBUG_INJECT_HAZARDS";
   if (options.debug_bias_diffuse) build_options += " -DPC_DEBUG_BIAS_DIFFUSE";
+  if (options.build_nonce) build_options += " -DPC_BUILD_NONCE=" + std::to_string(options.build_nonce);
   EventQueue events;
   std::vector<std::unique_ptr<WorkerThread>> threads;
   result.devices.resize(n);

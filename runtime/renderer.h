@@ -47,6 +47,9 @@ struct RenderOptions {
   // Tests only.
   bool debug_inject_hazards = false;   // make some samples NaN, infinite or negative
   bool debug_bias_diffuse = false;     // diffuse reflectance 1 % too high (the bench gate's test)
+  // Non-zero: -DPC_BUILD_NONCE=N, a kernel no driver or cache has seen, so its first build is a cold
+  // one (`pathcl bench`); the code is the same.
+  uint64_t build_nonce = 0;
   std::vector<DeviceFault> faults;     // per device index (in the order given), if present
 };
 

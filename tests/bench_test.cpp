@@ -4,7 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <csignal>
 #include <fstream>
+#include <iterator>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -107,4 +112,35 @@ TEST(Bench, BadArgumentsAreUsageErrors) {
   EXPECT_NE(err.find("--only sponza: no such scene"), std::string::npos) << err;
   EXPECT_EQ(run_pathcl("bench --json " + temp_dir(), &err), 2);
   EXPECT_NE(err.find("is a directory"), std::string::npos) << err;
+}
+
+// Ctrl-C ends the benchmark cleanly: exit 130, the figures measured so far printed and in the JSON,
+// marked INTERRUPTED, with no score.
+TEST(Bench, InterruptEndsCleanlyWithWhatWasMeasured) {
+  std::string dir = temp_dir() + "/bench-interrupt", json = dir + "/b.json", out = dir + "/stdout.txt";
+  std::filesystem::create_directories(dir);
+  pid_t pid = fork();
+  if (pid == 0) {
+    std::string command = std::string("exec ") + PATHCL_BINARY + " bench --suite test --json " + json + device_arg() +
+                          " >" + out + " 2>/dev/null";
+    execl("/bin/sh", "sh", "-c", command.c_str(), (char*)nullptr);
+    _exit(127);
+  }
+  // The first line is printed once the signal handlers are in place; then let it measure for a while.
+  auto text_of = [&] {
+    std::ifstream in(out);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  for (int i = 0; i < 3000 && text_of().find("pathcl bench:") == std::string::npos; ++i) usleep(10000);
+  usleep(1000000);
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  nlohmann::json j = read_json(json);
+  EXPECT_EQ(j["results"][0]["verdict"], "INTERRUPTED");
+  EXPECT_TRUE(j["results"][0]["score"].is_null());
+  std::string text = text_of();
+  EXPECT_NE(text.find("INTERRUPTED"), std::string::npos) << text;
 }
