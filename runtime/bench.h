@@ -22,6 +22,7 @@ struct BenchSuiteSettings {
   uint32_t throughput_spp = 0;
   uint32_t ray_size = 0;            // camera rays: one per pixel of a film this wide and high
   int ray_repeats = 0;              // timed traversals, the median counts
+  int timing_repeats = 0;           // renders for samples/s and for the time to relMSE 1e-2, the median counts
   double convergence_seconds = 0;   // at most this long towards relMSE 1e-2 (then extrapolated)
 };
 // "quick", "standard", or "test" (CTest: small films, no cold builds). UsageError for others.
