@@ -14,8 +14,18 @@
 #include <stb_image.h>
 
 #include "scene/scene_error.h"
+#include "scene/scene_limits.h"
 
 namespace {
+
+// Refuses images beyond kMaxTextureTexels before they are decoded.
+void check_size(const std::string& path, int64_t width, int64_t height) {
+  if (width <= 0 || height <= 0) throw SceneError(path + ": the image has no texels");
+  if (width > int64_t(kMaxTextureTexels) || height > int64_t(kMaxTextureTexels) ||
+      uint64_t(width) * uint64_t(height) > kMaxTextureTexels)
+    throw SceneError(path + ": an image of " + std::to_string(width) + " x " + std::to_string(height) +
+                     " texels is larger than the largest of " + std::to_string(kMaxTextureTexels) + " texels");
+}
 
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
@@ -26,8 +36,9 @@ TextureImage load_exr(const std::string& path) {
   try {
     Imf::InputFile file(path.c_str());
     Imath::Box2i dw = file.header().dataWindow();
-    long width = dw.max.x - dw.min.x + 1, height = dw.max.y - dw.min.y + 1;
-    if (width <= 0 || height <= 0 || width * height > (1l << 28)) throw SceneError(path + ": unsupported image size");
+    // In 64 bits: the window's corners are ints, and its width can overflow one.
+    int64_t width = int64_t(dw.max.x) - dw.min.x + 1, height = int64_t(dw.max.y) - dw.min.y + 1;
+    check_size(path, width, height);
     image.width = uint32_t(width);
     image.height = uint32_t(height);
     image.texels.reserve(size_t(width) * height);
@@ -66,6 +77,8 @@ TextureImage load_exr(const std::string& path) {
 
 TextureImage load_8bit(const std::string& path) {
   int width = 0, height = 0, channels = 0;
+  // The header alone first: stb_image would decode anything it can allocate.
+  if (stbi_info(path.c_str(), &width, &height, &channels)) check_size(path, width, height);
   std::unique_ptr<unsigned char, void (*)(void*)> data(stbi_load(path.c_str(), &width, &height, &channels, 3),
                                                        stbi_image_free);
   if (!data) throw SceneError(path + ": cannot read the image: " + stbi_failure_reason());

@@ -193,6 +193,182 @@ TEST(SceneLoad, BadMaterialLightAndCameraParametersAreRejected) {
   EXPECT_NE(error_of(cases[19].json).find("missing-sky.exr: cannot open the image file"), std::string::npos);
 }
 
+// ---- Numeric fields ------------------------------------------------------------------------------------
+
+namespace {
+
+// A scene whose camera has these keys (besides position and look_at) and a point light.
+std::string scene_with_camera(const std::string& keys, const std::string& rest = "") {
+  return R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], )" + keys + R"(},
+    "materials": {"m": {"type": "diffuse"}}, "shapes": [],
+    "lights": [{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]}])" + rest + "}";
+}
+
+const char* const kCamera = R"("width": 8, "height": 8)";
+
+// `text` with its "@" replaced by `value`.
+std::string with_value(std::string text, const std::string& value) {
+  return text.replace(text.find('@'), 1, value);
+}
+
+}  // namespace
+
+// Every numeric field of the format against each class of bad number that applies to it: zero, negative,
+// too large, so small that it is 0 as a float, beyond float range, a fraction or an exponent where an
+// integer is meant (8.0 and 1e3 are refused like 3.5: docs/scene-format.md), a string. The message names
+// the file, the field's JSON path and what was expected.
+TEST(SceneLoad, EveryNumericFieldRefusesEachClassOfBadNumber) {
+  const std::string integer = "expected an integer in ";
+  const std::string no_fraction = " without a fraction or exponent, got ";
+  struct Field {
+    std::string json, path;  // the scene with "@" for the value, and the value's JSON path
+    std::vector<std::pair<std::string, std::string>> bad;  // value, what the message says after the path
+  } fields[] = {
+      {scene_with_camera(R"("width": @, "height": 8)"), "camera.width",
+       {{"0", integer + "[1, 16384], got 0"}, {"-1", integer + "[1, 16384], got -1"},
+        {"16385", integer + "[1, 16384], got 16385"}, {"8.0", integer + "[1, 16384]" + no_fraction + "8.0"},
+        {"3.5", no_fraction + "3.5"}, {"1e3", no_fraction + "1000.0"},
+        {"18446744073709551616", no_fraction + "1.8446744073709552e+19"}, {"\"8\"", integer + "[1, 16384]"}}},
+      {scene_with_camera(R"("width": 8, "height": @)"), "camera.height",
+       {{"0", integer + "[1, 16384], got 0"}, {"-8", "got -8"}, {"1e9", no_fraction + "1000000000.0"},
+        {"99999", "got 99999"}}},
+      {scene_with_camera(kCamera, R"(, "render": {"spp": @})"), "render.spp",
+       {{"0", integer + "[1, 16777216], got 0"}, {"-4", "got -4"}, {"16777217", "got 16777217"},
+        {"3.5", no_fraction + "3.5"}, {"1.0", no_fraction + "1.0"}, {"true", integer + "[1, 16777216]"}}},
+      {scene_with_camera(kCamera, R"(, "render": {"max_depth": @})"), "render.max_depth",
+       {{"-1", integer + "[0, 1024], got -1"}, {"1025", "got 1025"}, {"2.5", no_fraction + "2.5"}}},
+      {scene_with_camera(kCamera, R"(, "render": {"seed": @})"), "render.seed",
+       {{"-1", integer + "[0, 4294967295], got -1"}, {"4294967296", "got 4294967296"},
+        {"1.5", no_fraction + "1.5"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "fov_y_degrees": @)"), "camera.fov_y_degrees",
+       {{"0", "expected a number > 0, got 0"}, {"-40", "expected a number > 0, got -40"},
+        {"1e-300", "expected a number > 0 (at least 1.2e-38), got 1e-300"},
+        {"180", "expected a field of view below 180 degrees"}, {"1e39", "expected a finite number within float range"},
+        {"\"40\"", "expected a number"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "type": "thin_lens", "focus_distance": 1, "aperture_radius": @)"),
+       "camera.aperture_radius",
+       {{"-0.1", "expected a number >= 0, got -0.1"}, {"1e20", "expected at most 1.5e18, got 1e+20"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "type": "thin_lens", "aperture_radius": 0.1, "focus_distance": @)"),
+       "camera.focus_distance",
+       {{"0", "expected a number > 0"}, {"-2", "expected a number > 0"},
+        {"1e-300", "expected a number > 0 (at least 1.2e-38)"}, {"3e38", "expected at most 1.5e18"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "filter": {"type": "tent", "radius": @})"), "camera.filter.radius",
+       {{"0", "expected a number > 0"}, {"-1", "expected a number > 0"}, {"1e-300", "(at least 1.2e-38)"},
+        {"16385", "expected at most 16384 pixels, got 16385"}, {"1e30", "expected at most 16384 pixels"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "filter": {"type": "gaussian", "sigma": @})"),
+       "camera.filter.sigma",
+       {{"0", "expected a number > 0"}, {"1e-300", "(at least 1.2e-38)"},
+        {"5462", "expected at most 5461 pixels, got 5462"}}},
+      {scene_with_camera(std::string(kCamera) + R"(, "filter": {"type": "gaussian", "radius": @})"),
+       "camera.filter.radius", {{"0", "expected a number > 0"}, {"20000", "expected at most 16384 pixels"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": @, "material": "m"})"), "shapes[0].radius",
+       {{"0", "expected a number > 0, got 0"}, {"-1", "expected a number > 0"},
+        {"1e39", "expected a finite number within float range"},
+        {"1e30", "a sphere radius of 1e+30 is beyond the largest of 1.5e+18"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "center": [0, @, 0], "material": "m"})"),
+       "shapes[0].center[1]", {{"1e39", "expected a finite number within float range, got 1e+39"}}},
+      {scene_with(R"("m": {"type": "dielectric", "ior": @})"), "materials.m.ior",
+       {{"0", "expected an index of refraction in (0, 10], got 0"}, {"-1.5", "got -1.5"},
+        {"1e-300", "expected an index of refraction in (0, 10], got 1e-300"}, {"11", "got 11"}}},
+      {scene_with(R"("m": {"type": "plastic", "ior": @})"), "materials.m.ior",
+       {{"0", "expected an index of refraction in (0, 10]"}}},
+      {scene_with(R"("m": {"type": "phong", "exponent": @})"), "materials.m.exponent",
+       {{"0", "expected an exponent in (0, 100000], got 0"}, {"-1", "got -1"}, {"1e-300", "got 1e-300"},
+        {"1e6", "got 1000000.0"}}},
+      {scene_with(R"("m": {"type": "oren_nayar", "sigma_degrees": @})"), "materials.m.sigma_degrees",
+       {{"-1", "expected an angle in [0, 90] degrees"}, {"91", "expected an angle in [0, 90] degrees"}}},
+      {scene_with(R"("m": {"type": "rough_conductor", "specular": [1, 1, 1], "roughness": @})"),
+       "materials.m.roughness",
+       {{"0", "expected a roughness in [0.01, 1]"}, {"-0.5", "expected a roughness in [0.01, 1]"},
+        {"1.5", "expected a roughness in [0.01, 1]"}}},
+      {scene_with(R"("m": {"type": "plastic", "roughness": @})"), "materials.m.roughness",
+       {{"-1", "expected 0 (smooth) or a roughness in [0.01, 1]"}, {"0.001", "expected 0 (smooth)"},
+        {"2", "expected 0 (smooth)"}}},
+      {scene_with(R"("m": {"type": "diffuse", "reflectance": [0.5, @, 0.5]})"), "materials.m.reflectance",
+       {{"-0.1", "expected non-negative values"}, {"1.1", "expected values in [0, 1]"}}},
+      {scene_with(R"("m": {"type": "rough_conductor", "roughness": 0.5, "eta": [1, @, 1], "k": [1, 1, 1]})"),
+       "materials.m.eta", {{"0", "expected values > 0"}, {"-1", "expected values > 0"}}},
+      {scene_with(R"("m": {"type": "rough_conductor", "roughness": 0.5, "eta": [1, 1, 1], "k": [1, @, 1]})"),
+       "materials.m.k", {{"-1", "expected non-negative values"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "emission": [1, @, 1]})"),
+       "shapes[0].emission", {{"-1", "expected non-negative values"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "emission": [1, @, 1]})"),
+       "shapes[0].emission[1]", {{"1e39", "expected a finite number within float range"}}},
+      {scene_with(R"("m": {"type": "diffuse"})", R"({"type": "point", "position": [0, 2, 0], "intensity": [@, 1, 1]})"),
+       "lights[0].intensity", {{"-1", "expected non-negative values"}}},
+      {scene_with(R"("m": {"type": "diffuse"})", R"({"type": "point", "position": [@, 0, 0], "intensity": [1, 1, 1]})"),
+       "lights[0].position",
+       {{"2e18", "the light is 2e+18 from the camera, beyond the largest distance of 1.5e+18"},
+        {"-3e38", "the light is 3e+38 from the camera"}}},
+      {scene_with(R"("m": {"type": "diffuse"})",
+                  R"({"type": "spot", "position": [0, 2, 0], "direction": [0, -1, 0], "intensity": [1, 1, 1], "outer_angle_degrees": @})"),
+       "lights[0].outer_angle_degrees",
+       {{"0", "expected an angle in (0, 180] degrees, got 0"}, {"-10", "got -10"},
+        {"1e-300", "expected an angle in (0, 180] degrees, got 1e-300"}, {"181", "got 181"}}},
+      {scene_with(R"("m": {"type": "diffuse"})",
+                  R"({"type": "spot", "position": [0, 2, 0], "direction": [0, -1, 0], "intensity": [1, 1, 1], "outer_angle_degrees": 30, "inner_angle_degrees": @})"),
+       "lights[0].inner_angle_degrees",
+       {{"-1", "expected an angle in [0, outer_angle_degrees], got -1"}, {"31", "got 31"}}},
+      {scene_with(R"("m": {"type": "diffuse"})", R"({"type": "directional", "direction": [0, @, 0], "irradiance": [1, 1, 1]})"),
+       "lights[0].direction", {{"0", "expected a non-zero direction"}}},
+      {scene_with(R"("m": {"type": "diffuse"})", R"({"type": "directional", "direction": [0, -1, 0], "irradiance": [1, @, 1]})"),
+       "lights[0].irradiance", {{"-1", "expected non-negative values"}}},
+      {scene_with(R"("m": {"type": "diffuse"})", R"({"type": "environment", "file": "sky.exr", "scale": @})"),
+       "lights[0].scale", {{"-1", "expected a number >= 0, got -1"}, {"1e39", "expected a finite number"}}},
+      {scene_with_shape(R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,@]], "material": "m"})"),
+       "shapes[0].indices[0][2]",
+       {{"-1", "vertex index -1 out of range (3 positions)"}, {"3", "vertex index 3 out of range (3 positions)"},
+        {"18446744073709551615", "vertex index 18446744073709551615 out of range"},
+        {"2.0", "expected an integer vertex index, got 2.0"}, {"\"2\"", "expected an integer vertex index"}}},
+      {scene_with_shape(R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,@,0]], "indices": [[0,1,2]], "material": "m"})"),
+       "shapes[0].positions[2][1]", {{"1e39", "expected a finite number within float range"}}},
+      {scene_with_shape(R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "uvs": [[0,0],[1,0],[0,@]], "indices": [[0,1,2]], "material": "m"})"),
+       "shapes[0].uvs[2][1]", {{"1e39", "expected a finite number within float range"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"scale": [1, @, 1]}})"),
+       "shapes[0].transform.scale", {{"0", "expected non-zero scale factors"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"translate": [1, @, 1]}})"),
+       "shapes[0].transform.translate[1]", {{"1e39", "expected a finite number within float range"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"rotate": {"axis": [0, 1, 0], "degrees": @}}})"),
+       "shapes[0].transform.rotate.degrees", {{"1e39", "expected a finite number within float range"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"rotate": {"axis": [0, @, 0], "degrees": 1}}})"),
+       "shapes[0].transform.rotate.axis", {{"0", "expected a non-zero axis"}}},
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"matrix": [[1,0,0,0],[0,@,0,0],[0,0,1,0],[0,0,0,1]]}})"),
+       "shapes[0].transform.matrix", {{"0", "the matrix is singular"}}},
+  };
+  for (const Field& f : fields)
+    for (const auto& [value, expected] : f.bad) {
+      std::string path = write_temp_file("numeric.json", with_value(f.json, value));
+      std::string error = load_error(path);
+      EXPECT_NE(error.find(path + ": " + f.path + ": "), std::string::npos) << f.path << " = " << value << "\n  gave: " << error;
+      EXPECT_NE(error.find(expected), std::string::npos)
+          << f.path << " = " << value << ": expected \"" << expected << "\"\n  gave: " << error;
+    }
+}
+
+// The edges of each range load (a sphere's radius, like all geometry, need only be > 0: degenerate
+// geometry is handled), and directions are normalised in double: in float [3e38, 3e38, 0] has an
+// infinite length and [1e-30, 0, 0] a zero one.
+TEST(SceneLoad, NumericFieldsAcceptTheEdgesOfTheirRanges) {
+  SceneDescription s = load_scene(write_temp_file("edges.json", scene_with_camera(
+      R"("width": 1, "height": 16384, "fov_y_degrees": 1e-30, "filter": {"type": "gaussian", "sigma": 5461, "radius": 16384})",
+      R"(, "render": {"spp": 16777216, "max_depth": 0, "seed": 4294967295})")));
+  EXPECT_EQ(s.camera.width, 1u);
+  EXPECT_EQ(s.camera.height, 16384u);
+  EXPECT_EQ(s.render.spp, 16777216u);
+  EXPECT_EQ(s.render.max_depth, 0u);
+  EXPECT_EQ(s.render.seed, 4294967295u);
+  EXPECT_EQ(load_scene(write_temp_file("tiny-sphere.json", scene_with_shape(
+                R"({"type": "sphere", "radius": 1e-300, "material": "m"})"))).shapes[0].radius, 1e-300);
+  SceneDescription d = load_scene(write_temp_file("directions.json", scene_with(R"("m": {"type": "diffuse"})",
+      R"({"type": "directional", "direction": [3e38, 3e38, 0], "irradiance": [1, 1, 1]},
+         {"type": "directional", "direction": [1e-30, 0, 0], "irradiance": [1, 1, 1]},
+         {"type": "point", "position": [1.4e18, 0, 0], "intensity": [1, 1, 1]})")));
+  ASSERT_EQ(d.lights.size(), 3u);
+  EXPECT_NEAR(d.lights[0].direction.x, std::sqrt(0.5f), 1e-6f);
+  EXPECT_NEAR(d.lights[0].direction.y, std::sqrt(0.5f), 1e-6f);
+  EXPECT_EQ(d.lights[1].direction, glm::vec3(1, 0, 0));
+}
+
 // The kernel is specialised to what the scene uses, and only to that: a change of per-render settings
 // (samples, depth, seed, camera) leaves the build options, and so the cached binary, unchanged.
 TEST(SceneLoad, KernelFeaturesFollowTheSceneNotTheSettings) {
