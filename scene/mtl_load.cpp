@@ -93,6 +93,7 @@ void parse_map_kd(const std::string& rest, const std::string& where, const std::
 }
 
 std::vector<RawMaterial> read_raw(const std::string& path, std::vector<std::string>& warnings) {
+  read_input_file(path, kMaterialInput, 512);
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the material file");
   std::filesystem::path dir = std::filesystem::path(path).parent_path();

@@ -80,7 +80,7 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
   for (const auto& [line, file] : lines.mtllibs) {
     std::string mtl = (dir / file).string();
     std::string where = path + ":" + std::to_string(line);
-    if (!std::filesystem::is_regular_file(mtl)) throw SceneError(where + ": cannot open the material file " + mtl);
+    if (!std::filesystem::exists(mtl)) throw SceneError(where + ": cannot open the material file " + mtl);
     for (MtlMaterial& m : load_mtl(mtl, warnings)) {
       auto [it, added] = by_name.emplace(m.name, uint32_t(materials.size()));
       if (!added)
@@ -94,6 +94,7 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
 }  // namespace
 
 ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<std::string>& warnings) {
+  read_input_file(path, kMeshInput, 512);
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
   LineIndex lines = scan_obj_lines(path, in);

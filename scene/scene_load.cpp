@@ -640,11 +640,10 @@ bool sampler_from_name(const std::string& name, uint32_t* sampler) {
 const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
 
 SceneDescription load_scene(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the scene file");
+  const std::string text = read_input_file(path, kSceneInput);
   json root;
   try {
-    root = json::parse(in);
+    root = json::parse(text);
   } catch (const json::exception& e) {
     // nlohmann's message names the line and column. Not only parse_error: a number too large for a
     // double (1e400) is an out_of_range error.

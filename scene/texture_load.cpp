@@ -97,7 +97,7 @@ TextureImage load_8bit(const std::string& path) {
 }  // namespace
 
 TextureImage load_texture_image(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw SceneError(path + ": cannot open the image file");
+  read_input_file(path, kImageInput, 512);
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   TextureImage image;

@@ -1,5 +1,6 @@
 // Scene files: every error names the file and the place; transforms and flags do what they say.
 #include <cmath>
+#include <filesystem>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -43,6 +44,53 @@ TEST(SceneLoad, ErrorsNameFileAndPlace) {
   EXPECT_NE(load_error(scenes() + "/bad-negative-spp.json").find("render.spp: expected an integer in [1,"),
             std::string::npos);
   EXPECT_NE(load_error(scenes() + "/no-such-scene.json").find("cannot open the scene file"), std::string::npos);
+}
+
+// A directory or a missing file where a file is expected is named as such, with the path, whichever
+// reader would have read it (it used to be "basic_filebuf::underflow error reading the file: Is a
+// directory", exit 1, for a scene, and "no faces" for a mesh).
+TEST(SceneLoad, DirectoriesAndMissingFilesAreNamedAsSuch) {
+  const std::string dir = temp_dir() + "/inputs";
+  for (const char* d : {"scene-dir.json", "meshes/dir.obj", "tex/dir.png", "lib-dir.mtl", "sky-dir.exr"})
+    std::filesystem::create_directories(dir + "/" + d);
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  write_temp_file("inputs/meshes/lib.obj", "mtllib ../lib-dir.mtl\n" + tri + "usemtl m\nf 1 2 3\n");
+  auto scene = [&](const std::string& name, const std::string& materials, const std::string& shape,
+                   const std::string& lights = "") {
+    return write_temp_file("inputs/" + name, R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+      "materials": {)" + materials + R"(}, "shapes": [)" + shape + "], \"lights\": [" + lights + "]}");
+  };
+  const std::string diffuse = R"("m": {"type": "diffuse"})", sphere = R"({"type": "sphere", "radius": 1, "material": "m"})";
+  struct Case {
+    std::string scene, expected;
+  } cases[] = {
+      {dir + "/scene-dir.json", dir + "/scene-dir.json: is a directory, expected a JSON scene file"},
+      {dir + "/missing.json", dir + "/missing.json: cannot open the scene file: no such file"},
+      {scene("mesh-dir.json", diffuse, R"({"type": "mesh", "file": "meshes/dir.obj", "material": "m"})"),
+       dir + "/meshes/dir.obj: is a directory, expected a Wavefront OBJ file"},
+      {scene("mesh-missing.json", diffuse, R"({"type": "mesh", "file": "meshes/missing.obj", "material": "m"})"),
+       dir + "/meshes/missing.obj: cannot open the mesh file: no such file"},
+      {scene("mtl-dir.json", diffuse, R"({"type": "mesh", "file": "meshes/lib.obj", "material": "from_mtl"})"),
+       dir + "/meshes/../lib-dir.mtl: is a directory, expected an MTL material file"},
+      {scene("texture-dir.json", R"("m": {"type": "diffuse", "reflectance": {"texture": "tex/dir.png"}})", sphere),
+       dir + "/texture-dir.json: materials.m.reflectance.texture: " + dir +
+           "/tex/dir.png: is a directory, expected an image file (PNG, JPEG or OpenEXR)"},
+      {scene("texture-missing.json", R"("m": {"type": "diffuse", "reflectance": {"texture": "tex/none.png"}})", sphere),
+       dir + "/texture-missing.json: materials.m.reflectance.texture: " + dir +
+           "/tex/none.png: cannot open the image file: no such file"},
+      {scene("sky-dir.json", diffuse, sphere, R"({"type": "environment", "file": "sky-dir.exr"})"),
+       dir + "/sky-dir.json: lights[0].file: " + dir + "/sky-dir.exr: is a directory, expected an image file"},
+  };
+  for (const Case& c : cases) {
+    std::string error;
+    try {
+      load_scene(c.scene);
+      error = "(loaded)";
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    EXPECT_NE(error.find(c.expected), std::string::npos) << "expected \"" << c.expected << "\"\n  gave: " << error;
+  }
 }
 
 TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
