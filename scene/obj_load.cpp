@@ -19,6 +19,66 @@
 
 namespace {
 
+// Mesh formats pathcl does not read, by extension and by how their files begin. tinyobjloader takes any
+// file for OBJ: a PLY file became "igea.ply: no faces", a binary glTF "Failed parse 'l' line".
+struct MeshFormat {
+  const char* name;
+  std::vector<std::string> extensions, starts;
+  const char* hint = "";
+};
+const MeshFormat kOtherMeshFormats[] = {
+    {"PLY", {".ply"}, {"ply\n", "ply\r"}},
+    {"glTF", {".gltf", ".glb"}, {"glTF"}},
+    {"STL", {".stl"}, {"solid "}},  // ASCII STL; binary STL is caught as binary
+    {"OFF", {".off"}, {"OFF\n", "OFF\r", "OFF ", "COFF", "NOFF"}},
+    {"FBX", {".fbx"}, {"Kaydara FBX Binary", "; FBX"}},
+    {"COLLADA", {".dae"}, {"<?xml", "<COLLADA"}},
+    {"3DS", {".3ds"}, {}},
+    {"Blender", {".blend"}, {"BLENDER"}},
+    {"USD", {".usd", ".usda", ".usdc", ".usdz"}, {"#usda", "PXR-USDC"}},
+    {"Alembic", {".abc"}, {}},
+    {"X3D", {".x3d"}, {}},
+    {"VRML", {".wrl"}, {"#VRML"}},
+    {"3MF", {".3mf"}, {}},
+    {"LightWave", {".lwo"}, {}},
+    {"Maya", {".ma", ".mb"}, {"//Maya"}},
+    {"Compressed", {".gz", ".zip", ".xz", ".bz2", ".zst", ".7z"}, {"\x1f\x8b", "PK\x03\x04", "\xfd" "7zXZ"},
+     "; decompress it first"},
+};
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+[[noreturn]] void refuse_format(const std::string& path, const MeshFormat& f) {
+  throw SceneError(path + ": " + f.name + " meshes are not supported (expected a Wavefront OBJ file" + f.hint + ")");
+}
+
+// Refuses, by extension, a mesh format that is not OBJ (before the file is opened: the format is the
+// first thing to fix).
+void check_obj_extension(const std::string& path) {
+  std::string ext = lower_extension(path);
+  for (const MeshFormat& f : kOtherMeshFormats)
+    for (const std::string& e : f.extensions)
+      if (ext == e) refuse_format(path, f);
+}
+
+// Refuses, by its first bytes, a file that is another mesh format, JSON or not text at all.
+void check_obj_content(const std::string& path, const std::string& head) {
+  for (const MeshFormat& f : kOtherMeshFormats)
+    for (const std::string& start : f.starts)
+      if (head.rfind(start, 0) == 0) refuse_format(path, f);
+  size_t first = head.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && head[first] == '{')
+    throw SceneError(path + ": looks like JSON (a glTF mesh or a scene file?), expected a Wavefront OBJ file");
+  // Control characters other than white space do not occur in text.
+  for (unsigned char c : head)
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\v' && c != '\f' && c != '\r')
+      throw SceneError(path + ": not a text OBJ file (it has binary content), expected a Wavefront OBJ file");
+}
+
 struct LineIndex {
   std::vector<size_t> vertex_lines, face_lines;
   std::vector<std::string> face_material;     // per face: the name of the usemtl in effect, or ""
@@ -94,7 +154,8 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
 }  // namespace
 
 ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<std::string>& warnings) {
-  read_input_file(path, kMeshInput, 512);
+  check_obj_extension(path);
+  check_obj_content(path, read_input_file(path, kMeshInput, 512));
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
   LineIndex lines = scan_obj_lines(path, in);

@@ -20,14 +20,16 @@ struct SceneError : std::runtime_error {
 struct InputKind {
   const char* file;      // "cannot open the mesh file"
   const char* expected;  // "is a directory, expected a Wavefront OBJ file"
+  const char* content;   // "looks like a Git LFS pointer, not a mesh"
 };
-inline constexpr InputKind kSceneInput{"scene file", "a JSON scene file"};
-inline constexpr InputKind kMeshInput{"mesh file", "a Wavefront OBJ file"};
-inline constexpr InputKind kMaterialInput{"material file", "an MTL material file"};
-inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG or OpenEXR)"};
+inline constexpr InputKind kSceneInput{"scene file", "a JSON scene file", "a scene"};
+inline constexpr InputKind kMeshInput{"mesh file", "a Wavefront OBJ file", "a mesh"};
+inline constexpr InputKind kMaterialInput{"material file", "an MTL material file", "a material file"};
+inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG or OpenEXR)", "an image"};
 
-// Reads up to `limit` bytes from the start of the file, or throws SceneError naming it: a directory or a
-// file that cannot be opened (and why).
+// Reads up to `limit` bytes from the start of the file, or throws SceneError naming it: a directory, a
+// file that cannot be opened (and why), or a Git LFS pointer (what a clone without git lfs has in place of
+// its large files).
 inline std::string read_input_file(const std::string& path, const InputKind& kind, size_t limit = SIZE_MAX) {
   std::error_code ignored;
   if (std::filesystem::is_directory(path, ignored)) throw SceneError(path + ": is a directory, expected " + kind.expected);
@@ -46,5 +48,7 @@ inline std::string read_input_file(const std::string& path, const InputKind& kin
     in.read(text.data(), std::streamsize(limit));
     text.resize(size_t(in.gcount()));
   }
+  if (text.rfind("version https://git-lfs.github.com/spec/", 0) == 0)
+    throw SceneError(path + ": looks like a Git LFS pointer, not " + kind.content + " (run git lfs pull)");
   return text;
 }

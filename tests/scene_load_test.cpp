@@ -93,6 +93,40 @@ TEST(SceneLoad, DirectoriesAndMissingFilesAreNamedAsSuch) {
   }
 }
 
+// Mesh files that are not OBJ text are named for what they are, by extension or by content, instead of
+// what tinyobjloader made of them ("igea.ply: no faces", "Duck.glb: Failed parse 'l' line").
+TEST(SceneLoad, MeshFilesOfOtherFormatsAreNamed) {
+  const std::string bin("\x00\x01\x02\x03\x4d\x4d\x10\x00", 8);
+  const std::string lfs =
+      "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 12345\n";
+  const std::string obj = " (expected a Wavefront OBJ file)";
+  struct Case {
+    std::string file, content, expected;
+  } cases[] = {
+      {"igea.ply", "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n", "PLY meshes are not supported" + obj},
+      {"Duck.glb", std::string("glTF\x02\x00\x00\x00", 8), "glTF meshes are not supported" + obj},
+      {"Duck.gltf", "{\"asset\": {\"version\": \"2.0\"}}", "glTF meshes are not supported" + obj},
+      {"part.STL", "solid part\nendsolid part\n", "STL meshes are not supported" + obj},
+      {"box.off", "OFF\n0 0 0\n", "OFF meshes are not supported" + obj},
+      {"rig.fbx", "; FBX 7.4.0 project file\n", "FBX meshes are not supported" + obj},
+      {"scene.dae", "<?xml version=\"1.0\"?>\n<COLLADA/>\n", "COLLADA meshes are not supported" + obj},
+      {"old.3ds", bin, "3DS meshes are not supported" + obj},
+      {"model.blend", "BLENDER-v300", "Blender meshes are not supported" + obj},
+      {"model.obj.gz", "\x1f\x8b\x08", "Compressed meshes are not supported (expected a Wavefront OBJ file; decompress it first)"},
+      // Named .obj, told by content.
+      {"ply-inside.obj", "ply\r\nformat binary_little_endian 1.0\r\n", "PLY meshes are not supported" + obj},
+      {"gltf-inside.obj", "\n  {\"asset\": {}}", "looks like JSON (a glTF mesh or a scene file?), expected a Wavefront OBJ file"},
+      {"binary.obj", "v 0 0 0\n" + bin, "not a text OBJ file (it has binary content), expected a Wavefront OBJ file"},
+      {"lfs.obj", lfs, "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+  };
+  for (const Case& c : cases) {
+    std::string mesh = write_temp_file("formats/" + c.file, c.content);
+    std::string error = load_error(write_temp_file("formats.json", scene_with_shape(
+        R"({"type": "mesh", "file": "formats/)" + c.file + R"(", "material": "m"})")));
+    EXPECT_EQ(error, mesh + ": " + c.expected) << c.file;
+  }
+}
+
 TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
   struct Case {
     std::string shape, expected;

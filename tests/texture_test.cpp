@@ -207,6 +207,40 @@ TEST(TextureFile, ImagesBeyondTheTexelLimitAreRefusedFromTheirHeader) {
   }
 }
 
+// Images are recognised by content: another format is named, with the formats accepted; an undecodable
+// file is corrupt or truncated, in our words rather than stb_image's ("unknown image type", "bad IHDR
+// len") or OpenEXR's.
+TEST(TextureFile, OtherFormatsAndBrokenFilesAreNamed) {
+  std::string png = read_text_file(write_temp_png("formats/real.png", 2, 1, {255, 0, 0, 0, 255, 0}));
+  const std::string accepted = " (expected PNG, JPEG or OpenEXR: .png, .jpg, .jpeg or .exr)";
+  struct Case {
+    std::string file, content, expected;  // expected "" = it loads
+  } cases[] = {
+      {"anim.gif", "GIF89a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
+      {"gif-inside.png", "GIF87a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
+      {"sky.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "Radiance HDR images are not supported" + accepted},
+      {"old.tga", std::string("\x00\x00\x02\x00", 4), "TGA images are not supported" + accepted},
+      {"scan.tiff", std::string("II*\x00", 4), "TIFF images are not supported" + accepted},
+      {"notes.png", "these are not pixels", "unrecognised image format" + accepted},
+      {"empty.png", "", "unrecognised image format" + accepted},
+      {"lfs.png", "version https://git-lfs.github.com/spec/v1\noid sha256:00\nsize 1\n",
+       "looks like a Git LFS pointer, not an image (run git lfs pull)"},
+      {"truncated.png", png.substr(0, 40), "cannot decode the PNG or JPEG image (corrupt or truncated)"},
+      {"truncated.exr", std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8), "cannot decode the OpenEXR image (corrupt or truncated)"},
+      {"png-inside.jpg", png, ""},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("formats/" + c.file, c.content);
+    std::string error;
+    try {
+      load_texture_image(path);
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    EXPECT_EQ(error, c.expected.empty() ? "" : path + ": " + c.expected) << c.file;
+  }
+}
+
 // ---- Rendering -------------------------------------------------------------------------------------
 
 // A 4 x 4 texture of 2 x 2 blocks, four colours given as sRGB bytes; block (column, row from the top).
