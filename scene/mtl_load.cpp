@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -65,7 +66,7 @@ float parse_scalar(std::istringstream& words, const std::string& where, const st
 // map_Kd [-clamp on|off] [-blendu on|off] [-blendv on|off] FILE. Other options change how the image is
 // placed or its values (-o, -s, -mm, ...): rather than ignore them and render something else, refuse.
 void parse_map_kd(const std::string& rest, const std::string& where, const std::filesystem::path& dir,
-                  RawMaterial& m) {
+                  RawMaterial& m, std::vector<std::string>& warnings) {
   size_t pos = 0;
   // The next whitespace-separated word from pos on ("" at the end), advancing pos past it.
   auto next_word = [&](size_t& start) {
@@ -88,7 +89,7 @@ void parse_map_kd(const std::string& rest, const std::string& where, const std::
   }
   std::string file = word.empty() ? "" : trim(rest.substr(start));
   if (file.empty()) throw SceneError(where + ": map_Kd: expected a file name");
-  m.map_kd = (dir / file).string();
+  m.map_kd = resolve_written_path(dir, file, where + ": map_Kd", warnings);
   m.map_kd_where = where;
 }
 
@@ -100,7 +101,7 @@ std::vector<RawMaterial> read_raw(const std::string& path, std::vector<std::stri
   std::vector<RawMaterial> materials;
   std::set<std::string> names, ignored;
   std::string line;
-  for (size_t number = 1; std::getline(in, line); ++number) {
+  for (size_t number = 1; read_line(in, line); ++number) {
     std::string where = path + ":" + std::to_string(number);
     std::istringstream words(line);
     std::string key;
@@ -152,7 +153,7 @@ std::vector<RawMaterial> read_raw(const std::string& path, std::vector<std::stri
     } else if (key == "map_Kd") {
       std::string rest;
       std::getline(words, rest);
-      parse_map_kd(rest, where, dir, m);
+      parse_map_kd(rest, where, dir, m, warnings);
     } else {
       ignored.insert(key);
     }

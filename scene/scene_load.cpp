@@ -20,6 +20,7 @@
 #include "kernels/shared/types.h"
 #include "scene/mtl_load.h"
 #include "scene/obj_load.h"
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_limits.h"
 #include "scene/texture_load.h"

@@ -13,6 +13,7 @@
 #include <ImfRgbaFile.h>
 #include <stb_image.h>
 
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_limits.h"
 

@@ -772,6 +772,88 @@ TEST(SceneLoadMtl, ErrorsNameTheObjOrMtlLine) {
   }
 }
 
+// ---- OBJ statements: every error ours and on its line -------------------------------------------------
+
+namespace {
+
+// Loads `obj` (written as objs/NAME) as the only shape of a scene, with `material`; returns the error.
+std::string obj_error(const std::string& name, const std::string& obj, const std::string& material = "m") {
+  write_temp_file("objs/" + name, obj);
+  return load_error(write_temp_file("objs.json", scene_with_shape(
+      R"({"type": "mesh", "file": "objs/)" + name + R"(", "material": ")" + material + "\"}")));
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  return text;
+}
+
+}  // namespace
+
+// Statements tinyobjloader fails on ("Failed parse 'f' line(e.g. zero value for face index. line 16.)")
+// or reads wrong (a face of more than 255 corners) are refused as FILE:LINE: what.
+TEST(SceneLoadObj, BadStatementsAreRefusedOnTheirLine) {
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const std::string corner = " (expected v, v/vt, v//vn or v/vt/vn: non-zero integers, 1 for the first vertex)";
+  std::string big;
+  for (int i = 1; i <= 300; ++i) big += " " + std::to_string(i % 3 + 1);
+  struct Case {
+    std::string obj, expected;  // expected after "PATH:"
+  } cases[] = {
+      {tri + "f 1 2 0\n", "4: bad vertex reference \"0\" in \"f\"" + corner},
+      {tri + "f 1 2 x\n", "4: bad vertex reference \"x\" in \"f\"" + corner},
+      {tri + "f 1/0 2 3\n", "4: bad vertex reference \"1/0\" in \"f\"" + corner},
+      {tri + "f 1// 2 3\n", "4: bad vertex reference \"1//\" in \"f\"" + corner},
+      {tri + "f 1/1/1/1 2 3\n", "4: bad vertex reference \"1/1/1/1\" in \"f\"" + corner},
+      {tri + "f 1 2 3 # a comment\n", "4: bad vertex reference \"#\" in \"f\"" + corner},
+      {tri + "f 1 2 99999999999\n", "4: bad vertex reference \"99999999999\" in \"f\"" + corner},
+      {tri + "l 1 0\n", "4: bad vertex reference \"0\" in \"l\"" + corner},
+      {tri + "f" + big + "\n", "4: a face with 300 vertices, more than the 255 the OBJ reader supports (split it)"},
+      // tinyobjloader's own extension: what it fails on is passed on with its line only.
+      {tri + "vw 0 -1 0.5\n", "4: cannot read this statement"},
+      // Lines end at \r too, as tinyobjloader reads them.
+      {"v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 9\r", "4: face index 9 out of range (3 vertices)"},
+      // A face of 2 corners is dropped (with a warning): the faces after it keep their own lines.
+      {tri + "f 1 2\nf 3\nf 1 2 9\n", "6: face index 9 out of range (3 vertices)"},
+  };
+  int n = 0;
+  for (const Case& c : cases) {
+    std::string name = "bad" + std::to_string(n++) + ".obj";
+    EXPECT_EQ(obj_error(name, c.obj), temp_dir() + "/objs/" + name + ":" + c.expected) << c.obj;
+  }
+}
+
+// Faces of 1 or 2 corners are dropped with a warning naming the first one's line; the faces after them
+// keep their own materials (tinyobjloader's dropping them used to shift usemtl onto the wrong faces).
+// mtllib names may have escaped spaces, and Windows paths in mtllib and map_Kd are found with a warning.
+TEST(SceneLoadObj, ShortFacesWarnEscapedSpacesAndBackslashPathsLoad) {
+  write_temp_file("objs/my material.mtl", "newmtl a\nKd 1 0 0\n");
+  write_temp_file("objs/lib/b.mtl", "newmtl b\nKd 0 1 0\nnewmtl wood\nmap_Kd textures\\wood.png\n");
+  write_temp_png("objs/lib/textures/wood.png", 1, 1, {200, 100, 50});
+  const std::string obj = temp_dir() + "/objs/short.obj";
+  write_temp_file("objs/short.obj", joined({"mtllib my\\ material.mtl lib\\b.mtl", "v 0 0 0", "v 1 0 0", "v 0 1 0",
+                                            "v 1 1 0", "vt 0 0", "usemtl a", "f 2 4", "f 3", "usemtl b", "f 1 2 3",
+                                            "usemtl wood", "f 2/1 4/1 3/1", "f 1 2"}));
+  SceneDescription s = load_scene(write_temp_file("short.json", scene_with_shape(
+      R"({"type": "mesh", "file": "objs/short.obj", "material": "from_mtl"})")));
+  const ShapeDesc& shape = s.shapes[0];
+  ASSERT_EQ(shape.triangle_materials.size(), 2u);
+  EXPECT_EQ(s.materials[shape.triangle_materials[0]].name, "b");
+  EXPECT_EQ(s.materials[shape.triangle_materials[1]].name, "wood");
+  ASSERT_NE(s.materials[shape.triangle_materials[1]].color_texture, PC_INVALID);
+  EXPECT_EQ(s.textures[s.materials[shape.triangle_materials[1]].color_texture].file,
+            temp_dir() + "/objs/lib/textures/wood.png");
+  std::string warnings = joined(s.warnings);
+  EXPECT_NE(warnings.find(obj + ":8: face with 2 vertices ignored (a face needs at least 3), and 2 more such faces\n"),
+            std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(obj + ":1: mtllib: \"lib\\b.mtl\" not found, read as \"lib/b.mtl\" (backslashes taken as "
+                          "directory separators)\n"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(temp_dir() + "/objs/lib/b.mtl:4: map_Kd: \"textures\\wood.png\" not found, read as "
+                          "\"textures/wood.png\" (backslashes taken as directory separators)\n"), std::string::npos)
+      << warnings;
+}
+
 TEST(SceneLoad, FloatExrTexelsKeepFullPrecisionAndRange) {
   // A 32-bit float EXR (an HDR environment with a sun far above half's 65504, and values half rounds).
   Image img;
