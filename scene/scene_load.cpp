@@ -623,6 +623,77 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   return s;
 }
 
+// ---- The JSON text ----------------------------------------------------------------------------------
+// nlohmann keeps the last of two equal keys in an object, and neither the DOM nor its SAX interface say
+// where a value is. So one pass over the text finds what needs a line: keys given twice in one object,
+// numbers beyond double range (which nlohmann reports without a position) and nesting deeper than any
+// scene needs. It runs on text nlohmann has parsed, or parsed up to the bad number, so it need not check
+// the syntax, only never read past the end.
+
+// Deeper than any scene needs (shapes[0].transform.matrix[0][0] is 5 levels), far from what costs.
+constexpr size_t kMaxJsonDepth = 64;
+
+struct TextFrame {
+  bool object = false;
+  bool expect_key = true;                         // objects: the next string is a key
+  size_t index = 0;                               // arrays: the current element
+  std::string key;                                // objects: the current key
+  std::map<std::string, size_t> key_lines;        // objects: each key and its line
+};
+
+// The JSON path of the current value, as Node writes it: "shapes[0].radius".
+std::string text_path(const std::vector<TextFrame>& frames) {
+  std::string path;
+  for (const TextFrame& f : frames)
+    path += f.object ? (path.empty() ? "" : ".") + f.key : "[" + std::to_string(f.index) + "]";
+  return path.empty() ? "(top level)" : path;
+}
+
+void check_json_text(const std::string& file, const std::string& text) {
+  std::vector<TextFrame> frames;
+  size_t line = 1;
+  auto fail = [&](const std::string& what) {
+    throw SceneError(file + ":" + std::to_string(line) + ": " + text_path(frames) + ": " + what);
+  };
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '{' || c == '[') {
+      if (frames.size() == kMaxJsonDepth) fail("nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+      frames.emplace_back().object = c == '{';
+    } else if ((c == '}' || c == ']') && !frames.empty()) {
+      frames.pop_back();
+    } else if (c == ',' && !frames.empty()) {
+      frames.back().expect_key = true;
+      ++frames.back().index;
+    } else if (c == '"') {
+      size_t end = i + 1;  // the closing quote; no raw newline can come before it in JSON
+      while (end < text.size() && text[end] != '"') end += text[end] == '\\' ? 2 : 1;
+      if (end >= text.size()) return;
+      if (!frames.empty() && frames.back().object && frames.back().expect_key) {
+        TextFrame& f = frames.back();
+        f.expect_key = false;
+        try {
+          f.key = json::parse(text.substr(i, end - i + 1)).get<std::string>();  // escapes decoded as nlohmann does
+        } catch (const json::exception&) {
+          return;  // not valid JSON: nlohmann says where
+        }
+        auto [first, added] = f.key_lines.emplace(f.key, line);
+        if (!added)
+          fail("duplicate key \"" + f.key + "\" (first at line " + std::to_string(first->second) + ")");
+      }
+      i = end;
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      size_t end = std::min(text.find_first_not_of("+-.0123456789eE", i), text.size());
+      std::string number = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(number.c_str(), nullptr)))
+        fail("malformed JSON: the number " + number + " is beyond the range of a double");
+      i = end - 1;
+    }
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -642,17 +713,34 @@ const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[
 
 SceneDescription load_scene(const std::string& path) {
   const std::string text = read_input_file(path, kSceneInput);
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw SceneError(path + ": the file is empty, expected a JSON scene");
+  if (text.rfind("\xff\xfe", 0) == 0 || text.rfind("\xfe\xff", 0) == 0)
+    throw SceneError(path + ": the file is UTF-16, expected UTF-8 JSON");
   json root;
   try {
-    root = json::parse(text);
-  } catch (const json::exception& e) {
-    // nlohmann's message names the line and column. Not only parse_error: a number too large for a
-    // double (1e400) is an out_of_range error.
-    throw SceneError(path + ": malformed JSON: " + e.what());
+    root = json::parse(text);  // skips a UTF-8 byte order mark
+  } catch (const json::parse_error& e) {
+    // "[json.exception.parse_error.101] parse error at line 5, column 1: syntax error ...": our form, with
+    // nlohmann's description of what is wrong.
+    std::string what = e.what();
+    size_t line = 0, column = 0, at = what.find("at line ");
+    if (at != std::string::npos) std::sscanf(what.c_str() + at, "at line %zu, column %zu", &line, &column);
+    size_t colon = what.find(": ", at == std::string::npos ? 0 : at);
+    throw SceneError(path + (line > 0 ? ":" + std::to_string(line) + ":" + std::to_string(column) : "") +
+                     ": malformed JSON: " + (colon == std::string::npos ? "syntax error" : what.substr(colon + 2)));
+  } catch (const json::exception&) {
+    // A number beyond double range (out_of_range), reported without a position: the scan finds it.
+    check_json_text(path, text);
+    throw SceneError(path + ": malformed JSON: a number is beyond the range of a double");
   }
+  check_json_text(path, text);
   SceneDescription scene;
   scene.path = path;
   Node top{path, root, ""};
+  if (!root.is_object())
+    top.fail(std::string("expected an object with camera, materials and shapes, got ") + (root.is_array() ? "an " : "a ") +
+             root.type_name());
   top.expect_object({"camera", "materials", "shapes", "lights", "render"}, {"camera", "materials", "shapes"});
   scene.camera = read_camera(top.at("camera"));
 

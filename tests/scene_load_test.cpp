@@ -32,8 +32,10 @@ std::string scene_with_shape(const std::string& shape) {
 }  // namespace
 
 TEST(SceneLoad, ErrorsNameFileAndPlace) {
-  EXPECT_NE(load_error(scenes() + "/bad-malformed.json").find("bad-malformed.json: malformed JSON"), std::string::npos);
-  EXPECT_NE(load_error(scenes() + "/bad-malformed.json").find("line 5"), std::string::npos);
+  // nlohmann's description of the syntax error, in our form (not "[json.exception.parse_error.101] ...").
+  EXPECT_EQ(load_error(scenes() + "/bad-malformed.json"),
+            scenes() + "/bad-malformed.json:5:1: malformed JSON: syntax error while parsing value - unexpected '}'; "
+                       "expected '[', '{', or a literal");
   EXPECT_NE(load_error(scenes() + "/bad-unknown-key.json").find("shapes[0]: unknown key \"colour\""), std::string::npos);
   EXPECT_NE(load_error(scenes() + "/bad-unknown-material.json").find("shapes[0].material: unknown material \"glas\""),
             std::string::npos);
@@ -296,8 +298,8 @@ std::string with_value(std::string text, const std::string& value) {
 }  // namespace
 
 // Every numeric field of the format against each class of bad number that applies to it: zero, negative,
-// too large, so small that it is 0 as a float, beyond float range, a fraction or an exponent where an
-// integer is meant (8.0 and 1e3 are refused like 3.5: docs/scene-format.md), a string. The message names
+// too large, so small that it is 0 as a float, beyond float range (and beyond double range: 1e400), a
+// fraction or an exponent where an integer is meant (8.0 and 1e3 are refused like 3.5: docs/scene-format.md), a string. The message names
 // the file, the field's JSON path and what was expected.
 TEST(SceneLoad, EveryNumericFieldRefusesEachClassOfBadNumber) {
   const std::string integer = "expected an integer in ";
@@ -425,6 +427,14 @@ TEST(SceneLoad, EveryNumericFieldRefusesEachClassOfBadNumber) {
       EXPECT_NE(error.find(expected), std::string::npos)
           << f.path << " = " << value << ": expected \"" << expected << "\"\n  gave: " << error;
     }
+  // Beyond double range, every field: a JSON text error, with the line and the value's JSON path.
+  for (const Field& f : fields) {
+    std::string path = write_temp_file("numeric.json", with_value(f.json, "1e400"));
+    std::string error = load_error(path);
+    EXPECT_EQ(error.rfind(path + ":", 0), 0u) << error;
+    EXPECT_NE(error.find(": " + f.path), std::string::npos) << error;
+    EXPECT_NE(error.find(": malformed JSON: the number 1e400 is beyond the range of a double"), std::string::npos) << error;
+  }
 }
 
 // The edges of each range load (a sphere's radius, like all geometry, need only be > 0: degenerate
@@ -769,6 +779,78 @@ TEST(SceneLoadMtl, ErrorsNameTheObjOrMtlLine) {
     std::string path = write_mtl_scene(c.obj, c.mtl, c.shape_extra);
     std::string error = load_error(path);
     EXPECT_NE(error.find(c.expected), std::string::npos) << c.obj << c.mtl << "\n  gave: " << error;
+  }
+}
+
+// ---- The JSON text ---------------------------------------------------------------------------------------
+
+// A key given twice in one object is refused with its JSON path and both lines (nlohmann keeps the last
+// silently); keys are compared as decoded, so "\u0061" is "a"; the same key in different objects is fine.
+TEST(SceneLoad, DuplicateKeysAreRefusedWithBothLines) {
+  struct Case {
+    std::string json, expected;  // expected after "PATH:"
+  } cases[] = {
+      {R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+ "materials": {"m": {"type": "diffuse"}},
+ "shapes": [{"type": "sphere", "radius": 1, "material": "m",
+   "radius": 2}]})",
+       "4: shapes[0].radius: duplicate key \"radius\" (first at line 3)"},
+      {R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+ "materials": {"m": {"type": "diffuse"}, "glass": {"type": "dielectric", "ior": 1.5},
+   "m": {"type": "mirror"}}, "shapes": []})",
+       "3: materials.m: duplicate key \"m\" (first at line 2)"},
+      {"{\"camera\": {\"position\": [0,0,5], \"look_at\": [0,0,0], \"width\": 8, \"height\": 8},\n"
+       "\"materials\": {\"a \\\"q\\\" \\\\\": {\"type\": \"diffuse\"}, \"\\u0061 \\\"q\\\" \\\\\": {\"type\": \"diffuse\"}},\n"
+       "\"shapes\": []}",
+       "2: materials.a \"q\" \\: duplicate key \"a \"q\" \\\" (first at line 2)"},
+      {"{\"camera\": {\"position\": [0,0,5], \"look_at\": [0,0,0], \"width\": 8, \"height\": 8},\n\"materials\": {},\n"
+       "\"shapes\": [],\n\n\"camera\": {}}",
+       "5: camera: duplicate key \"camera\" (first at line 1)"},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("duplicate.json", c.json);
+    EXPECT_EQ(load_error(path), path + ":" + c.expected);
+  }
+  // The same keys in different objects, and keys that differ only after an escape, load.
+  EXPECT_EQ(error_of(R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse"}, "m\"": {"type": "diffuse"}, "m\\": {"type": "diffuse"}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "m"}, {"type": "sphere", "radius": 2, "material": "m"}]})"),
+            "");
+}
+
+// What the whole file can be instead of a scene: empty, UTF-16, valid JSON but not an object, nested
+// deeper than any scene, a number beyond double range (nlohmann says "number overflow" without a
+// position: the line and the JSON path come from our scan). A UTF-8 byte order mark is accepted.
+TEST(SceneLoad, FilesThatAreNoSceneObjectAreNamed) {
+  const std::string scene = R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
+    "materials": {}, "shapes": []})";
+  std::string deep = R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8}, "materials": {"m": )" +
+                     std::string(100000, '[') + std::string(100000, ']') + "}, \"shapes\": []}";
+  struct Case {
+    std::string json, expected;  // expected after "PATH"
+  } cases[] = {
+      {"", ": the file is empty, expected a JSON scene"},
+      {" \n\t\r\n", ": the file is empty, expected a JSON scene"},
+      {std::string("\xff\xfe{\0", 4), ": the file is UTF-16, expected UTF-8 JSON"},
+      {"[1, 2, 3]", ": (top level): expected an object with camera, materials and shapes, got an array"},
+      {"\"scene\"", ": (top level): expected an object with camera, materials and shapes, got a string"},
+      {"null", ": (top level): expected an object with camera, materials and shapes, got a null"},
+      {deep, ":1: materials.m[0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0]"
+             "[0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0][0]: "
+             "nested deeper than 64 levels"},
+      {"{\"camera\": {\"position\": [0,0,5], \"look_at\": [0,0,0], \"width\": 8, \"height\": 8},\n\"materials\": {},\n"
+       "\"shapes\": [{\"type\": \"sphere\", \"radius\": 1e400, \"material\": \"m\"}]}",
+       ":3: shapes[0].radius: malformed JSON: the number 1e400 is beyond the range of a double"},
+      {"{\"camera\": {\"position\": [0,0,5], \"look_at\": [0,0,0], \"width\": 8, \"height\": 8},\n\"materials\": {},\n"
+       "\"shapes\": [], \"render\": {\"spp\": -1e999}}",
+       ":3: render.spp: malformed JSON: the number -1e999 is beyond the range of a double"},
+      {"{\"camera\": {\"position\": [0,0,5], \"look_at\": [0, 1e400, 0]", 
+       ":1: camera.look_at[1]: malformed JSON: the number 1e400 is beyond the range of a double"},
+      {"\xef\xbb\xbf" + scene, ""},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("whole.json", c.json);
+    EXPECT_EQ(load_error(path), c.expected.empty() ? "" : path + c.expected) << c.json.substr(0, 80);
   }
 }
 
