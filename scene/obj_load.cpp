@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <tiny_obj_loader.h>
@@ -216,7 +217,7 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
     std::string where = path + ":" + std::to_string(line);
     std::string mtl = resolve_written_path(dir, file, where + ": mtllib", warnings);
     if (!std::filesystem::exists(mtl)) throw SceneError(where + ": cannot open the material file " + mtl);
-    for (MtlMaterial& m : load_mtl(mtl, warnings)) {
+    for (MtlMaterial& m : load_mtl(mtl)) {
       auto [it, added] = by_name.emplace(m.name, uint32_t(materials.size()));
       if (!added)
         throw SceneError(m.where + ": material \"" + m.name + "\" is already defined at " + materials[it->second].where);
@@ -224,6 +225,27 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
     }
   }
   return by_name;
+}
+
+// The warnings of the materials some face uses, and per MTL file the statements pathcl ignored in them:
+// a library's other materials are not rendered, so what they say does not matter.
+void warn_about_used_materials(const std::vector<MtlMaterial>& materials, const std::vector<uint32_t>& face_materials,
+                               std::vector<std::string>& warnings) {
+  std::vector<bool> used(materials.size(), false);
+  for (uint32_t id : face_materials) used[id] = true;
+  std::vector<std::pair<std::string, std::set<std::string>>> ignored;  // per MTL file, in file order
+  for (size_t i = 0; i < materials.size(); ++i) {
+    if (!used[i]) continue;
+    const MtlMaterial& m = materials[i];
+    warnings.insert(warnings.end(), m.warnings.begin(), m.warnings.end());
+    if (ignored.empty() || ignored.back().first != m.file) ignored.push_back({m.file, {}});
+    ignored.back().second.insert(m.ignored.begin(), m.ignored.end());
+  }
+  for (const auto& [file, keys] : ignored) {
+    std::string list;
+    for (const std::string& k : keys) list += (list.empty() ? "" : ", ") + k;
+    if (!list.empty()) warnings.push_back(file + ": ignored statements (not used by pathcl): " + list);
+  }
 }
 
 }  // namespace
@@ -307,6 +329,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
     }
   }
   if (!any_uvs) soup.uvs.clear();
+  if (with_materials) warn_about_used_materials(obj.materials, soup.materials, warnings);
   if (soup.polygons.empty()) throw SceneError(path + ": no faces");
   return obj;
 }

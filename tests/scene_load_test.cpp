@@ -936,6 +936,30 @@ TEST(SceneLoadObj, ShortFacesWarnEscapedSpacesAndBackslashPathsLoad) {
       << warnings;
 }
 
+// MTL warnings are about what is rendered: a library's materials that no face uses say nothing, and the
+// ignored statements listed are those of the materials used.
+TEST(SceneLoadMtl, WarningsOnlyForMaterialsFacesUse) {
+  write_temp_png("mtl-used/tex/wood.png", 1, 1, {200, 100, 50});
+  write_temp_file("mtl-used/lib.mtl", joined({"newmtl used", "Kd 0.5 0.5 0.5", "Ka 0.1 0.1 0.1",
+                                              "newmtl unused", "Kd 0.9 0.9 0.9", "Ks 0.5 0.5 0.5", "map_Bump bump.png",
+                                              "illum 2", "newmtl unused_glass", "d 0.5", "map_Kd tex\\wood.png"}));
+  write_temp_file("mtl-used/model.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl used\nf 1 2 3\n");
+  SceneDescription s = load_scene(write_temp_file("mtl-used.json", scene_with_shape(
+      R"({"type": "mesh", "file": "mtl-used/model.obj", "material": "from_mtl"})")));
+  EXPECT_EQ(s.warnings, (std::vector<std::string>{temp_dir() + "/mtl-used/lib.mtl: ignored statements (not used by pathcl): Ka"}));
+  // With the other two used too, everything is said.
+  write_temp_file("mtl-used/model.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl used\nf 1 2 3\n"
+                                        "usemtl unused\nf 2 4 3\nusemtl unused_glass\nf 1 2 4\n");
+  s = load_scene(write_temp_file("mtl-used.json", scene_with_shape(
+      R"({"type": "mesh", "file": "mtl-used/model.obj", "material": "from_mtl"})")));
+  std::string warnings = joined(s.warnings);
+  const std::string lib = temp_dir() + "/mtl-used/lib.mtl";
+  EXPECT_NE(warnings.find(lib + ": ignored statements (not used by pathcl): Ka, map_Bump\n"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":11: map_Kd: \"tex\\wood.png\" not found, read as \"tex/wood.png\""), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":11: map_Kd ignored: material \"unused_glass\" is a dielectric"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":4: material \"unused\": Kd + Ks reaches 1.4"), std::string::npos) << warnings;
+}
+
 TEST(SceneLoad, FloatExrTexelsKeepFullPrecisionAndRange) {
   // A 32-bit float EXR (an HDR environment with a sun far above half's 65504, and values half rounds).
   Image img;
