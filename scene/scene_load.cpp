@@ -623,6 +623,21 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   return s;
 }
 
+// Whether anything emits: an emitting sphere, an emitting triangle left after clean-up (emission or an
+// MTL material's Ke), or a point, spot, directional or environment light whose emission (and map) is not
+// all zero. What the device scene then drops as well (zero-area emitters, a directional light in a scene
+// of no size) is counted by `pathcl info`.
+bool has_light(const SceneDescription& scene) {
+  for (const ShapeDesc& s : scene.shapes)
+    if (shape_emits(s) && (s.is_sphere || !s.mesh.triangles.empty())) return true;
+  for (const LightDesc& l : scene.lights) {
+    glm::vec3 e = l.emission;
+    if (l.texture != PC_INVALID) e *= texture_max(scene.textures[l.texture]);
+    if (e != glm::vec3(0)) return true;
+  }
+  return false;
+}
+
 // ---- The JSON text ----------------------------------------------------------------------------------
 // nlohmann keeps the last of two equal keys in an object, and neither the DOM nor its SAX interface say
 // where a value is. So one pass over the text finds what needs a line: keys given twice in one object,
@@ -787,5 +802,8 @@ SceneDescription load_scene(const std::string& path) {
       r.at("sampler").fail("unknown sampler \"" + r.at("sampler").string() +
                            "\" (expected independent, stratified, sobol or halton)");
   }
+  if (!has_light(scene))
+    scene.warnings.push_back(path + ": the scene has no light (no shape or MTL material emits, and no entry of "
+                             "\"lights\" emits): it renders black");
   return scene;
 }

@@ -1,4 +1,5 @@
 // Scene files: every error names the file and the place; transforms and flags do what they say.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -500,6 +501,44 @@ TEST(SceneLoad, LightSelectionIsProportionalToPowerAcrossTypes) {
   EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
 }
 
+// A scene without any light renders black: it is loaded, with a warning. Lights are emitting shapes
+// (spheres, triangles left after clean-up, MTL materials with Ke) and entries of "lights" that emit.
+TEST(SceneLoad, ASceneWithoutLightIsWarnedAbout) {
+  write_temp_png("nolight/black.png", 1, 1, {0, 0, 0});
+  write_temp_png("nolight/sky.png", 1, 1, {0, 0, 10});
+  write_temp_file("nolight/lamp.mtl", "newmtl lamp\nKe 1 1 1\n");
+  write_temp_file("nolight/lamp.obj", "mtllib lamp.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl lamp\nf 1 2 3\n");
+  const std::string diffuse = R"("m": {"type": "diffuse"})";
+  const std::string point = R"({"type": "point", "position": [0, 2, 0], "intensity": [@]})";
+  struct Case {
+    std::string json;
+    bool warned;
+  } cases[] = {
+      {scene_with(diffuse), true},
+      {scene_with(diffuse, with_value(point, "0, 0, 0")), true},
+      {scene_with(diffuse, R"({"type": "environment", "radiance": [0, 0, 0]})"), true},
+      {scene_with(diffuse, R"({"type": "environment", "file": "nolight/black.png", "scale": 5})"), true},
+      {scene_with(diffuse, R"({"type": "environment", "file": "nolight/sky.png", "scale": 0})"), true},
+      {scene_with(diffuse, R"({"type": "directional", "direction": [0, -1, 0], "irradiance": [0, 0, 0]})"), true},
+      {scene_with_shape(R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[2,0,0]], "indices": [[0,1,2]],
+                            "material": "m", "emission": [1, 1, 1]})"), true},  // collinear: removed by clean-up
+      {scene_with_shape(R"({"type": "sphere", "radius": 1, "material": "m", "emission": [0, 0, 0.1]})"), false},
+      {scene_with_shape(R"({"type": "mesh", "file": "nolight/lamp.obj", "material": "from_mtl"})"), false},
+      {scene_with(diffuse, with_value(point, "0, 1e-30, 0")), false},
+      {scene_with(diffuse, R"({"type": "spot", "position": [0, 2, 0], "direction": [0, -1, 0], "intensity": [1, 1, 1], "outer_angle_degrees": 30})"), false},
+      {scene_with(diffuse, R"({"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]})"), false},
+      {scene_with(diffuse, R"({"type": "environment", "radiance": [0.1, 0, 0]})"), false},
+      {scene_with(diffuse, R"({"type": "environment", "file": "nolight/sky.png"})"), false},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("nolight.json", c.json);
+    std::string warning = path + ": the scene has no light (no shape or MTL material emits, and no entry of \"lights\" "
+                                 "emits): it renders black";
+    std::vector<std::string> warnings = load_scene(path).warnings;
+    EXPECT_EQ(std::count(warnings.begin(), warnings.end(), warning), c.warned ? 1 : 0) << c.json;
+  }
+}
+
 // ---- Textures, texture coordinates and materials from MTL files -----------------------------------------
 
 namespace {
@@ -944,8 +983,9 @@ TEST(SceneLoadMtl, WarningsOnlyForMaterialsFacesUse) {
                                               "newmtl unused", "Kd 0.9 0.9 0.9", "Ks 0.5 0.5 0.5", "map_Bump bump.png",
                                               "illum 2", "newmtl unused_glass", "d 0.5", "map_Kd tex\\wood.png"}));
   write_temp_file("mtl-used/model.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl used\nf 1 2 3\n");
+  const std::string lamp = R"(, {"type": "sphere", "radius": 0.1, "center": [0, 0, 3], "material": "m", "emission": [1, 1, 1]})";
   SceneDescription s = load_scene(write_temp_file("mtl-used.json", scene_with_shape(
-      R"({"type": "mesh", "file": "mtl-used/model.obj", "material": "from_mtl"})")));
+      R"({"type": "mesh", "file": "mtl-used/model.obj", "material": "from_mtl"})" + lamp)));
   EXPECT_EQ(s.warnings, (std::vector<std::string>{temp_dir() + "/mtl-used/lib.mtl: ignored statements (not used by pathcl): Ka"}));
   // With the other two used too, everything is said.
   write_temp_file("mtl-used/model.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl used\nf 1 2 3\n"
