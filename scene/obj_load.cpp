@@ -6,18 +6,18 @@
 // unknown material).
 #include "scene/obj_load.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include <tiny_obj_loader.h>
 
-#include "scene/scene_description.h"
 #include "scene/input_file.h"
+#include "scene/scene_description.h"
 #include "scene/scene_error.h"
 
 namespace {

@@ -645,7 +645,8 @@ bool has_light(const SceneDescription& scene) {
 // scene needs. It runs on text nlohmann has parsed, or parsed up to the bad number, so it need not check
 // the syntax, only never read past the end.
 
-// Deeper than any scene needs (shapes[0].transform.matrix[0][0] is 5 levels), far from what costs.
+// Far deeper than any scene needs (shapes[0].transform.matrix[0][0] is 5 levels); it bounds what the
+// scan keeps per level.
 constexpr size_t kMaxJsonDepth = 64;
 
 struct TextFrame {
