@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -24,6 +25,8 @@ struct RawMaterial {
   int illum = -1;
   std::string map_kd, map_kd_where;
   uint32_t map_kd_wrap = PC_WRAP_REPEAT;
+  std::vector<std::string> warnings;
+  std::set<std::string> ignored;
 };
 
 std::string trim(const std::string& s) {
@@ -88,18 +91,19 @@ void parse_map_kd(const std::string& rest, const std::string& where, const std::
   }
   std::string file = word.empty() ? "" : trim(rest.substr(start));
   if (file.empty()) throw SceneError(where + ": map_Kd: expected a file name");
-  m.map_kd = (dir / file).string();
+  m.map_kd = resolve_written_path(dir, file, where + ": map_Kd", m.warnings);
   m.map_kd_where = where;
 }
 
-std::vector<RawMaterial> read_raw(const std::string& path, std::vector<std::string>& warnings) {
+std::vector<RawMaterial> read_raw(const std::string& path) {
+  read_input_file(path, kMaterialInput, 512);
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the material file");
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   std::vector<RawMaterial> materials;
-  std::set<std::string> names, ignored;
+  std::set<std::string> names;
   std::string line;
-  for (size_t number = 1; std::getline(in, line); ++number) {
+  for (size_t number = 1; read_line(in, line); ++number) {
     std::string where = path + ":" + std::to_string(number);
     std::istringstream words(line);
     std::string key;
@@ -153,25 +157,23 @@ std::vector<RawMaterial> read_raw(const std::string& path, std::vector<std::stri
       std::getline(words, rest);
       parse_map_kd(rest, where, dir, m);
     } else {
-      ignored.insert(key);
+      m.ignored.insert(key);
     }
-  }
-  if (!ignored.empty()) {
-    std::string list;
-    for (const std::string& k : ignored) list += (list.empty() ? "" : ", ") + k;
-    warnings.push_back(path + ": ignored statements (not used by pathcl): " + list);
   }
   return materials;
 }
 
 }  // namespace
 
-std::vector<MtlMaterial> load_mtl(const std::string& path, std::vector<std::string>& warnings) {
+std::vector<MtlMaterial> load_mtl(const std::string& path) {
   std::vector<MtlMaterial> result;
-  for (const RawMaterial& raw : read_raw(path, warnings)) {
+  for (const RawMaterial& raw : read_raw(path)) {
     MtlMaterial out;
     out.name = raw.name;
+    out.file = path;
     out.where = raw.where;
+    out.warnings = raw.warnings;
+    out.ignored = raw.ignored;
     out.emission = raw.ke;
     MaterialDesc& m = out.material;
     m.name = raw.name;
@@ -183,8 +185,8 @@ std::vector<MtlMaterial> load_mtl(const std::string& path, std::vector<std::stri
       m.ior = raw.has_ni ? raw.ni : 1.5f;
       m.color = raw.has_tf ? raw.tf : glm::vec3(1);
       if (!raw.map_kd.empty())
-        warnings.push_back(raw.map_kd_where + ": map_Kd ignored: material \"" + raw.name +
-                           "\" is a dielectric, which has no diffuse colour");
+        out.warnings.push_back(raw.map_kd_where + ": map_Kd ignored: material \"" + raw.name +
+                               "\" is a dielectric, which has no diffuse colour");
     } else if (raw.ks.x > 0 || raw.ks.y > 0 || raw.ks.z > 0) {
       m.type = "phong";
       m.type_id = PC_MAT_PHONG;

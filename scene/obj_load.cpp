@@ -1,72 +1,208 @@
 // OBJ meshes through tinyobjloader, polygons kept whole (CGAL triangulates them in mesh_clean.cpp).
-// tinyobjloader does not report line numbers, so one light scan of the file records where each vertex
-// and face line is, for messages such as "bunny.obj:1043: face index 90211 out of range"; the same
+// tinyobjloader does not report line numbers, so one light scan of the file records where each face
+// line is, for messages such as "bunny.obj:1043: face index 90211 out of range", and checks first what
+// tinyobjloader would fail on or read wrong, so that every message is ours and names its line; the same
 // scan follows mtllib and usemtl, which we resolve ourselves (tinyobjloader only warns about an
 // unknown material).
 #include "scene/obj_load.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
+#include <set>
 
 #include <tiny_obj_loader.h>
 
+#include "scene/input_file.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
 
 namespace {
 
+// Mesh formats pathcl does not read, by extension and by how their files begin. tinyobjloader takes any
+// file for OBJ: a PLY file became "igea.ply: no faces", a binary glTF "Failed parse 'l' line".
+struct MeshFormat {
+  const char* name;
+  std::vector<std::string> extensions, starts;
+  const char* hint = "";
+};
+const MeshFormat kOtherMeshFormats[] = {
+    {"PLY", {".ply"}, {"ply\n", "ply\r"}},
+    {"glTF", {".gltf", ".glb"}, {"glTF"}},
+    {"STL", {".stl"}, {"solid "}},  // ASCII STL; binary STL is caught as binary
+    {"OFF", {".off"}, {"OFF\n", "OFF\r", "OFF ", "COFF", "NOFF"}},
+    {"FBX", {".fbx"}, {"Kaydara FBX Binary", "; FBX"}},
+    {"COLLADA", {".dae"}, {"<?xml", "<COLLADA"}},
+    {"3DS", {".3ds"}, {}},
+    {"Blender", {".blend"}, {"BLENDER"}},
+    {"USD", {".usd", ".usda", ".usdc", ".usdz"}, {"#usda", "PXR-USDC"}},
+    {"Alembic", {".abc"}, {}},
+    {"X3D", {".x3d"}, {}},
+    {"VRML", {".wrl"}, {"#VRML"}},
+    {"3MF", {".3mf"}, {}},
+    {"LightWave", {".lwo"}, {}},
+    {"Maya", {".ma", ".mb"}, {"//Maya"}},
+    {"Compressed", {".gz", ".zip", ".xz", ".bz2", ".zst", ".7z"}, {"\x1f\x8b", "PK\x03\x04", "\xfd" "7zXZ"},
+     "; decompress it first"},
+};
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+[[noreturn]] void refuse_format(const std::string& path, const MeshFormat& f) {
+  throw SceneError(path + ": " + f.name + " meshes are not supported (expected a Wavefront OBJ file" + f.hint + ")");
+}
+
+// Refuses, by extension, a mesh format that is not OBJ (before the file is opened: the format is the
+// first thing to fix).
+void check_obj_extension(const std::string& path) {
+  std::string ext = lower_extension(path);
+  for (const MeshFormat& f : kOtherMeshFormats)
+    for (const std::string& e : f.extensions)
+      if (ext == e) refuse_format(path, f);
+}
+
+// Refuses, by its first bytes, a file that is another mesh format, JSON or not text at all.
+void check_obj_content(const std::string& path, const std::string& head) {
+  for (const MeshFormat& f : kOtherMeshFormats)
+    for (const std::string& start : f.starts)
+      if (head.rfind(start, 0) == 0) refuse_format(path, f);
+  size_t first = head.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && head[first] == '{')
+    throw SceneError(path + ": looks like JSON (a glTF mesh or a scene file?), expected a Wavefront OBJ file");
+  // Control characters other than white space do not occur in text.
+  for (unsigned char c : head)
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\v' && c != '\f' && c != '\r')
+      throw SceneError(path + ": not a text OBJ file (it has binary content), expected a Wavefront OBJ file");
+}
+
 struct LineIndex {
-  std::vector<size_t> vertex_lines, face_lines;
+  std::vector<size_t> face_lines;             // per face tinyobjloader keeps (3 or more corners)
   std::vector<std::string> face_material;     // per face: the name of the usemtl in effect, or ""
   std::vector<size_t> face_material_line;     // per face: the line of that usemtl, or 0
   std::vector<std::pair<size_t, std::string>> mtllibs;  // (line, file) for each file an mtllib names
+  size_t short_faces = 0, first_short_face = 0, first_short_corners = 0;  // faces with 1 or 2 corners
 };
 
-// Checks that the first `min` words of `words` are finite numbers, and the words after them up to
-// `max` too if present (tinyobjloader would silently read a bad one as zero); more are not looked at.
-void check_coordinates(const std::string& path, size_t number, const std::string& line, std::istringstream& words,
-                       int min, int max, const char* what) {
-  int count = 0;
-  for (std::string word; count < max && words >> word; ++count) {
-    char* end = nullptr;
-    float value = std::strtof(word.c_str(), &end);
-    if (*end != '\0' || !std::isfinite(value)) {
-      count = -1;
-      break;
-    }
+// The words of a line as tinyobjloader separates them: by spaces and tabs.
+std::vector<std::string> split_words(const std::string& line) {
+  std::vector<std::string> words;
+  for (size_t a = line.find_first_not_of(" \t"); a != std::string::npos; a = line.find_first_not_of(" \t", a)) {
+    size_t b = std::min(line.find_first_of(" \t", a), line.size());
+    words.push_back(line.substr(a, b - a));
+    a = b;
   }
-  if (count < min)
-    throw SceneError(path + ":" + std::to_string(number) + ": expected " + what + ", got \"" + line + "\"");
+  return words;
 }
 
+// Checks that the first `min` of `words` after the keyword are finite numbers, and the words after them up
+// to `max` too if present (tinyobjloader would silently read a bad one as zero); more are not looked at.
+void check_coordinates(const std::string& where, const std::string& line, const std::vector<std::string>& words,
+                       size_t min, size_t max, const char* what) {
+  size_t count = 0;
+  for (; count < max && count + 1 < words.size(); ++count) {
+    char* end = nullptr;
+    float value = std::strtof(words[count + 1].c_str(), &end);
+    if (*end != '\0' || !std::isfinite(value)) break;
+  }
+  if (count < std::min(max, words.size() - 1) || count < min)
+    throw SceneError(where + ": expected " + what + ", got \"" + line + "\"");
+}
+
+// A non-zero integer that fits an int, as tinyobjloader's atoi reads OBJ indices ("" and "0" are not).
+bool is_index(const std::string& text) {
+  size_t digits = text.find_first_not_of('-') == 1 ? 1 : 0;
+  if (text.size() <= digits || text.find_first_not_of("0123456789", digits) != std::string::npos) return false;
+  long long value = text.size() - digits > 10 ? 0 : std::stoll(text);
+  return value != 0 && value >= -2147483647 && value <= 2147483647;
+}
+
+// Checks the corners of an f, l or p statement: v, v/vt, v//vn or v/vt/vn. tinyobjloader gives up on the
+// first bad one with a message of its own ("Failed parse 'f' line(e.g. zero value for face index. ...").
+void check_corners(const std::string& where, const std::vector<std::string>& words) {
+  for (size_t k = 1; k < words.size(); ++k) {
+    const std::string& w = words[k];
+    size_t a = w.find('/'), b = a == std::string::npos ? a : w.find('/', a + 1);
+    bool ok = is_index(w.substr(0, a));
+    if (ok && a != std::string::npos) {
+      std::string vt = w.substr(a + 1, b == std::string::npos ? b : b - a - 1);
+      ok = (vt.empty() ? b != std::string::npos : is_index(vt)) &&
+           (b == std::string::npos || is_index(w.substr(b + 1)));
+    }
+    if (!ok)
+      throw SceneError(where + ": bad vertex reference \"" + w + "\" in \"" + words[0] +
+                       "\" (expected v, v/vt, v//vn or v/vt/vn: non-zero integers, 1 for the first vertex)");
+  }
+}
+
+// "mtllib a.mtl my\ lib.mtl": file names separated by spaces, "\ " an escaped space (as exporters write
+// names with spaces).
+std::vector<std::string> mtllib_names(const std::string& line) {
+  std::vector<std::string> names;
+  std::string name;
+  size_t start = line.find("mtllib") + 6;
+  for (size_t i = start; i <= line.size(); ++i) {
+    char c = i < line.size() ? line[i] : ' ';
+    if (c == '\\' && i + 1 < line.size() && line[i + 1] == ' ') {
+      name += ' ';
+      ++i;
+    } else if (c == ' ' || c == '\t') {
+      if (!name.empty()) names.push_back(name);
+      name.clear();
+    } else {
+      name += c;
+    }
+  }
+  return names;
+}
+
+// Statements tinyobjloader would fail on are checked here first, so that every error is ours and names
+// its line.
 LineIndex scan_obj_lines(const std::string& path, std::istream& in) {
   LineIndex index;
   std::string line, material;
   size_t material_line = 0;
-  for (size_t number = 1; std::getline(in, line); ++number) {
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
+  for (size_t number = 1; read_line(in, line); ++number) {
+    const std::vector<std::string> words = split_words(line);
+    if (words.empty()) continue;
+    const std::string& keyword = words[0];
+    const std::string where = path + ":" + std::to_string(number);
+    if (keyword == "f" || keyword == "l" || keyword == "p") check_corners(where, words);
     if (keyword == "f") {
+      size_t corners = words.size() - 1;
+      // tinyobjloader drops faces of fewer than 3 corners (with a warning we would not see) and stores
+      // corner counts in a byte: a face of 300 became one of 44, shifting every face after it.
+      if (corners > 255)
+        throw SceneError(where + ": a face with " + std::to_string(corners) +
+                         " vertices, more than the 255 the OBJ reader supports (split it)");
+      if (corners < 3) {
+        if (index.short_faces++ == 0) {
+          index.first_short_face = number;
+          index.first_short_corners = corners;
+        }
+        continue;
+      }
       index.face_lines.push_back(number);
       index.face_material.push_back(material);
       index.face_material_line.push_back(material_line);
     } else if (keyword == "v") {
-      index.vertex_lines.push_back(number);
-      check_coordinates(path, number, line, words, 3, 3, "3 finite vertex coordinates");
+      check_coordinates(where, line, words, 3, 3, "3 finite vertex coordinates");
     } else if (keyword == "vt") {
-      check_coordinates(path, number, line, words, 1, 3, "1 to 3 finite texture coordinates");
+      check_coordinates(where, line, words, 1, 3, "1 to 3 finite texture coordinates");
     } else if (keyword == "usemtl") {
-      std::getline(words, material);
-      size_t a = material.find_first_not_of(" \t\r"), b = material.find_last_not_of(" \t\r");
-      material = a == std::string::npos ? "" : material.substr(a, b - a + 1);
+      size_t a = line.find("usemtl") + 6;
+      material = line.substr(a);
+      size_t first = material.find_first_not_of(" \t"), last = material.find_last_not_of(" \t");
+      material = first == std::string::npos ? "" : material.substr(first, last - first + 1);
       material_line = number;
     } else if (keyword == "mtllib") {
-      for (std::string file; words >> file;) index.mtllibs.push_back({number, file});
+      for (const std::string& file : mtllib_names(line)) index.mtllibs.push_back({number, file});
     }
   }
   return index;
@@ -78,10 +214,10 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   std::map<std::string, uint32_t> by_name;
   for (const auto& [line, file] : lines.mtllibs) {
-    std::string mtl = (dir / file).string();
     std::string where = path + ":" + std::to_string(line);
-    if (!std::filesystem::is_regular_file(mtl)) throw SceneError(where + ": cannot open the material file " + mtl);
-    for (MtlMaterial& m : load_mtl(mtl, warnings)) {
+    std::string mtl = resolve_written_path(dir, file, where + ": mtllib", warnings);
+    if (!std::filesystem::exists(mtl)) throw SceneError(where + ": cannot open the material file " + mtl);
+    for (MtlMaterial& m : load_mtl(mtl)) {
       auto [it, added] = by_name.emplace(m.name, uint32_t(materials.size()));
       if (!added)
         throw SceneError(m.where + ": material \"" + m.name + "\" is already defined at " + materials[it->second].where);
@@ -91,9 +227,32 @@ std::map<std::string, uint32_t> read_mtllibs(const std::string& path, const Line
   return by_name;
 }
 
+// The warnings of the materials some face uses, and per MTL file the statements pathcl ignored in them:
+// a library's other materials are not rendered, so what they say does not matter.
+void warn_about_used_materials(const std::vector<MtlMaterial>& materials, const std::vector<uint32_t>& face_materials,
+                               std::vector<std::string>& warnings) {
+  std::vector<bool> used(materials.size(), false);
+  for (uint32_t id : face_materials) used[id] = true;
+  std::vector<std::pair<std::string, std::set<std::string>>> ignored;  // per MTL file, in file order
+  for (size_t i = 0; i < materials.size(); ++i) {
+    if (!used[i]) continue;
+    const MtlMaterial& m = materials[i];
+    warnings.insert(warnings.end(), m.warnings.begin(), m.warnings.end());
+    if (ignored.empty() || ignored.back().first != m.file) ignored.push_back({m.file, {}});
+    ignored.back().second.insert(m.ignored.begin(), m.ignored.end());
+  }
+  for (const auto& [file, keys] : ignored) {
+    std::string list;
+    for (const std::string& k : keys) list += (list.empty() ? "" : ", ") + k;
+    if (!list.empty()) warnings.push_back(file + ": ignored statements (not used by pathcl): " + list);
+  }
+}
+
 }  // namespace
 
 ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<std::string>& warnings) {
+  check_obj_extension(path);
+  check_obj_content(path, read_input_file(path, kMeshInput, 512));
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
   LineIndex lines = scan_obj_lines(path, in);
@@ -110,7 +269,17 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
   std::string warn, err;
   // No material reader: the scan above resolved mtllib and usemtl.
   bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr, /*triangulate=*/false);
-  if (!ok) throw SceneError(path + ": " + (err.empty() ? "cannot parse the OBJ file" : err));
+  if (!ok) {
+    // What the scan does not check (tinyobjloader's own "vw" statement): only its line number is worth
+    // passing on.
+    size_t at = err.rfind("line ");
+    long line = at == std::string::npos ? 0 : std::strtol(err.c_str() + at + 5, nullptr, 10);
+    throw SceneError(path + (line > 0 ? ":" + std::to_string(line) + ": cannot read this statement" : ": cannot read the OBJ file"));
+  }
+  if (lines.short_faces > 0)
+    warnings.push_back(path + ":" + std::to_string(lines.first_short_face) + ": face with " +
+                       std::to_string(lines.first_short_corners) + " vertices ignored (a face needs at least 3)" +
+                       (lines.short_faces > 1 ? ", and " + std::to_string(lines.short_faces - 1) + " more such faces" : ""));
 
   PolygonSoup& soup = obj.soup;
   size_t vertex_count = attrib.vertices.size() / 3, uv_count = attrib.texcoords.size() / 2;
@@ -140,7 +309,6 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
       }
       if (!uvs.empty() && uvs.size() != arity)
         throw SceneError(where + ": a face needs texture coordinates at all of its corners or at none");
-      if (arity < 3) throw SceneError(where + ": a face needs at least 3 vertices");
       if (with_materials) {
         const std::string& name = face < lines.face_material.size() ? lines.face_material[face] : "";
         if (name.empty()) throw SceneError(where + ": face without a material (no usemtl before it)");
@@ -161,6 +329,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
     }
   }
   if (!any_uvs) soup.uvs.clear();
+  if (with_materials) warn_about_used_materials(obj.materials, soup.materials, warnings);
   if (soup.polygons.empty()) throw SceneError(path + ": no faces");
   return obj;
 }

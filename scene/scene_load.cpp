@@ -1,5 +1,6 @@
 // Reads the JSON scene file (docs/scene-format.md), checking every key and type, and loads, transforms
 // and cleans the meshes it names.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -19,12 +20,17 @@
 #include "kernels/shared/types.h"
 #include "scene/mtl_load.h"
 #include "scene/obj_load.h"
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
+#include "scene/scene_limits.h"
 #include "scene/texture_load.h"
 
 using nlohmann::json;
 
 namespace {
+
+// The smallest value a number that must be > 0 may have: float's smallest normal number.
+constexpr double kSmallestPositive = std::numeric_limits<float>::min();
 
 // A JSON value with its path in the file, so every error can say where it is.
 struct Node {
@@ -53,26 +59,41 @@ struct Node {
     for (const char* r : required)
       if (!value.contains(r)) fail(std::string("missing key \"") + r + "\"");
   }
+  // The value as JSON writes it, for messages: ", got 1e-300".
+  std::string got() const { return ", got " + value.dump(); }
   double number() const {
     if (!value.is_number()) fail("expected a number");
     double d = value.get<double>();
     // Colours and settings end up as floats, coordinates as floats relative to the camera: 1e39 would
     // become infinity there.
     if (!std::isfinite(d) || std::abs(d) > double(std::numeric_limits<float>::max()))
-      fail("expected a finite number within float range");
+      fail("expected a finite number within float range" + got());
     return d;
   }
   double positive() const {
     double d = number();
-    if (!(d > 0)) fail("expected a number > 0");
+    if (!(d > 0)) fail("expected a number > 0" + got());
     return d;
   }
+  // A setting > 0 that is still > 0 as a float on the device: from float's smallest normal number on
+  // (1.2e-38; below it a float is 0 or a denormal, which devices may flush to 0). Sizes of geometry
+  // need only be > 0: degenerate geometry is handled (tests/robustness_test.cpp).
+  double positive_setting() const {
+    double d = positive();
+    if (!(d >= kSmallestPositive)) fail("expected a number > 0 (at least 1.2e-38)" + got());
+    return d;
+  }
+  // An integer in [lo, hi]. nlohmann keeps what the text says: 8 is an integer, 8.0 and 8e0 are not, and
+  // are refused like 8.5 (docs/scene-format.md: counts are written as integers). The lower bound is
+  // checked for every representation: a non-negative integer is parsed as unsigned.
   uint32_t count(uint32_t lo, uint32_t hi) const {
-    if (!value.is_number_integer()) fail("expected an integer");
-    if (value.is_number_unsigned() ? value.get<uint64_t>() > hi : value.get<int64_t>() < int64_t(lo) ||
-                                                                       value.get<int64_t>() > int64_t(hi))
-      fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return uint32_t(value.get<int64_t>());
+    const std::string expected = "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (!value.is_number()) fail(expected);
+    if (!value.is_number_integer()) fail(expected + " without a fraction or exponent" + got());
+    bool inside = value.is_number_unsigned() ? value.get<uint64_t>() >= lo && value.get<uint64_t>() <= hi
+                                             : value.get<int64_t>() >= int64_t(lo) && value.get<int64_t>() <= int64_t(hi);
+    if (!inside) fail(expected + got());
+    return uint32_t(value.get<uint64_t>());
   }
   bool boolean() const {
     if (!value.is_boolean()) fail("expected true or false");
@@ -117,14 +138,20 @@ uint32_t read_filter(const Node& n, CameraDesc& c) {
     if (n.has("radius") || n.has("sigma")) n.fail("a box filter covers its pixel and takes no radius or sigma");
     return PC_FILTER_BOX;
   }
+  // In pixels, at most kMaxFilterRadius: for sigma, its default radius 3 sigma too.
+  auto pixels = [](const Node& v, double largest) {
+    double d = v.positive_setting();
+    if (d > largest) v.fail("expected at most " + std::to_string(int(largest)) + " pixels" + v.got());
+    return float(d);
+  };
   if (type == "tent") {
     if (n.has("sigma")) n.at("sigma").fail("a tent filter takes no sigma");
-    c.filter_radius = n.has("radius") ? n.at("radius").positive() : 1.0f;
+    c.filter_radius = n.has("radius") ? pixels(n.at("radius"), kMaxFilterRadius) : 1.0f;
     return PC_FILTER_TENT;
   }
   if (type == "gaussian") {
-    c.filter_sigma = n.has("sigma") ? n.at("sigma").positive() : 0.5f;
-    c.filter_radius = n.has("radius") ? n.at("radius").positive() : 3 * c.filter_sigma;
+    c.filter_sigma = n.has("sigma") ? pixels(n.at("sigma"), kMaxFilterRadius / 3) : 0.5f;
+    c.filter_radius = n.has("radius") ? pixels(n.at("radius"), kMaxFilterRadius) : 3 * c.filter_sigma;
     return PC_FILTER_GAUSSIAN;
   }
   n.at("type").fail("unknown filter \"" + type + "\" (expected box, tent or gaussian)");
@@ -142,11 +169,11 @@ CameraDesc read_camera(const Node& n) {
   c.look_at = n.at("look_at").dvec3();
   if (n.has("up")) c.up = n.at("up").dvec3();
   if (n.has("fov_y_degrees")) {
-    c.fov_y_degrees = n.at("fov_y_degrees").positive();
+    c.fov_y_degrees = n.at("fov_y_degrees").positive_setting();
     if (c.fov_y_degrees >= 180) n.at("fov_y_degrees").fail("expected a field of view below 180 degrees");
   }
-  c.width = n.at("width").count(1, 16384);
-  c.height = n.at("height").count(1, 16384);
+  c.width = n.at("width").count(1, kMaxFilmSide);
+  c.height = n.at("height").count(1, kMaxFilmSide);
   glm::dvec3 forward = c.look_at - c.position;
   if (glm::length(forward) == 0) n.fail("position and look_at coincide");
   if (glm::length(glm::cross(forward, c.up)) == 0)
@@ -154,9 +181,15 @@ CameraDesc read_camera(const Node& n) {
   if (type == "thin_lens") {
     if (!n.has("aperture_radius") || !n.has("focus_distance"))
       n.fail("a thin_lens camera needs aperture_radius and focus_distance");
-    c.aperture_radius = float(n.at("aperture_radius").number());
-    if (c.aperture_radius < 0) n.at("aperture_radius").fail("expected a number >= 0");
-    c.focus_distance = n.at("focus_distance").positive();
+    // The lens and the plane in focus lie within the reach of the scene's geometry (kMaxSceneExtent):
+    // farther, squared distances from the ray origins would overflow float.
+    Node aperture = n.at("aperture_radius"), focus = n.at("focus_distance");
+    double a = aperture.number();
+    if (!(a >= 0)) aperture.fail("expected a number >= 0" + aperture.got());
+    if (a > kMaxSceneExtent) aperture.fail("expected at most 1.5e18" + aperture.got());
+    c.aperture_radius = float(a);
+    c.focus_distance = float(focus.positive_setting());
+    if (c.focus_distance > kMaxSceneExtent) focus.fail("expected at most 1.5e18" + focus.got());
   } else if (n.has("aperture_radius") || n.has("focus_distance")) {
     n.fail("aperture_radius and focus_distance need \"type\": \"thin_lens\"");
   }
@@ -183,7 +216,7 @@ float read_roughness(const Node& n, bool allow_smooth) {
 
 float read_ior(const Node& n) {
   double ior = n.number();
-  if (!(ior > 0 && ior <= 10)) n.fail("expected an index of refraction in (0, 10]");
+  if (!(ior >= kSmallestPositive && ior <= 10)) n.fail("expected an index of refraction in (0, 10]" + n.got());
   return float(ior);
 }
 
@@ -202,6 +235,12 @@ uint32_t add_texture_file(SceneDescription& scene, const std::string& file, cons
   } catch (const SceneError& e) {
     throw SceneError(where + ": " + e.what());
   }
+  uint64_t texels = image.texels.size();
+  for (const TextureImage& t : scene.textures) texels += t.texels.size();
+  if (texels > kMaxSceneTexels)
+    throw SceneError(where + ": " + file + ": the scene's textures would have " + std::to_string(texels) +
+                     " texels, more than the largest of " + std::to_string(kMaxSceneTexels) +
+                     " (texel indices are 32-bit on the device)");
   image.wrap = wrap;
   image.reflectance = reflectance;
   if (reflectance) {
@@ -279,7 +318,7 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
     if (n.has("diffuse")) read_albedo_or_texture(n.at("diffuse"), scene, dir, m);
     m.specular = n.has("specular") ? read_albedo(n.at("specular")) : glm::vec3(0);
     double e = n.at("exponent").number();
-    if (!(e > 0 && e <= 1e5)) n.at("exponent").fail("expected an exponent in (0, 100000]");
+    if (!(e >= kSmallestPositive && e <= 1e5)) n.at("exponent").fail("expected an exponent in (0, 100000]" + n.at("exponent").got());
     m.exponent = float(e);
     bool textured = m.color_texture != PC_INVALID;
     glm::vec3 sum = (textured ? texture_max(scene.textures[m.color_texture]) : m.color) + m.specular;
@@ -326,10 +365,11 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
   return m;
 }
 
+// Normalised in double: in float, [3e38, 3e38, 0] has an infinite length and [1e-30, 0, 0] a zero one.
 glm::vec3 read_unit_direction(const Node& n) {
-  glm::vec3 d = n.vec3();
+  glm::dvec3 d = n.dvec3();
   if (glm::length(d) == 0) n.fail("expected a non-zero direction");
-  return glm::normalize(d);
+  return glm::vec3(glm::normalize(d));
 }
 
 LightDesc read_light(const Node& n) {
@@ -350,10 +390,11 @@ LightDesc read_light(const Node& n) {
     l.direction = read_unit_direction(n.at("direction"));
     l.emission = n.at("intensity").color();
     double outer = n.at("outer_angle_degrees").number();
-    if (!(outer > 0 && outer <= 180)) n.at("outer_angle_degrees").fail("expected an angle in (0, 180] degrees");
+    if (!(outer >= kSmallestPositive && outer <= 180))
+      n.at("outer_angle_degrees").fail("expected an angle in (0, 180] degrees" + n.at("outer_angle_degrees").got());
     double inner = n.has("inner_angle_degrees") ? n.at("inner_angle_degrees").number() : outer;
     if (!(inner >= 0 && inner <= outer))
-      n.at("inner_angle_degrees").fail("expected an angle in [0, outer_angle_degrees]");
+      n.at("inner_angle_degrees").fail("expected an angle in [0, outer_angle_degrees]" + n.at("inner_angle_degrees").got());
     l.cos_outer = float(std::cos(outer * M_PI / 180));
     l.cos_inner = float(std::cos(inner * M_PI / 180));
   } else if (type == "directional") {
@@ -370,7 +411,7 @@ LightDesc read_light(const Node& n) {
       l.emission = n.at("radiance").color();
     } else {
       l.emission = glm::vec3(n.has("scale") ? float(n.at("scale").number()) : 1.0f);
-      if (l.emission.x < 0) n.at("scale").fail("expected a number >= 0");
+      if (l.emission.x < 0) n.at("scale").fail("expected a number >= 0" + n.at("scale").got());
     }
   } else {
     n.at("type").fail("unknown light type \"" + type + "\" (expected point, spot, directional or environment)");
@@ -436,12 +477,12 @@ void check_inline_triangles(const Node& positions, const Node& indices, const No
     std::vector<uint32_t> poly;
     for (int k = 0; k < 3; ++k) {
       Node i = f.at(k);
-      if (!i.value.is_number_integer()) i.fail("expected an integer vertex index");
-      int64_t idx = i.value.get<int64_t>();
-      if (idx < 0 || idx >= int64_t(soup.positions.size()))
-        i.fail("vertex index " + std::to_string(idx) + " out of range (" +
-               std::to_string(soup.positions.size()) + " positions)");
-      poly.push_back(uint32_t(idx));
+      if (!i.value.is_number_integer()) i.fail("expected an integer vertex index" + (i.value.is_number() ? i.got() : ""));
+      // Unsigned when >= 0 (nlohmann), so that 2^64 - 1 is not read as -1.
+      if (!i.value.is_number_unsigned() || i.value.get<uint64_t>() >= soup.positions.size())
+        i.fail("vertex index " + i.value.dump() + " out of range (" + std::to_string(soup.positions.size()) +
+               " positions)");
+      poly.push_back(uint32_t(i.value.get<uint64_t>()));
     }
     if (uvs) soup.uvs.push_back({vertex_uvs[poly[0]], vertex_uvs[poly[1]], vertex_uvs[poly[2]]});
     soup.polygons.push_back(poly);
@@ -582,6 +623,93 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   return s;
 }
 
+// Whether anything emits: an emitting sphere, an emitting triangle left after clean-up (emission or an
+// MTL material's Ke), or a point, spot, directional or environment light whose emission (and map) is not
+// all zero. What the device scene then drops as well (zero-area emitters, a directional light in a scene
+// of no size) is counted by `pathcl info`.
+bool has_light(const SceneDescription& scene) {
+  for (const ShapeDesc& s : scene.shapes)
+    if (shape_emits(s) && (s.is_sphere || !s.mesh.triangles.empty())) return true;
+  for (const LightDesc& l : scene.lights) {
+    glm::vec3 e = l.emission;
+    if (l.texture != PC_INVALID) e *= texture_max(scene.textures[l.texture]);
+    if (e != glm::vec3(0)) return true;
+  }
+  return false;
+}
+
+// ---- The JSON text ----------------------------------------------------------------------------------
+// nlohmann keeps the last of two equal keys in an object, and neither the DOM nor its SAX interface say
+// where a value is. So one pass over the text finds what needs a line: keys given twice in one object,
+// numbers beyond double range (which nlohmann reports without a position) and nesting deeper than any
+// scene needs. It runs on text nlohmann has parsed, or parsed up to the bad number, so it need not check
+// the syntax, only never read past the end.
+
+// Far deeper than any scene needs (shapes[0].transform.matrix[0][0] is 5 levels); it bounds what the
+// scan keeps per level.
+constexpr size_t kMaxJsonDepth = 64;
+
+struct TextFrame {
+  bool object = false;
+  bool expect_key = true;                         // objects: the next string is a key
+  size_t index = 0;                               // arrays: the current element
+  std::string key;                                // objects: the current key
+  std::map<std::string, size_t> key_lines;        // objects: each key and its line
+};
+
+// The JSON path of the current value, as Node writes it: "shapes[0].radius".
+std::string text_path(const std::vector<TextFrame>& frames) {
+  std::string path;
+  for (const TextFrame& f : frames)
+    path += f.object ? (path.empty() ? "" : ".") + f.key : "[" + std::to_string(f.index) + "]";
+  return path.empty() ? "(top level)" : path;
+}
+
+void check_json_text(const std::string& file, const std::string& text) {
+  std::vector<TextFrame> frames;
+  size_t line = 1;
+  auto fail = [&](const std::string& what) {
+    throw SceneError(file + ":" + std::to_string(line) + ": " + text_path(frames) + ": " + what);
+  };
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '{' || c == '[') {
+      if (frames.size() == kMaxJsonDepth) fail("nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+      frames.emplace_back().object = c == '{';
+    } else if ((c == '}' || c == ']') && !frames.empty()) {
+      frames.pop_back();
+    } else if (c == ',' && !frames.empty()) {
+      frames.back().expect_key = true;
+      ++frames.back().index;
+    } else if (c == '"') {
+      size_t end = i + 1;  // the closing quote; no raw newline can come before it in JSON
+      while (end < text.size() && text[end] != '"') end += text[end] == '\\' ? 2 : 1;
+      if (end >= text.size()) return;
+      if (!frames.empty() && frames.back().object && frames.back().expect_key) {
+        TextFrame& f = frames.back();
+        f.expect_key = false;
+        try {
+          f.key = json::parse(text.substr(i, end - i + 1)).get<std::string>();  // escapes decoded as nlohmann does
+        } catch (const json::exception&) {
+          return;  // not valid JSON: nlohmann says where
+        }
+        auto [first, added] = f.key_lines.emplace(f.key, line);
+        if (!added)
+          fail("duplicate key \"" + f.key + "\" (first at line " + std::to_string(first->second) + ")");
+      }
+      i = end;
+    } else if (c == '-' || (c >= '0' && c <= '9')) {
+      size_t end = std::min(text.find_first_not_of("+-.0123456789eE", i), text.size());
+      std::string number = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(number.c_str(), nullptr)))
+        fail("malformed JSON: the number " + number + " is beyond the range of a double");
+      i = end - 1;
+    }
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -600,19 +728,35 @@ bool sampler_from_name(const std::string& name, uint32_t* sampler) {
 const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
 
 SceneDescription load_scene(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the scene file");
+  const std::string text = read_input_file(path, kSceneInput);
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw SceneError(path + ": the file is empty, expected a JSON scene");
+  if (text.rfind("\xff\xfe", 0) == 0 || text.rfind("\xfe\xff", 0) == 0)
+    throw SceneError(path + ": the file is UTF-16, expected UTF-8 JSON");
   json root;
   try {
-    root = json::parse(in);
-  } catch (const json::exception& e) {
-    // nlohmann's message names the line and column. Not only parse_error: a number too large for a
-    // double (1e400) is an out_of_range error.
-    throw SceneError(path + ": malformed JSON: " + e.what());
+    root = json::parse(text);  // skips a UTF-8 byte order mark
+  } catch (const json::parse_error& e) {
+    // "[json.exception.parse_error.101] parse error at line 5, column 1: syntax error ...": our form, with
+    // nlohmann's description of what is wrong.
+    std::string what = e.what();
+    size_t line = 0, column = 0, at = what.find("at line ");
+    if (at != std::string::npos) std::sscanf(what.c_str() + at, "at line %zu, column %zu", &line, &column);
+    size_t colon = what.find(": ", at == std::string::npos ? 0 : at);
+    throw SceneError(path + (line > 0 ? ":" + std::to_string(line) + ":" + std::to_string(column) : "") +
+                     ": malformed JSON: " + (colon == std::string::npos ? "syntax error" : what.substr(colon + 2)));
+  } catch (const json::exception&) {
+    // A number beyond double range (out_of_range), reported without a position: the scan finds it.
+    check_json_text(path, text);
+    throw SceneError(path + ": malformed JSON: a number is beyond the range of a double");
   }
+  check_json_text(path, text);
   SceneDescription scene;
   scene.path = path;
   Node top{path, root, ""};
+  if (!root.is_object())
+    top.fail(std::string("expected an object with camera, materials and shapes, got ") + (root.is_array() ? "an " : "a ") +
+             root.type_name());
   top.expect_object({"camera", "materials", "shapes", "lights", "render"}, {"camera", "materials", "shapes"});
   scene.camera = read_camera(top.at("camera"));
 
@@ -630,6 +774,16 @@ SceneDescription load_scene(const std::string& path) {
     bool environment = false;
     for (const Node& l : top.at("lights").array()) {
       LightDesc light = read_light(l);
+      // As for geometry (kMaxSceneExtent): farther from the camera, squared distances to the light would
+      // overflow float on the device.
+      glm::dvec3 d = glm::abs(light.position - scene.camera.position);
+      bool positioned = light.type == PC_LIGHT_POINT || light.type == PC_LIGHT_SPOT;
+      if (positioned && std::max({d.x, d.y, d.z}) > kMaxSceneExtent) {
+        char what[160];
+        std::snprintf(what, sizeof what, "the light is %g from the camera, beyond the largest distance of %g",
+                      std::max({d.x, d.y, d.z}), kMaxSceneExtent);
+        l.at("position").fail(what);
+      }
       if (light.type == PC_LIGHT_ENVIRONMENT) {
         if (environment) l.fail("a scene has at most one environment light");
         environment = true;
@@ -642,12 +796,15 @@ SceneDescription load_scene(const std::string& path) {
   if (top.has("render")) {
     Node r = top.at("render");
     r.expect_object({"spp", "max_depth", "seed", "sampler"});
-    if (r.has("spp")) scene.render.spp = r.at("spp").count(1, 1u << 24);
-    if (r.has("max_depth")) scene.render.max_depth = r.at("max_depth").count(0, 1024);
+    if (r.has("spp")) scene.render.spp = r.at("spp").count(1, kMaxSpp);
+    if (r.has("max_depth")) scene.render.max_depth = r.at("max_depth").count(0, kMaxDepth);
     if (r.has("seed")) scene.render.seed = r.at("seed").count(0, 0xffffffffu);
     if (r.has("sampler") && !sampler_from_name(r.at("sampler").string(), &scene.render.sampler))
       r.at("sampler").fail("unknown sampler \"" + r.at("sampler").string() +
                            "\" (expected independent, stratified, sobol or halton)");
   }
+  if (!has_light(scene))
+    scene.warnings.push_back(path + ": the scene has no light (no shape or MTL material emits, and no entry of "
+                             "\"lights\" emits): it renders black");
   return scene;
 }

@@ -13,9 +13,20 @@
 #include <ImfRgbaFile.h>
 #include <stb_image.h>
 
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
+#include "scene/scene_limits.h"
 
 namespace {
+
+// Refuses images beyond kMaxTextureTexels before they are decoded.
+void check_size(const std::string& path, int64_t width, int64_t height) {
+  if (width <= 0 || height <= 0) throw SceneError(path + ": the image has no texels");
+  if (width > int64_t(kMaxTextureTexels) || height > int64_t(kMaxTextureTexels) ||
+      uint64_t(width) * uint64_t(height) > kMaxTextureTexels)
+    throw SceneError(path + ": an image of " + std::to_string(width) + " x " + std::to_string(height) +
+                     " texels is larger than the largest of " + std::to_string(kMaxTextureTexels) + " texels");
+}
 
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
@@ -26,8 +37,9 @@ TextureImage load_exr(const std::string& path) {
   try {
     Imf::InputFile file(path.c_str());
     Imath::Box2i dw = file.header().dataWindow();
-    long width = dw.max.x - dw.min.x + 1, height = dw.max.y - dw.min.y + 1;
-    if (width <= 0 || height <= 0 || width * height > (1l << 28)) throw SceneError(path + ": unsupported image size");
+    // In 64 bits: the window's corners are ints, and its width can overflow one.
+    int64_t width = int64_t(dw.max.x) - dw.min.x + 1, height = int64_t(dw.max.y) - dw.min.y + 1;
+    check_size(path, width, height);
     image.width = uint32_t(width);
     image.height = uint32_t(height);
     image.texels.reserve(size_t(width) * height);
@@ -58,17 +70,21 @@ TextureImage load_exr(const std::string& path) {
       }
   } catch (const SceneError&) {
     throw;
-  } catch (const std::exception& e) {
-    throw SceneError(path + ": cannot read the EXR file: " + e.what());
+  } catch (const std::exception&) {
+    // OpenEXR's own message names the file again and its internals ("Cannot read image file ...").
+    throw SceneError(path + ": cannot decode the OpenEXR image (corrupt or truncated)");
   }
   return image;
 }
 
 TextureImage load_8bit(const std::string& path) {
   int width = 0, height = 0, channels = 0;
+  // The header alone first: stb_image would decode anything it can allocate.
+  if (stbi_info(path.c_str(), &width, &height, &channels)) check_size(path, width, height);
   std::unique_ptr<unsigned char, void (*)(void*)> data(stbi_load(path.c_str(), &width, &height, &channels, 3),
                                                        stbi_image_free);
-  if (!data) throw SceneError(path + ": cannot read the image: " + stbi_failure_reason());
+  // stb_image's reasons are terse internals ("bad zlib header"), not for users.
+  if (!data) throw SceneError(path + ": cannot decode the PNG or JPEG image (corrupt or truncated)");
   TextureImage image;
   image.width = uint32_t(width);
   image.height = uint32_t(height);
@@ -81,19 +97,55 @@ TextureImage load_8bit(const std::string& path) {
   return image;
 }
 
+// Image formats pathcl does not read (stb_image could read some of them, but they are neither the 8-bit
+// sRGB nor the linear float images the format defines), by how their files begin and by extension.
+struct ImageFormat {
+  const char* name;
+  std::vector<std::string> extensions, starts;
+};
+const ImageFormat kOtherImageFormats[] = {
+    {"GIF", {".gif"}, {"GIF87a", "GIF89a"}},
+    {"BMP", {".bmp"}, {"BM"}},
+    {"TIFF", {".tif", ".tiff"}, {std::string("II*\0", 4), std::string("MM\0*", 4)}},
+    {"WebP", {".webp"}, {}},
+    {"Radiance HDR", {".hdr", ".pic"}, {"#?RADIANCE", "#?RGBE"}},
+    {"Photoshop", {".psd"}, {"8BPS"}},
+    {"DDS", {".dds"}, {"DDS "}},
+    {"KTX", {".ktx", ".ktx2"}, {"\xabKTX"}},
+    {"PFM", {".pfm"}, {"PF\n", "Pf\n"}},
+    {"TGA", {".tga"}, {}},
+    {"PNM", {".ppm", ".pgm", ".pnm", ".pbm"}, {}},
+    {"JPEG 2000", {".jp2", ".j2k"}, {std::string("\0\0\0\x0cjP  ", 8)}},
+    {"HEIF", {".heic", ".heif", ".avif"}, {}},
+};
+
+// Names the format of an image that is not PNG, JPEG or OpenEXR, by content, then by extension.
+[[noreturn]] void refuse_image_format(const std::string& path, const std::string& head) {
+  const char* accepted = " (expected PNG, JPEG or OpenEXR: .png, .jpg, .jpeg or .exr)";
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (const ImageFormat& f : kOtherImageFormats)
+    for (const std::string& s : f.starts)
+      if (head.rfind(s, 0) == 0) throw SceneError(path + ": " + f.name + " images are not supported" + accepted);
+  for (const ImageFormat& f : kOtherImageFormats)
+    for (const std::string& e : f.extensions)
+      if (ext == e) throw SceneError(path + ": " + f.name + " images are not supported" + accepted);
+  throw SceneError(path + ": unrecognised image format" + accepted);
+}
+
 }  // namespace
 
 TextureImage load_texture_image(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw SceneError(path + ": cannot open the image file");
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string head = read_input_file(path, kImageInput, 64);
+  auto starts = [&](const char* magic) { return head.rfind(magic, 0) == 0; };
   TextureImage image;
-  if (ext == ".exr")
+  // The format is told by the content, which is what the readers go by, not by the name.
+  if (starts("\x76\x2f\x31\x01"))
     image = load_exr(path);
-  else if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
+  else if (starts("\x89PNG\r\n\x1a\n") || starts("\xff\xd8\xff"))
     image = load_8bit(path);
   else
-    throw SceneError(path + ": unsupported image format (expected .png, .jpg, .jpeg or .exr)");
+    refuse_image_format(path, head);
   for (const glm::vec4& t : image.texels)
     if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z)) || t.x < 0 || t.y < 0 || t.z < 0)
       throw SceneError(path + ": texels must be finite and non-negative");

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/image_io.h"
+#include "scene/scene_error.h"
 #include "scene/texture_load.h"
 #include "test_support.h"
 
@@ -182,6 +183,62 @@ TEST(TextureFile, ExrReflectanceAboveOneIsClampedWithAWarningButAnEnvironmentMap
   EXPECT_NE(scene.warnings[0].find("materials.m.reflectance.texture"), std::string::npos) << scene.warnings[0];
   EXPECT_NE(scene.warnings[0].find("2 texels above 1 clamped to 1"), std::string::npos) << scene.warnings[0];
   EXPECT_EQ(scene.materials[0].color, glm::vec3(1));
+}
+
+// A PNG whose header claims width x height (its pixel data are missing: only the header is read).
+std::string png_header_only(const std::string& name, uint32_t width, uint32_t height) {
+  auto be32 = [](uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+  };
+  // stb_image does not check CRCs, so they are left 0.
+  std::string ihdr = be32(13) + "IHDR" + be32(width) + be32(height) + std::string("\x08\x02\x00\x00\x00", 5) + be32(0);
+  return write_temp_file(name, std::string("\x89PNG\r\n\x1a\n", 8) + ihdr + be32(0) + "IEND" + be32(0));
+}
+
+// Images beyond 2^28 texels (4 GiB as float4 texels) are refused from their header, before decoding.
+TEST(TextureFile, ImagesBeyondTheTexelLimitAreRefusedFromTheirHeader) {
+  std::string path = png_header_only("huge.png", 16384, 16385);
+  try {
+    load_texture_image(path);
+    ADD_FAILURE() << "expected a SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path + ": an image of 16384 x 16385 texels is larger than the largest of 268435456 texels");
+  }
+}
+
+// Images are recognised by content: another format is named, with the formats accepted; an undecodable
+// file is corrupt or truncated, in our words rather than stb_image's ("unknown image type", "bad IHDR
+// len") or OpenEXR's.
+TEST(TextureFile, OtherFormatsAndBrokenFilesAreNamed) {
+  std::string png = read_text_file(write_temp_png("formats/real.png", 2, 1, {255, 0, 0, 0, 255, 0}));
+  const std::string accepted = " (expected PNG, JPEG or OpenEXR: .png, .jpg, .jpeg or .exr)";
+  struct Case {
+    std::string file, content, expected;  // expected "" = it loads
+  } cases[] = {
+      {"anim.gif", "GIF89a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
+      {"gif-inside.png", "GIF87a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
+      {"sky.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "Radiance HDR images are not supported" + accepted},
+      {"old.tga", std::string("\x00\x00\x02\x00", 4), "TGA images are not supported" + accepted},
+      {"scan.tiff", std::string("II*\x00", 4), "TIFF images are not supported" + accepted},
+      {"notes.png", "these are not pixels", "unrecognised image format" + accepted},
+      {"empty.png", "", "unrecognised image format" + accepted},
+      {"lfs.png", "version https://git-lfs.github.com/spec/v1\noid sha256:00\nsize 1\n",
+       "looks like a Git LFS pointer, not an image (run git lfs pull)"},
+      {"truncated.png", png.substr(0, 40), "cannot decode the PNG or JPEG image (corrupt or truncated)"},
+      {"truncated.exr", std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8), "cannot decode the OpenEXR image (corrupt or truncated)"},
+      {"png-inside.jpg", png, ""},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("formats/" + c.file, c.content);
+    std::string error;
+    try {
+      load_texture_image(path);
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    EXPECT_EQ(error, c.expected.empty() ? "" : path + ": " + c.expected) << c.file;
+  }
 }
 
 // ---- Rendering -------------------------------------------------------------------------------------
