@@ -155,7 +155,8 @@ void warn_about_clean_up(const LoadedScene& s) {
                    "positive volume instead of by CGAL's orient_to_bound_a_volume\n", shape.label.c_str());
   }
   if (s.device.skipped_zero_area_emitters > 0)
-    std::fprintf(stderr, "warning: %u zero-area emitters are not lights\n", s.device.skipped_zero_area_emitters);
+    std::fprintf(stderr, "warning: %u zero-area emitters are not lights%s\n", s.device.skipped_zero_area_emitters,
+                 s.device.lights.empty() ? ", and the scene has no other light: it renders black" : "");
 }
 
 // The names of the devices that rendered, joined.

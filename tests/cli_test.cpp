@@ -34,6 +34,7 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
       {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
       {scene("tiny.json") + " --device 99", "no device with that index"},
       {scene("no-such-scene.json"), "cannot open the scene file"},
+      {std::string(PATHCL_TEST_SCENES) + "/meshes", "meshes: is a directory, expected a JSON scene file"},
   };
   for (const Case& c : cases) {
     std::string out = temp_dir() + "/bad.exr", png = temp_dir() + "/bad.png", stats = temp_dir() + "/bad.json";
@@ -269,6 +270,20 @@ TEST(Cli, QuietKeepsTheWarnings) {
   ASSERT_EQ(run_pathcl("render " + file + " --spp 1 -q -o " + out, &err), 0) << err;
   EXPECT_NE(err.find("warning: shapes[0]"), std::string::npos) << err;
   EXPECT_EQ(err.find("spp in"), std::string::npos) << err;
+}
+
+// An emitter whose area is 0 in float (1e-30 sides) is no light; when it was the only one, say that the
+// image will be black (the scene file's own no-light warning cannot see it: the file has an emitter).
+TEST(Cli, OnlyZeroAreaEmittersWarnThatTheSceneIsBlack) {
+  std::string file = write_temp_file("zero-area.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0],
+    "width": 8, "height": 8}, "materials": {"m": {"type": "diffuse"}},
+    "shapes": [{"type": "triangles", "positions": [[0,0,0], [1e-30,0,0], [0,1e-30,0]], "indices": [[0,1,2]],
+                "material": "m", "emission": [1,1,1]}, {"type": "sphere", "radius": 1, "material": "m"}]})");
+  std::string err;
+  ASSERT_EQ(run_pathcl("render " + file + " --spp 1 -q -o " + temp_dir() + "/zero-area.exr", &err), 0) << err;
+  EXPECT_NE(err.find("warning: 1 zero-area emitters are not lights, and the scene has no other light: it renders black"),
+            std::string::npos)
+      << err;
 }
 
 TEST(Cli, VersionNamesTheRevisionAndThePlatforms) {
