@@ -133,6 +133,9 @@ TEST(FuzzRegression, RenderFindingsRender) {
   // GGX at the smallest roughness (alpha 1e-4): 1 + (alpha^2 - 1) cos^2 rounded to 0 for normals within
   // 1e-4 rad of the surface normal, D became infinite and the sample weight infinity / infinity = NaN.
   EXPECT_EQ(render_outcome(dir + "/render-rough-conductor-smooth-nan.scene"), "rendered");
+  // A light sampled from 1e18 away (inside a sphere of radius 1e18) has a solid-angle pdf of about 1e36:
+  // the power heuristic's squares overflowed and its weight was infinity / infinity = NaN.
+  EXPECT_EQ(render_outcome(dir + "/render-mis-pdf-overflow.scene"), "rendered");
 }
 
 // The messages of the inputs whose fix was to reject them.
