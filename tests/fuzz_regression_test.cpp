@@ -136,6 +136,9 @@ TEST(FuzzRegression, RenderFindingsRender) {
   // A light sampled from 1e18 away (inside a sphere of radius 1e18) has a solid-angle pdf of about 1e36:
   // the power heuristic's squares overflowed and its weight was infinity / infinity = NaN.
   EXPECT_EQ(render_outcome(dir + "/render-mis-pdf-overflow.scene"), "rendered");
+  // A conductor channel with "specular": 0 (eta 1, k 0): the Fresnel term, a difference of two equal
+  // numbers there, came out slightly negative, and so did the radiance.
+  EXPECT_EQ(render_outcome(dir + "/render-conductor-fresnel-negative.scene"), "rendered");
 }
 
 // The messages of the inputs whose fix was to reject them.
