@@ -22,8 +22,7 @@
 // Findings (abort, so that libFuzzer keeps the input): crashes and sanitizer reports; any exception but
 // SceneError and UsageError (the exit-2 class of `pathcl`), RuntimeFailure included, except a reported
 // out-of-memory (fuzz::reported_out_of_memory); a film of the wrong size or spp or with a value that is
-// not finite; NaN, infinite or negative samples counted by the kernel (fuzz::render_problem). Inputs
-// whose scene is not JSON are kept out of the corpus.
+// not finite; NaN, infinite or negative samples counted by the kernel (fuzz::render_problem).
 //
 // The OpenCL context lives for the whole process with keep_programs set (runtime/device.h), so each
 // specialised kernel is built (or loaded from the PATHCL_KERNEL_CACHE binary cache) once per process and
@@ -35,6 +34,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <iterator>
@@ -108,6 +108,23 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The last inputs that rendered: the mutator starts from one of them instead of an input whose scene is
+// not JSON (libFuzzer keeps those in the corpus for the JSON parser's error paths, and a byte-level
+// mutation can make one at any step of a chain of mutations).
+std::vector<std::string> rendered_inputs;
+size_t next_rendered = 0;
+constexpr size_t kRenderedInputs = 64;
+
+void remember_rendered(const uint8_t* data, size_t size) {
+  std::string input(reinterpret_cast<const char*>(data), size);
+  if (rendered_inputs.size() < kRenderedInputs) {
+    rendered_inputs.push_back(std::move(input));
+  } else {
+    rendered_inputs[next_rendered] = std::move(input);
+    next_rendered = (next_rendered + 1) % kRenderedInputs;
+  }
+}
+
 [[noreturn]] void finding(const std::string& what) {
   std::fprintf(stderr, "pathcl fuzz_render: %s\n", what.c_str());
   std::abort();
@@ -153,12 +170,26 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" size_t LLVMFuzzerMutate(uint8_t* data, size_t size, size_t max_size);
 
-// Nine mutations in ten change the scene's JSON structurally (fuzz/scene_mutator.h), the tenth (and any
-// whose scene is not JSON) is libFuzzer's own, on the bytes of the scene and its files. Crossing over
-// swaps members of two scenes.
+// Most mutations change the scene's JSON structurally (fuzz/scene_mutator.h); one in six is libFuzzer's
+// own on the bytes of the files after the scene (OBJ, MTL), one in twenty on the bytes of the whole input.
+// An input whose scene is not JSON is replaced by one that rendered lately, three times in four, before
+// the scene is changed. Crossing over swaps members of two scenes.
 extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max_size, unsigned seed) {
-  if (seed % 10 != 0)
-    if (size_t n = fuzz::mutate_scene(data, size, max_size, seed / 10)) return n;
+  const unsigned choice = seed % 60;
+  seed /= 60;
+  if (choice >= 13) {
+    if (size_t n = fuzz::mutate_scene(data, size, max_size, seed)) return n;
+    if (!rendered_inputs.empty() && seed % 4 != 0) {
+      const std::string& other = rendered_inputs[(seed / 4) % rendered_inputs.size()];
+      if (other.size() <= max_size) {
+        std::memcpy(data, other.data(), other.size());
+        if (size_t n = fuzz::mutate_scene(data, other.size(), max_size, seed)) return n;
+        return other.size();
+      }
+    }
+  }
+  if (choice >= 3)
+    if (size_t n = fuzz::mutate_files(data, size, max_size, LLVMFuzzerMutate)) return n;
   return LLVMFuzzerMutate(data, size, max_size);
 }
 
@@ -204,18 +235,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     const std::string problem = fuzz::render_problem(result, device_scene, options);
     if (!problem.empty()) finding(problem);
+    remember_rendered(data, size);
     if (verbose())
       std::fprintf(stderr, "pathcl fuzz_render: rendered %ux%u, features 0x%x, kernel %s in %.1f ms\n",
                    result.film.width, result.film.height, device_scene.features,
                    result.kernel_from_cache ? "cached" : "built", result.kernel_build_ms);
   } catch (const SceneError& e) {
     if (verbose()) std::fprintf(stderr, "pathcl fuzz_render: %s: SceneError: %s\n", stage.c_str(), e.what());
-    // Not JSON: the JSON parser's paths are fuzz_scene_json's to explore. Kept out of the corpus (-1), so
-    // that the structural mutations have scenes to work on.
-    if (std::string_view(e.what()).find(": malformed JSON: ") != std::string_view::npos) {
-      counts.load_s += seconds_since(start);
-      return -1;
-    }
   } catch (const UsageError& e) {
     if (verbose()) std::fprintf(stderr, "pathcl fuzz_render: %s: UsageError: %s\n", stage.c_str(), e.what());
   } catch (const RuntimeFailure& e) {

@@ -73,6 +73,18 @@ inline std::vector<InputFile> split_render_input(std::string_view input) {
   return files;
 }
 
+// Where the scene of an input ends: at the newline before its first separator line, as split_render_input
+// splits it (a separator on the first line, an empty scene, is not looked for).
+inline size_t scene_end(std::string_view input) {
+  for (size_t end = 0;; ++end) {
+    end = input.find("\n--- ", end);
+    if (end == std::string_view::npos) return input.size();
+    size_t line_end = input.find('\n', end + 1);
+    if (valid_input_file_name(input.substr(end + 5, (line_end == std::string_view::npos ? input.size() : line_end) - end - 5)))
+      return end;
+  }
+}
+
 // m.obj, tex.png and env.exr, made once per process (in a directory of their own).
 inline const std::vector<InputFile>& fixed_render_files() {
   static const std::vector<InputFile> files = [] {

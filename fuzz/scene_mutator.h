@@ -3,7 +3,7 @@
 // written out again, the files after it untouched. Byte-level mutations of the text almost always make
 // JSON that the loader refuses (3 inputs in 1000 rendered with them alone); these keep it well formed and
 // near the format, with values at the edges of what the loader accepts: about two in three still load.
-// fuzz/fuzz_render.cpp uses it for nine mutations in ten and to cross two inputs over.
+// fuzz/fuzz_render.cpp uses it for most mutations and to cross two inputs over.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -258,15 +258,12 @@ inline void mutate_once(Json& scene, Rng& rng) {
   }
 }
 
-// Where the scene of an input ends: at the newline before its first separator line (split_render_input).
-inline size_t scene_end(std::string_view input) {
-  for (size_t end = 0;; ++end) {
-    end = input.find("\n--- ", end);
-    if (end == std::string_view::npos) return input.size();
-    size_t line_end = input.find('\n', end + 1);
-    if (valid_input_file_name(input.substr(end + 5, (line_end == std::string_view::npos ? input.size() : line_end) - end - 5)))
-      return end;
-  }
+// Where the text of the first file begins (after its separator line), or the size if there is none.
+inline size_t files_begin(std::string_view input) {
+  const size_t end = scene_end(input);
+  if (end == input.size()) return end;
+  const size_t line_end = input.find('\n', end + 1);
+  return line_end == std::string_view::npos ? input.size() : line_end + 1;
 }
 
 // The scene of an input as JSON (discarded if it is not).
@@ -312,9 +309,19 @@ inline size_t mutate_scene(uint8_t* data, size_t size, size_t max_size, unsigned
   return write_input(scene, input.substr(scene_end(input)), data, max_size);
 }
 
+// The first file's separator line stays, so that a byte-level mutation of the files (with libFuzzer's
+// LLVMFuzzerMutate, passed as mutate) leaves the scene as it is. 0 where the input has no file.
+template <class Mutate>
+size_t mutate_files(uint8_t* data, size_t size, size_t max_size, Mutate mutate) {
+  using namespace scene_mutator_detail;
+  const size_t begin = files_begin(std::string_view(reinterpret_cast<const char*>(data), size));
+  if (begin >= size || begin >= max_size) return 0;
+  return begin + mutate(data + begin, size - begin, max_size - begin);
+}
+
 // Crosses two inputs: a member of the second scene (a material, a shape, a camera, a colour, ...) replaces
-// a member of the same name in the first, whose files are kept (or, one time in four, the second's
-// taken). 0 where a scene is not JSON, no member matches or the result does not fit in max_size.
+// a member of the same name in the first, whose files are kept and joined by the second's. 0 where a
+// scene is not JSON, no member matches or the result does not fit in max_size.
 inline size_t cross_scenes(const uint8_t* data1, size_t size1, const uint8_t* data2, size_t size2, uint8_t* out,
                            size_t max_size, unsigned seed) {
   using namespace scene_mutator_detail;
@@ -332,7 +339,13 @@ inline size_t cross_scenes(const uint8_t* data1, size_t size1, const uint8_t* da
     if (n == name) same.push_back(v);
   if (same.empty()) return 0;
   *same[pick(rng, same.size())] = *value;
-  const std::string_view files = pick(rng, 4) ? a.substr(scene_end(a)) : b.substr(scene_end(b));
+  // The first input's files, then those of the second that the first lacks (a shape taken over may name
+  // them).
+  std::string files(a.substr(scene_end(a)));
+  const std::vector<InputFile> mine = split_render_input(a), theirs = split_render_input(b);
+  for (size_t i = 1; i < theirs.size(); ++i)
+    if (std::none_of(mine.begin() + 1, mine.end(), [&](const InputFile& f) { return f.name == theirs[i].name; }))
+      files += "\n--- " + theirs[i].name + "\n" + theirs[i].text;
   return write_input(first, files, out, max_size);
 }
 
