@@ -141,6 +141,21 @@ TEST(FuzzRegression, RenderFindingsRender) {
   EXPECT_EQ(render_outcome(dir + "/render-conductor-fresnel-negative.scene"), "rendered");
 }
 
+// The render findings whose fix is in the loader: rejected, with the place and what was expected.
+TEST(FuzzRegression, RenderFindingsRejectedWithAMessage) {
+  const std::string dir = regressions();
+  // nlohmann parses every non-negative integer as unsigned, and only the upper bound was checked for it:
+  // a 16 x 0 film reached clCreateBuffer (CL_INVALID_BUFFER_SIZE), and spp 0 rendered an empty film.
+  EXPECT_NE(render_outcome(dir + "/render-camera-height-zero.scene").find("camera.height: expected an integer in [1, 16384]"),
+            std::string::npos);
+  EXPECT_NE(render_outcome(dir + "/render-spp-zero.scene").find("render.spp: expected an integer in [1, 16777216]"),
+            std::string::npos);
+  // An emission of 3.4e38: light sampling made infinite samples, and a radiance above 1.8e19 seen directly
+  // overflows the film's sum of squares.
+  EXPECT_NE(render_outcome(dir + "/render-emission-overflow.scene").find("shapes[0].emission: expected values of at most 1e12"),
+            std::string::npos);
+}
+
 // The messages of the inputs whose fix was to reject them.
 TEST(FuzzRegression, RejectedWithAMessage) {
   const std::string dir = regressions();
