@@ -30,6 +30,7 @@
 // (short runs: scripts/fuzz). The device is $PATHCL_TEST_DEVICE, by default "pthread" (PoCL's CPU
 // device). PATHCL_FUZZ_VERBOSE=1 prints what became of each input (for looking at a corpus).
 #include <csignal>
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -112,17 +113,19 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 // not JSON (libFuzzer keeps those in the corpus for the JSON parser's error paths, and a byte-level
 // mutation can make one at any step of a chain of mutations).
 std::vector<std::string> rendered_inputs;
-size_t next_rendered = 0;
+size_t next_rendered = 0, remembered = 0;
 constexpr size_t kRenderedInputs = 64;
 
+// Copied into strings whose capacity is allocated up front: an input that allocates more than it frees
+// makes libFuzzer run it again and look for leaks, which costs a scan of the whole heap.
 void remember_rendered(const uint8_t* data, size_t size) {
-  std::string input(reinterpret_cast<const char*>(data), size);
-  if (rendered_inputs.size() < kRenderedInputs) {
-    rendered_inputs.push_back(std::move(input));
-  } else {
-    rendered_inputs[next_rendered] = std::move(input);
-    next_rendered = (next_rendered + 1) % kRenderedInputs;
+  if (rendered_inputs.empty()) {
+    rendered_inputs.resize(kRenderedInputs);
+    for (std::string& s : rendered_inputs) s.reserve(fuzz::kMaxInputBytes);
   }
+  rendered_inputs[next_rendered].assign(reinterpret_cast<const char*>(data), size);
+  next_rendered = (next_rendered + 1) % kRenderedInputs;
+  remembered = std::min(remembered + 1, kRenderedInputs);
 }
 
 [[noreturn]] void finding(const std::string& what) {
@@ -179,8 +182,8 @@ extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max
   seed /= 60;
   if (choice >= 13) {
     if (size_t n = fuzz::mutate_scene(data, size, max_size, seed)) return n;
-    if (!rendered_inputs.empty() && seed % 4 != 0) {
-      const std::string& other = rendered_inputs[(seed / 4) % rendered_inputs.size()];
+    if (remembered > 0 && seed % 4 != 0) {
+      const std::string& other = rendered_inputs[(seed / 4) % remembered];
       if (other.size() <= max_size) {
         std::memcpy(data, other.data(), other.size());
         if (size_t n = fuzz::mutate_scene(data, other.size(), max_size, seed)) return n;
