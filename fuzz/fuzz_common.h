@@ -49,6 +49,7 @@ class ScratchDir {
     }
     return path;
   }
+  const std::filesystem::path& dir() const { return dir_; }
 
  private:
   std::filesystem::path dir_;

@@ -23,10 +23,13 @@ inline float3 fresnel_conductor(float cos_i, float3 eta, float3 k) {
   float3 t1 = a2_plus_b2 + cos2;
   float3 a = sqrt(fmax(0.5f * (a2_plus_b2 + t0), 0.0f));
   float3 t2 = 2.0f * cos_i * a;
-  float3 rs = (t1 - t2) / (t1 + t2);
+  /* Both are squared magnitudes in [0, 1]. Where the index is that of the medium (eta 1, k 0: the
+   * "specular": 0 channel) t1 and t2 are equal up to rounding, and their difference, negative half the
+   * time, made negative radiance. */
+  float3 rs = clamp((t1 - t2) / (t1 + t2), 0.0f, 1.0f);
   float3 t3 = cos2 * a2_plus_b2 + sin2 * sin2;
   float3 t4 = t2 * sin2;
-  float3 rp = rs * (t3 - t4) / (t3 + t4);
+  float3 rp = rs * clamp((t3 - t4) / (t3 + t4), 0.0f, 1.0f);
   return 0.5f * (rp + rs);
 }
 

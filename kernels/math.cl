@@ -38,7 +38,12 @@ inline float3 offset_ray_origin(float3 p, float3 err, float3 n, float3 w) {
 
 inline float power_heuristic(float pdf_a, float pdf_b) {
   float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
-  return a / (a + b);
+  if (a + b > 0.0f && isfinite(a + b)) return a / (a + b);
+  /* The squares overflowed (a light sampled from 1e18 away has a pdf of 1e36: inf / inf was NaN) or
+   * underflowed: the same weight from the ratio of the pdfs. */
+  if (!(pdf_a > 0.0f)) return 0.0f;
+  float r = pdf_b / pdf_a;
+  return 1.0f / (1.0f + r * r);
 }
 
 #endif

@@ -3,10 +3,13 @@
 #ifndef PATHCL_MICROFACET_CL
 #define PATHCL_MICROFACET_CL
 
+/* t = 1 + (a2 - 1) cos^2 written as sin^2 + a2 cos^2 (h is a unit vector): at the smallest alpha, 1e-4,
+ * a2 - 1 rounds to -1 and the first form is 0 for normals within 1e-4 rad of +z, which made D infinite
+ * and sample weights infinity / infinity. The second is at least a2 cos^2, so D <= 1 / (pi a2 cos^4). */
 inline float ggx_d(float3 h, float alpha) {
   if (h.z <= 0.0f) return 0.0f;
   float a2 = alpha * alpha;
-  float t = h.z * h.z * (a2 - 1.0f) + 1.0f;
+  float t = (h.x * h.x + h.y * h.y) + a2 * (h.z * h.z);
   return a2 / (PC_PI * t * t);
 }
 

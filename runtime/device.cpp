@@ -170,6 +170,7 @@ ClContext::ClContext(const DeviceInfo& device) : info(device) {
 }
 
 ClContext::~ClContext() {
+  for (const auto& kept : kept_programs) clReleaseProgram(kept.second);
   if (queue) clReleaseCommandQueue(queue);
   if (context) clReleaseContext(context);
   if (info.sub_device) clReleaseDevice(info.device);

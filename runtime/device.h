@@ -1,6 +1,9 @@
 // OpenCL platforms and devices: listing, choosing one by index or name, and the context and queue.
 #pragma once
+#include <cstdint>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/cl_check.h"
@@ -47,6 +50,14 @@ struct ClContext {
   DeviceInfo info;
   cl_context context = nullptr;
   cl_command_queue queue = nullptr;
+  // For a caller that builds the same programs again and again on this context (fuzz/fuzz_render.cpp
+  // renders thousands of scenes): build_kernel_program then keeps the last kKeptPrograms programs it made
+  // here and hands the same one out again for the same source and options, instead of loading the cached
+  // binary each time (tens of milliseconds on PoCL). Off by default: a render reports its real build.
+  bool keep_programs = false;
+  static constexpr size_t kKeptPrograms = 64;
+  std::vector<std::pair<uint64_t, cl_program>> kept_programs;  // key, retained; oldest first
+  std::mutex kept_programs_mutex;
   explicit ClContext(const DeviceInfo& device);
   ~ClContext();
   ClContext(const ClContext&) = delete;

@@ -176,7 +176,19 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
   fs::path file = dir.empty() ? fs::path() : dir / (fs::path(main_file).stem().string() + "-" + hex + ".bin");
+  auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
 
+  if (cl.keep_programs) {
+    std::lock_guard<std::mutex> lock(cl.kept_programs_mutex);
+    for (const auto& [kept_key, program] : cl.kept_programs)
+      if (kept_key == key) {
+        CL_CHECK(clRetainProgram(program));
+        result.program = program;
+        result.from_cache = true;
+        result.build_ms = elapsed_ms();
+        return result;
+      }
+  }
   if (!file.empty()) result.program = load_cached(cl, file, options);
   result.from_cache = result.program != nullptr;
   if (!result.program) {
@@ -189,6 +201,15 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
                            " with options \"" + options + "\":\n" + build_log(result.program, d.device));
     if (!file.empty()) store_cached(file, program_binary(result.program));
   }
-  result.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (cl.keep_programs) {
+    std::lock_guard<std::mutex> lock(cl.kept_programs_mutex);
+    if (cl.kept_programs.size() >= ClContext::kKeptPrograms) {
+      clReleaseProgram(cl.kept_programs.front().second);
+      cl.kept_programs.erase(cl.kept_programs.begin());
+    }
+    CL_CHECK(clRetainProgram(result.program));
+    cl.kept_programs.emplace_back(key, result.program);
+  }
+  result.build_ms = elapsed_ms();
   return result;
 }

@@ -25,7 +25,8 @@ struct KernelProgram {
 // ~/.cache/pathcl/kernels; an empty PATHCL_KERNEL_CACHE turns caching off. A cached binary that the
 // driver rejects is rebuilt from source. A failed build throws RuntimeFailure with the build log.
 // Where the device has correctly rounded divide and sqrt, -cl-fp32-correctly-rounded-divide-sqrt is
-// added to the options (KernelProgram::options has it).
+// added to the options (KernelProgram::options has it). With ClContext::keep_programs, a program built
+// on the same context before for the same source and options is handed out again (from_cache is true).
 KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, const std::string& options);
 
 // A kernel object released with its owner.
