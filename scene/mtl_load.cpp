@@ -13,6 +13,7 @@
 
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
+#include "scene/scene_limits.h"
 
 namespace {
 
@@ -129,6 +130,8 @@ std::vector<RawMaterial> read_raw(const std::string& path) {
       m.has_ks = true;
     } else if (key == "Ke") {
       m.ke = parse_color(words, where, key, false);
+      if (m.ke.x > kMaxLightValue || m.ke.y > kMaxLightValue || m.ke.z > kMaxLightValue)
+        throw SceneError(where + ": Ke: expected values of at most 1e12");
       m.has_ke = true;
     } else if (key == "Tf" || key == "Kt") {
       m.tf = parse_color(words, where, key, true);

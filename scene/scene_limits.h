@@ -15,3 +15,8 @@ constexpr double kMaxFilterRadius = kMaxFilmSide;  // pixels, for "radius", and 
 // device are 32-bit (kernels/texture.cl, Texture::offset).
 constexpr uint64_t kMaxTextureTexels = uint64_t(1) << 28;
 constexpr uint64_t kMaxSceneTexels = uint64_t(1) << 32;
+// The largest value of a light's colour channel (emission, MTL Ke, intensity, irradiance, radiance, an
+// environment map's scale). The film sums each sample's square over up to kMaxSpp samples in float: a
+// radiance of 1e12 seen directly sums to 1.7e31 there, which leaves a factor of 1e7 below FLT_MAX for
+// the light that reflections gather from lights close by. 1e12 is still 600 times the sun's luminance.
+constexpr float kMaxLightValue = 1e12f;

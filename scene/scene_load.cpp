@@ -117,6 +117,12 @@ struct Node {
     if (c.x < 0 || c.y < 0 || c.z < 0) fail("expected non-negative values");
     return c;
   }
+  // A light's colour: larger values overflow the film's sums of squares (scene/scene_limits.h).
+  glm::vec3 light_color() const {
+    glm::vec3 c = color();
+    if (c.x > kMaxLightValue || c.y > kMaxLightValue || c.z > kMaxLightValue) fail("expected values of at most 1e12");
+    return c;
+  }
   std::vector<Node> array() const {
     if (!value.is_array()) fail("expected an array");
     std::vector<Node> items;
@@ -381,14 +387,14 @@ LightDesc read_light(const Node& n) {
     n.expect_object({"type", "position", "intensity"}, {"position", "intensity"});
     l.type = PC_LIGHT_POINT;
     l.position = n.at("position").dvec3();
-    l.emission = n.at("intensity").color();
+    l.emission = n.at("intensity").light_color();
   } else if (type == "spot") {
     n.expect_object({"type", "position", "direction", "intensity", "outer_angle_degrees", "inner_angle_degrees"},
                     {"position", "direction", "intensity", "outer_angle_degrees"});
     l.type = PC_LIGHT_SPOT;
     l.position = n.at("position").dvec3();
     l.direction = read_unit_direction(n.at("direction"));
-    l.emission = n.at("intensity").color();
+    l.emission = n.at("intensity").light_color();
     double outer = n.at("outer_angle_degrees").number();
     if (!(outer >= kSmallestPositive && outer <= 180))
       n.at("outer_angle_degrees").fail("expected an angle in (0, 180] degrees" + n.at("outer_angle_degrees").got());
@@ -401,17 +407,18 @@ LightDesc read_light(const Node& n) {
     n.expect_object({"type", "direction", "irradiance"}, {"direction", "irradiance"});
     l.type = PC_LIGHT_DIRECTIONAL;
     l.direction = read_unit_direction(n.at("direction"));
-    l.emission = n.at("irradiance").color();
+    l.emission = n.at("irradiance").light_color();
   } else if (type == "environment") {
     n.expect_object({"type", "radiance", "file", "scale"});
     l.type = PC_LIGHT_ENVIRONMENT;
     if (n.has("radiance") == n.has("file")) n.fail("an environment light needs either radiance or file");
     if (n.has("radiance")) {
       if (n.has("scale")) n.at("scale").fail("scale goes with file");
-      l.emission = n.at("radiance").color();
+      l.emission = n.at("radiance").light_color();
     } else {
       l.emission = glm::vec3(n.has("scale") ? float(n.at("scale").number()) : 1.0f);
-      if (l.emission.x < 0) n.at("scale").fail("expected a number >= 0" + n.at("scale").got());
+      if (!(l.emission.x >= 0 && l.emission.x <= kMaxLightValue))
+        n.at("scale").fail("expected a number in [0, 1e12]" + n.at("scale").got());
     }
   } else {
     n.at("type").fail("unknown light type \"" + type + "\" (expected point, spot, directional or environment)");
@@ -540,7 +547,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     if (it == materials.end()) n.at("material").fail("unknown material \"" + material + "\"");
     s.material = it->second;
   }
-  if (n.has("emission")) s.emission = n.at("emission").color();
+  if (n.has("emission")) s.emission = n.at("emission").light_color();
   if (n.has("two_sided")) s.two_sided = n.at("two_sided").boolean();
   glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
   s.label = n.path;
