@@ -24,6 +24,7 @@ struct BenchSuiteSettings {
   int ray_repeats = 0;              // timed traversals, the median counts
   int timing_repeats = 0;           // renders for samples/s and for the time to relMSE 1e-2, the median counts
   double convergence_seconds = 0;   // at most this long towards relMSE 1e-2 (then extrapolated)
+  double timed_seconds = 0;         // each render timed for the time to relMSE 1e-2 lasts at least this long
 };
 // "quick", "standard", or "test" (CTest: small films, no cold builds). UsageError for others.
 BenchSuiteSettings bench_suite(const std::string& name);
