@@ -82,7 +82,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   for (uint depth = 0;; ++depth) {
     Hit hit;
     ++*rays;
-    if (!trace_bvh(sc->nodes, sc->prims, &ray, false, &hit)) {
+    if (!trace_bvh(PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
       radiance += throughput * escaped_radiance(sc, ray.d, prev_bsdf_pdf, prev_delta);
       break;
     }
@@ -127,7 +127,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
         }
         Hit blocker;
         ++*rays;
-        if (!trace_bvh(sc->nodes, sc->prims, &shadow, true, &blocker)) {
+        if (!trace_bvh(PC_SCENE_BVH(sc), sc->prims, &shadow, true, &blocker)) {
           float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
           radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
         }

@@ -7,6 +7,13 @@
 
 #define PC_BVH_STACK 64 /* = kBvhMaxDepth of scene/bvh_build.h */
 
+/* The BVH layout of this device (runtime/device.h, bvh_width): PC_BVH8 for the 8-wide tree. */
+#ifdef PC_BVH8
+typedef Bvh8Node WideNode;
+#else
+typedef Bvh4Node WideNode;
+#endif
+
 typedef struct {
   float3 o, d;
   float tmin, tmax;
@@ -16,6 +23,7 @@ typedef struct {
 typedef struct {
   float t;
   uint slot; /* index into the leaf-ordered primitive array, PC_INVALID for a miss */
+  uint prim; /* its scene-order primitive index, PC_INVALID for a miss */
   float u, v; /* barycentrics of vertices b and c */
 } Hit;
 
@@ -56,31 +64,34 @@ inline RayPrecomp ray_precompute(float3 d) {
   return p;
 }
 
-/* Robust slab test (pbrt-v4) of four boxes at once, given by coordinate (lo_x holds the four boxes'
- * lower x): the far distance is widened by 1 + 2 gamma(3) to cover rounding. The near and far planes
+/* Robust slab test (pbrt-v4) of four or eight boxes at once (ray_boxes4, ray_boxes8), given by coordinate
+ * (lo_x holds the boxes' lower x): the far distance is widened by 1 + 2 gamma(3) to cover rounding. The near and far planes
  * are chosen by the sign of inv_d (`negative`), not by comparing distances, so that the NaN of an
  * axis-parallel ray starting exactly on a slab plane (0 * inf) is skipped: comparisons rather than
  * fmin/fmax, as a NaN compares false (and they compile to plain min/max instructions). That axis then
  * does not limit the interval, and a ray lying in a box face counts as inside. An empty box (lo = +inf,
  * hi = -inf) is always missed. Returns each box's entry distance, or INFINITY when it is missed within
  * [tmin, tmax]. */
-inline float4 ray_boxes(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
-                        float4 lo_z, float4 hi_x, float4 hi_y, float4 hi_z) {
-  float4 lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;
-  float4 ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;
-  float4 lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;
-  float4 nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;
-  float4 ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;
-  float4 nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;
-  float4 enter = (float4)(tmin), exit = (float4)(tmax);
-  enter = select(enter, nx, nx > enter);
-  enter = select(enter, ny, ny > enter);
-  enter = select(enter, nz, nz > enter);
-  exit = select(exit, fx, fx < exit);
-  exit = select(exit, fy, fy < exit);
-  exit = select(exit, fz, fz < exit);
-  return select((float4)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));
-}
+#define PC_DEFINE_RAY_BOXES(N)                                                                                  \
+  inline float##N ray_boxes##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x,           \
+                               float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z) {           \
+    float##N lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;                                               \
+    float##N ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;                                               \
+    float##N lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;                                               \
+    float##N nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;                                                   \
+    float##N ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;                                                   \
+    float##N nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;                                                   \
+    float##N enter = (float##N)(tmin), exit = (float##N)(tmax);                                                     \
+    enter = select(enter, nx, nx > enter);                                                                           \
+    enter = select(enter, ny, ny > enter);                                                                           \
+    enter = select(enter, nz, nz > enter);                                                                           \
+    exit = select(exit, fx, fx < exit);                                                                              \
+    exit = select(exit, fy, fy < exit);                                                                              \
+    exit = select(exit, fz, fz < exit);                                                                              \
+    return select((float##N)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));                     \
+  }
+PC_DEFINE_RAY_BOXES(4)
+PC_DEFINE_RAY_BOXES(8)
 
 /* Watertight ray/triangle test. Edge functions of a shared edge are computed from the same sheared
  * vertex coordinates in both triangles, so a ray through the edge hits at least one of them. */
@@ -100,9 +111,13 @@ __attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPreco
   if (det == 0.0f) return false;
   float Az = rp->sz * Akz, Bz = rp->sz * Bkz, Cz = rp->sz * Ckz;
   float T = U * Az + V * Bz + W * Cz;
-  if (det < 0.0f ? (T >= tmin * det || T < tmax * det) : (T <= tmin * det || T > tmax * det)) return false;
+  if (det < 0.0f ? T >= tmin * det : T <= tmin * det) return false;
   float inv_det = 1.0f / det;
   float t = T * inv_det;
+  /* tmax (the nearest hit so far) is compared with t itself, not as T against tmax * det: that product
+   * rounds, so the same triangle could pass against one tmax and fail against an equal t found first in
+   * another traversal order. The order of the hits must not depend on the layout (intersect_prim). */
+  if (!(t <= tmax)) return false;
   /* No pbrt-style "t certainly > 0" bound here: for a triangle seen nearly edge-on its error bound grows
    * like 1 / det and rejected genuine hits at shared vertices, making the mesh leak (tests/
    * robustness_test.cpp). Spawned rays cannot re-hit their surface anyway: their origins are offset
@@ -138,7 +153,7 @@ inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center
     t0 = t1;
   }
   float t = t0 > tmin ? t0 : t1;
-  if (!(t > tmin && t < tmax)) return false;
+  if (!(t > tmin && t <= tmax)) return false;
   *t_out = t;
   return true;
 }
@@ -146,7 +161,10 @@ inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center
 inline uint prim_index_of(Primitive p) { return as_uint(p.a.w); }
 inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
 
-/* Intersects one primitive; updates *hit when closer. */
+/* Intersects one primitive; updates *hit when closer. Hits at equal t (a shared edge, coplanar faces)
+ * go to the lower primitive index, so the nearest hit is one total order's minimum and the same whatever
+ * the order the traversal meets the primitives in: the 4- and 8-wide layouts (and with them a CPU and a
+ * GPU in one render) give the same hit records. */
 __attribute__((always_inline)) inline bool intersect_prim(__global const Primitive* prims, uint slot, const Ray* ray, const RayPrecomp* rp,
                            uint kz, float tmax, Hit* hit) {
   Primitive p = prims[slot];
@@ -161,16 +179,29 @@ __attribute__((always_inline)) inline bool intersect_prim(__global const Primiti
     if (from_surface) return false; /* a flat triangle cannot occlude a ray that leaves it */
     if (!ray_triangle(ray->o, rp, kz, ray->tmin, tmax, p.a.xyz, p.b.xyz, p.c.xyz, &t, &u, &v)) return false;
   }
+  uint prim = prim_index_of(p);
+  if (t == tmax && prim >= hit->prim) return false;
   hit->t = t;
   hit->slot = slot;
+  hit->prim = prim;
   hit->u = u;
   hit->v = v;
   return true;
 }
 
+/* The leaf reference's primitives; with any_hit, true at the first hit. */
+__attribute__((always_inline)) inline bool intersect_leaf(__global const Primitive* prims, uint ref, const Ray* ray,
+                                                          const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
+  uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
+  for (uint i = 0; i < count; ++i) {
+    if (intersect_prim(prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
+  }
+  return false;
+}
+
 /* Entry distances of a wide node's four children (INFINITY for a miss or an unused slot). */
 inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, int3 negative, float tmin, float tmax) {
-  return ray_boxes(o, inv_d, negative, tmin, tmax, n->lo_x, n->lo_y, n->lo_z, n->hi_x, n->hi_y, n->hi_z);
+  return ray_boxes4(o, inv_d, negative, tmin, tmax, n->lo_x, n->lo_y, n->lo_z, n->hi_x, n->hi_y, n->hi_z);
 }
 
 /* Orders two (distance, reference) pairs, nearer first, without branches. */
@@ -187,11 +218,12 @@ inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
 /* Traversal of the 4-wide BVH, nearest child first. With any_hit it returns at the first hit (shadow
  * rays). kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices.
  * The stack holds at most 3 entries per level of the tree, whose depth is at most kBvhMaxDepth. */
-__attribute__((always_inline)) inline bool trace_bvh_axis(__global const Bvh4Node* nodes,
+__attribute__((always_inline)) inline bool trace_bvh4_axis(__global const Bvh4Node* nodes,
                                                           __global const Primitive* prims, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   hit->t = ray->tmax;
   hit->slot = PC_INVALID;
+  hit->prim = PC_INVALID;
   uint stack[3 * PC_BVH_STACK];
   float stack_entry[3 * PC_BVH_STACK];
   int sp = 0;
@@ -199,10 +231,7 @@ __attribute__((always_inline)) inline bool trace_bvh_axis(__global const Bvh4Nod
   uint ref = 0; /* the root node */
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
-      uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
-      for (uint i = 0; i < count; ++i) {
-        if (intersect_prim(prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
-      }
+      if (intersect_leaf(prims, ref, ray, rp, any_hit, hit, kz)) return true;
     } else {
       __global const Bvh4Node* n = nodes + ref;
       float4 entry = node_entries(n, ray->o, rp->inv_d, negative, ray->tmin, hit->t);
@@ -239,12 +268,105 @@ __attribute__((always_inline)) inline bool trace_bvh_axis(__global const Bvh4Nod
   }
 }
 
-inline bool trace_bvh(__global const Bvh4Node* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
+/* Traversal of the 8-wide BVH (CPU devices): one float8 slab test per node. As in Embree, one hit child
+ * is entered at once, of two the nearer is entered and the other pushed, more are insertion-sorted onto
+ * the stack by entry distance, nearest on top, and the nearest is popped. The stack holds at most 7
+ * entries per level. */
+__attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8Node* nodes,
+                                                           __global const Primitive* prims, const Ray* ray,
+                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
+  hit->t = ray->tmax;
+  hit->slot = PC_INVALID;
+  hit->prim = PC_INVALID;
+  uint stack[7 * PC_BVH_STACK];
+  float stack_entry[7 * PC_BVH_STACK];
+  int sp = 0;
+  int3 negative = rp->inv_d < 0.0f;
+  uint ref = 0; /* the root node */
+  for (;;) {
+    if (ref & PC_BVH4_LEAF) {
+      if (intersect_leaf(prims, ref, ray, rp, any_hit, hit, kz)) return true;
+    } else {
+      __global const Bvh8Node* n = nodes + ref;
+      float8 entry = ray_boxes8(ray->o, rp->inv_d, negative, ray->tmin, hit->t, vload8(0, n->lo_x), vload8(0, n->lo_y),
+                                vload8(0, n->lo_z), vload8(0, n->hi_x), vload8(0, n->hi_y), vload8(0, n->hi_z));
+      /* Bit i of mask: child i is hit. */
+      int8 bit = select((int8)(0), (int8)(1, 2, 4, 8, 16, 32, 64, 128), entry != (float8)(INFINITY));
+      int4 b4 = bit.lo | bit.hi;
+      int2 b2 = b4.lo | b4.hi;
+      uint mask = (uint)(b2.x | b2.y);
+      if (mask != 0u) {
+        float d[8];
+        vstore8(entry, 0, d);
+        uint i = 31u - clz(mask & (0u - mask));
+        mask &= mask - 1u;
+        uint near_ref = n->child[i];
+        float near_d = d[i];
+        if (mask == 0u) {
+          ref = near_ref;
+          continue;
+        }
+        i = 31u - clz(mask & (0u - mask));
+        mask &= mask - 1u;
+        uint far_ref = n->child[i];
+        float far_d = d[i];
+        order_pair(&near_d, &near_ref, &far_d, &far_ref);
+        if (mask == 0u) {
+          stack[sp] = far_ref;
+          stack_entry[sp] = far_d;
+          ++sp;
+          ref = near_ref;
+          continue;
+        }
+        /* Three or more: all onto the stack, kept sorted far to near from where this node's entries start. */
+        int base = sp;
+        stack[sp] = far_ref;
+        stack_entry[sp] = far_d;
+        stack[sp + 1] = near_ref;
+        stack_entry[sp + 1] = near_d;
+        sp += 2;
+        while (mask != 0u) {
+          i = 31u - clz(mask & (0u - mask));
+          mask &= mask - 1u;
+          float di = d[i];
+          uint ri = n->child[i];
+          int j = sp;
+          while (j > base && stack_entry[j - 1] < di) {
+            stack[j] = stack[j - 1];
+            stack_entry[j] = stack_entry[j - 1];
+            --j;
+          }
+          stack[j] = ri;
+          stack_entry[j] = di;
+          ++sp;
+        }
+        ref = stack[--sp];
+        continue;
+      }
+    }
+    /* Pop the next subtree that can still hold a closer hit. */
+    for (;;) {
+      if (sp == 0) return hit->slot != PC_INVALID;
+      --sp;
+      if (stack_entry[sp] <= hit->t) break;
+    }
+    ref = stack[sp];
+  }
+}
+
+/* The device's layout; kz as a literal, so each copy's triangle test has constant axis indices. */
+inline bool trace_bvh(__global const WideNode* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
                       Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
-  if (rp.kz == 0u) return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 0u);
-  if (rp.kz == 1u) return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 1u);
-  return trace_bvh_axis(nodes, prims, ray, &rp, any_hit, hit, 2u);
+#ifdef PC_BVH8
+#define PC_TRACE_AXIS trace_bvh8_axis
+#else
+#define PC_TRACE_AXIS trace_bvh4_axis
+#endif
+  if (rp.kz == 0u) return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 0u);
+  if (rp.kz == 1u) return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 1u);
+  return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 2u);
+#undef PC_TRACE_AXIS
 }
 
 #endif

@@ -14,6 +14,13 @@ typedef struct {
 } SceneData;
 #undef PC_SCENE_FIELD
 
+/* The BVH nodes of the layout this program was built for (kernels/intersect.cl). */
+#ifdef PC_BVH8
+#define PC_SCENE_BVH(sc) ((sc)->nodes8)
+#else
+#define PC_SCENE_BVH(sc) ((sc)->nodes)
+#endif
+
 /* A kernel's first parameters: the header and every scene array (bound by runtime/scene_buffers.h). */
 #define PC_SCENE_PARAM(T, name) , __global const T* name
 #define PC_SCENE_PARAMS __constant const SceneHeader* h PC_SCENE_ARRAYS(PC_SCENE_PARAM)

@@ -18,8 +18,9 @@ __kernel void layout_report(__global uint* out) {
 }
 
 /* boxes: lo.xyz, hi.xyz per box (6 floats); rays as RayRecord; out: entry distance or +inf.
- * Through the traversal's four-box test: box i goes into lane i % 4 and the other lanes hold empty boxes,
- * as unused node slots do; an empty lane that is not missed makes the output NaN. */
+ * Through the traversal's four- and eight-box tests: box i goes into lane i % 4 (i % 8) and the other
+ * lanes hold empty boxes, as unused node slots do; an empty lane that is not missed, or a difference
+ * between the two widths, makes the output NaN. */
 __kernel void ray_box_test(__global const RayRecord* rays, __global const float* boxes, __global float* out) {
   uint i = get_global_id(0);
   __global const float* r = (__global const float*)(rays + i);
@@ -27,13 +28,22 @@ __kernel void ray_box_test(__global const RayRecord* rays, __global const float*
   RayPrecomp rp = ray_precompute(d);
   float3 lo = vload3(0, boxes + 6 * i), hi = vload3(0, boxes + 6 * i + 3);
   int4 lane = (int4)(0, 1, 2, 3) == (int4)(i % 4u);
-  float4 e = ray_boxes(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7], select((float4)(INFINITY), (float4)(lo.x), lane),
-                       select((float4)(INFINITY), (float4)(lo.y), lane), select((float4)(INFINITY), (float4)(lo.z), lane),
-                       select((float4)(-INFINITY), (float4)(hi.x), lane), select((float4)(-INFINITY), (float4)(hi.y), lane),
-                       select((float4)(-INFINITY), (float4)(hi.z), lane));
+  float4 e = ray_boxes4(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7], select((float4)(INFINITY), (float4)(lo.x), lane),
+                        select((float4)(INFINITY), (float4)(lo.y), lane), select((float4)(INFINITY), (float4)(lo.z), lane),
+                        select((float4)(-INFINITY), (float4)(hi.x), lane), select((float4)(-INFINITY), (float4)(hi.y), lane),
+                        select((float4)(-INFINITY), (float4)(hi.z), lane));
   float mine = i % 4u == 0u ? e.s0 : i % 4u == 1u ? e.s1 : i % 4u == 2u ? e.s2 : e.s3;
   bool others_missed = all(select(e, (float4)(INFINITY), lane) == (float4)(INFINITY));
-  out[i] = others_missed ? mine : NAN;
+  int8 lane8 = (int8)(0, 1, 2, 3, 4, 5, 6, 7) == (int8)(i % 8u);
+  float8 e8 = ray_boxes8(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7],
+                         select((float8)(INFINITY), (float8)(lo.x), lane8), select((float8)(INFINITY), (float8)(lo.y), lane8),
+                         select((float8)(INFINITY), (float8)(lo.z), lane8), select((float8)(-INFINITY), (float8)(hi.x), lane8),
+                         select((float8)(-INFINITY), (float8)(hi.y), lane8), select((float8)(-INFINITY), (float8)(hi.z), lane8));
+  float all8[8];
+  vstore8(e8, 0, all8);
+  bool others_missed8 = all(select(e8, (float8)(INFINITY), lane8) == (float8)(INFINITY));
+  bool same = all8[i % 8u] == mine || (isnan(all8[i % 8u]) && isnan(mine));
+  out[i] = others_missed && others_missed8 && same ? mine : NAN;
 }
 
 /* One triangle (9 floats) per ray; out as HitRecord with prim 0 for a hit. */
@@ -66,6 +76,7 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
   Hit hit;
   hit.t = ray.tmax;
   hit.slot = PC_INVALID;
+  hit.prim = PC_INVALID;
   for (uint p = 0; p < prim_count; ++p) intersect_prim(prims, p, &ray, &rp, rp.kz, hit.t, &hit);
   HitRecord out;
   out.t = hit.slot == PC_INVALID ? INFINITY : hit.t;
@@ -95,7 +106,7 @@ inline Surface query_surface(__global const Primitive* prims, __global const Pri
   return surface_at(prims, shading, normals, &unused, &at);
 }
 
-__kernel void spawn_test(__global const Bvh4Node* nodes, __global const Primitive* prims,
+__kernel void spawn_test(__global const WideNode* nodes, __global const Primitive* prims,
                          __global const PrimShading* shading, __global const float4* normals,
                          __global const float* queries, uint mode, __global uint* out) {
   uint i = get_global_id(0);

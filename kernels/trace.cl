@@ -3,7 +3,7 @@
 #include "math.cl"
 #include "intersect.cl"
 
-__kernel void trace_rays(__global const Bvh4Node* nodes, __global const Primitive* prims,
+__kernel void trace_rays(__global const WideNode* nodes, __global const Primitive* prims,
                          __global const RayRecord* rays, __global HitRecord* hits, uint count) {
   uint i = get_global_id(0);
   if (i >= count) return;

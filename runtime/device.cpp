@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 
 namespace {
 
@@ -78,6 +79,15 @@ std::vector<DeviceInfo> list_devices() {
 }
 
 bool is_oclgrind(const DeviceInfo& device) { return lower(device.platform_name).find("oclgrind") != std::string::npos; }
+
+uint32_t bvh_width(const DeviceInfo& device) {
+  if (const char* forced = std::getenv("PATHCL_BVH_WIDTH")) {
+    if (std::string(forced) == "4") return 4;
+    if (std::string(forced) == "8") return 8;
+    throw UsageError(std::string("PATHCL_BVH_WIDTH=") + forced + ": expected 4 or 8");
+  }
+  return device.is_cpu ? 8 : 4;
+}
 
 DeviceInfo select_device(const std::string& selector) {
   std::vector<DeviceInfo> devices = list_devices();

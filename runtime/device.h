@@ -35,6 +35,12 @@ DeviceInfo select_device(const std::string& selector);
 // cannot run optimised kernels (runtime/kernel_program.cpp).
 bool is_oclgrind(const DeviceInfo& device);
 
+// The BVH layout for the device, 4 or 8 children a node (kernels/shared/types.h): 8 on CPU devices, whose
+// float8 slab test is one AVX instruction (or two SSE ones), 4 on the others. PATHCL_BVH_WIDTH=4 or 8
+// chooses for every device (tests and benchmarks of the layouts); any other value is a UsageError. The
+// hits, and so the images, are the same in both.
+uint32_t bvh_width(const DeviceInfo& device);
+
 // A comma-separated list of selectors as select_device takes them, "gpu" (every GPU), "cpu" (the first CPU
 // device: the CPU devices of several platforms are the same cores, which would only compete), or "all"
 // for every device; each device at most once, in the order given. "" is the default device alone. The

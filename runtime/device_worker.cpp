@@ -20,7 +20,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   pixels_ = header.width * header.height;
 
   // Everything the render keeps on the device must fit in its memory.
-  size_t scene_size = scene_bytes(scene), film_size = size_t(pixels_) * 3 * sizeof(pc_float4);
+  size_t scene_size = scene_bytes(scene, bvh_width(cl.info)), film_size = size_t(pixels_) * 3 * sizeof(pc_float4);
   if (scene_size + film_size > cl.info.global_memory)
     throw RuntimeFailure("the render needs " + std::to_string((scene_size + film_size) >> 20) +
                          " MiB on the device (scene " + std::to_string(scene_size >> 20) + " MiB, film " +

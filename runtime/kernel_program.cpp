@@ -164,6 +164,7 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   // 3 ulp): with contraction off, every operation of the kernels is then exactly defined.
   std::string options = requested;
   if (cl.info.correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (bvh_width(cl.info) == 8) options += " -DPC_BVH8";  // the device's BVH layout (runtime/device.h)
   // Oclgrind 21.10 cannot execute the llvm.bitreverse that clang's optimiser makes of sampler.cl's bit
   // reversal; unoptimised, the same source computes the same bits.
   if (is_oclgrind(cl.info)) options += " -cl-opt-disable";

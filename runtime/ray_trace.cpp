@@ -7,6 +7,7 @@
 
 #include "runtime/atomic_file.h"
 #include "runtime/kernel_program.h"
+#include "runtime/scene_buffers.h"
 
 std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
                                          int repeat, TraceTiming& timing, size_t work_group) {
@@ -24,7 +25,7 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
     for (RayRecord& r : moved)
       for (int k = 0; k < 3; ++k) r.org[k] = float(double(r.org[k]) - scene.origin[k]);
   }
-  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims),
+  ClBuffer nodes = upload_bvh(cl, scene), prims = upload(cl, scene.prims),
            ray_buf = upload(cl, moved.empty() ? rays : moved);
   ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
   ClKernel kernel(program.kernel("trace_rays"));

@@ -1,16 +1,32 @@
 #include "runtime/scene_buffers.h"
 
-size_t scene_bytes(const DeviceScene& scene) {
+#include <cstring>
+
+bool scene_array_used(const char* name, uint32_t bvh_width) {
+  if (std::strcmp(name, "nodes") == 0) return bvh_width == 4;
+  if (std::strcmp(name, "nodes8") == 0) return bvh_width == 8;
+  return true;
+}
+
+size_t scene_bytes(const DeviceScene& scene, uint32_t width) {
   size_t bytes = sizeof(SceneHeader);
-#define PC_ADD_BYTES(T, name) bytes += scene.name.size() * sizeof(T);
+#define PC_ADD_BYTES(T, name) \
+  if (scene_array_used(#name, width)) bytes += scene.name.size() * sizeof(T);
   PC_SCENE_ARRAYS(PC_ADD_BYTES)
 #undef PC_ADD_BYTES
   return bytes;
 }
 
+ClBuffer upload_bvh(ClContext& cl, const DeviceScene& scene) {
+  return bvh_width(cl.info) == 8 ? upload(cl, scene.nodes8) : upload(cl, scene.nodes);
+}
+
+// An array the device does not read gets the one-element buffer of an empty vector.
 SceneBuffers::SceneBuffers(ClContext& cl, const DeviceScene& scene, const SceneHeader& h)
     : header(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof h, &h) {
-#define PC_UPLOAD(T, name) arrays.push_back(upload(cl, scene.name));
+  uint32_t width = bvh_width(cl.info);
+#define PC_UPLOAD(T, name) \
+  arrays.push_back(scene_array_used(#name, width) ? upload(cl, scene.name) : upload(cl, std::vector<T>()));
   PC_SCENE_ARRAYS(PC_UPLOAD)
 #undef PC_UPLOAD
 }

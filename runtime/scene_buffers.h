@@ -8,8 +8,12 @@
 #include "runtime/kernel_program.h"
 #include "scene/device_scene.h"
 
-// Bytes of device memory the header and the arrays take.
-size_t scene_bytes(const DeviceScene& scene);
+// Whether a device with this BVH width (runtime/device.h) reads the array: it gets only one of the layouts.
+bool scene_array_used(const char* name, uint32_t bvh_width);
+// Bytes of device memory the header and the arrays take on a device with this BVH width.
+size_t scene_bytes(const DeviceScene& scene, uint32_t bvh_width);
+// The scene's BVH nodes in the device's layout.
+ClBuffer upload_bvh(ClContext& cl, const DeviceScene& scene);
 
 struct SceneBuffers {
   ClBuffer header;

@@ -176,17 +176,19 @@ Bvh build_bvh(const std::vector<Aabb>& prim_boxes) {
 namespace {
 
 void set_lane(pc_float4& v, int lane, float x) { (lane == 0 ? v.x : lane == 1 ? v.y : lane == 2 ? v.z : v.w) = x; }
+void set_lane(float (&v)[8], int lane, float x) { v[lane] = x; }
 
 float node_half_area(const BvhNode& n) {
   return Aabb{{n.lo[0], n.lo[1], n.lo[2]}, {n.hi[0], n.hi[1], n.hi[2]}}.half_area();
 }
 
+template <class Node, int Width>
 struct Collapser {
   const std::vector<BvhNode>& binary;
-  Bvh4& out;
+  WideBvh<Node>& out;
 
   // Fills out.nodes[wide] with the subtrees of binary node `b`: its children, opened further (largest
-  // interior child first) while fewer than four. A binary leaf at the root becomes the only child; the
+  // interior child first) while fewer than Width. A binary leaf at the root becomes the only child; the
   // empty scene's root (neither leaf nor interior) gives a node with no children.
   void fill(uint32_t wide, uint32_t b, uint32_t depth) {
     out.depth = std::max(out.depth, depth + 1);
@@ -195,7 +197,7 @@ struct Collapser {
       kids = {b};
     } else if (binary[b].left_first != 0) {
       kids = {b + 1, binary[b].left_first};
-      while (kids.size() < 4) {
+      while (kids.size() < Width) {
         int open = -1;
         for (int i = 0; i < int(kids.size()); ++i) {
           const BvhNode& k = binary[kids[i]];
@@ -207,8 +209,8 @@ struct Collapser {
         kids.push_back(binary[k].left_first);
       }
     }
-    Bvh4Node node;
-    for (int lane = 0; lane < 4; ++lane) {
+    Node node;
+    for (int lane = 0; lane < Width; ++lane) {
       bool used = lane < int(kids.size());
       const BvhNode* k = used ? &binary[kids[lane]] : nullptr;
       set_lane(node.lo_x, lane, used ? k->lo[0] : INFINITY);
@@ -231,12 +233,16 @@ struct Collapser {
   }
 };
 
-}  // namespace
-
-Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) {
-  Bvh4 out;
-  out.nodes.reserve(binary.size() / 2 + 1);
+template <class Node, int Width>
+WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
+  WideBvh<Node> out;
+  out.nodes.reserve(binary.size() / (Width / 2) + 1);
   out.nodes.emplace_back();
-  Collapser{binary, out}.fill(0, 0, 0);
+  Collapser<Node, Width>{binary, out}.fill(0, 0, 0);
   return out;
 }
+
+}  // namespace
+
+Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary); }
+Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary) { return collapse<Bvh8Node, 8>(binary); }

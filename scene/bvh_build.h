@@ -39,13 +39,17 @@ struct Bvh : BvhStats {
 
 Bvh build_bvh(const std::vector<Aabb>& prim_boxes);
 
-// The device's 4-wide BVH (kernels/shared/types.h): each wide node takes up to four subtrees of the
-// binary tree, opening the child of largest surface area first, so a traversal step tests four boxes
-// at once. Leaves and primitive order are the binary tree's. Its depth is at most the binary tree's,
-// which bounds the kernel's stack (kernels/intersect.cl). Needs fewer than PC_BVH4_MAX_LEAF_FIRST
-// primitives and leaves of at most 16.
-struct Bvh4 {
-  std::vector<Bvh4Node> nodes;  // nodes[0] is the root
+// The device's wide BVHs (kernels/shared/types.h): each wide node takes up to four (Bvh4Node) or eight
+// (Bvh8Node) subtrees of the binary tree, opening the child of largest surface area first, so a traversal
+// step tests four or eight boxes at once. Leaves and primitive order are the binary tree's. Its depth is
+// at most the binary tree's, which bounds the kernel's stack (kernels/intersect.cl). Needs fewer than
+// PC_BVH4_MAX_LEAF_FIRST primitives and leaves of at most 16.
+template <class Node>
+struct WideBvh {
+  std::vector<Node> nodes;  // nodes[0] is the root
   uint32_t depth = 0;
 };
+using Bvh4 = WideBvh<Bvh4Node>;
+using Bvh8 = WideBvh<Bvh8Node>;
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
+Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);

@@ -49,6 +49,7 @@ struct BvhStats {
 
 // The arrays (PC_SCENE_ARRAYS of kernels/shared/types.h):
 //   nodes      the 4-wide BVH (collapse_to_bvh4 of the binary tree)
+//   nodes8     the 8-wide BVH (collapse_to_bvh8 of the same tree); a device gets one of the two
 //   prims      geometry in BVH leaf order
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes
@@ -70,4 +71,5 @@ struct DeviceScene {
   uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
   BvhStats bvh;
   uint32_t wide_depth = 0;           // depth of the 4-wide tree
+  uint32_t wide8_depth = 0;          // depth of the 8-wide tree
 };

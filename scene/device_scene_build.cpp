@@ -227,12 +227,16 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
                      std::to_string(PC_BVH4_MAX_LEAF_FIRST - 1) + " are supported");
   Bvh bvh = build_bvh(boxes);
   auto collapse_start = std::chrono::steady_clock::now();
-  Bvh4 wide = collapse_to_bvh4(bvh.nodes);  // only the wide tree goes to the device
+  // Only the wide trees go to the device, each device taking the layout chosen for it (runtime/device.h).
+  Bvh4 wide = collapse_to_bvh4(bvh.nodes);
+  Bvh8 wide8 = collapse_to_bvh8(bvh.nodes);
   bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
   bvh.node_count = uint32_t(bvh.nodes.size());
   out.bvh = bvh;
   out.nodes = std::move(wide.nodes);
   out.wide_depth = wide.depth;
+  out.nodes8 = std::move(wide8.nodes);
+  out.wide8_depth = wide8.depth;
   out.prims.reserve(prims.size());
   out.leaf_slot.resize(prims.size());
   for (uint32_t slot = 0; slot < prims.size(); ++slot) {

@@ -48,17 +48,17 @@ std::vector<RayRecord> random_rays(size_t n, uint32_t seed) {
 }
 
 float lane(const pc_float4& v, int i) { return i == 0 ? v.x : i == 1 ? v.y : i == 2 ? v.z : v.w; }
+float lane(const float (&v)[8], int i) { return v[i]; }
 
 // Lane i's box of a wide node, as {lo, hi}.
-std::pair<glm::vec3, glm::vec3> lane_box(const Bvh4Node& n, int i) {
+template <class Node>
+std::pair<glm::vec3, glm::vec3> lane_box(const Node& n, int i) {
   return {{lane(n.lo_x, i), lane(n.lo_y, i), lane(n.lo_z, i)}, {lane(n.hi_x, i), lane(n.hi_y, i), lane(n.hi_z, i)}};
 }
 
-}  // namespace
-
-TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
-  DeviceScene scene = load_device_scene(write_temp_file("bvh-structure.json", random_scene_json(3000, 30, 1)));
-  ASSERT_EQ(scene.prims.size(), 3030u);
+// A wide tree of Width children a node: every primitive in exactly one leaf, children inside parents.
+template <class Node, int Width>
+void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, uint32_t wide_depth) {
   std::vector<int> seen(scene.prims.size(), 0);
   // (wide node, depth, the box its parent gave it)
   struct Item {
@@ -71,10 +71,10 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
     Item item = stack.back();
     stack.pop_back();
     max_depth = std::max(max_depth, item.depth);
-    ASSERT_LT(item.node, scene.nodes.size());
-    const Bvh4Node& n = scene.nodes[item.node];
+    ASSERT_LT(item.node, nodes.size());
+    const Node& n = nodes[item.node];
     int used = 0, interior = 0;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < Width; ++i) {
       auto [lo, hi] = lane_box(n, i);
       if (lo.x > hi.x) {  // an unused slot: an empty box in every axis
         EXPECT_TRUE(lo.x == INFINITY && lo.y == INFINITY && lo.z == INFINITY && hi.x == -INFINITY &&
@@ -113,17 +113,27 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
           }
       }
     }
-    // Collapsing fills every node up to four children unless all of them are leaves.
-    EXPECT_TRUE(used == 4 || interior == 0) << "node " << item.node << ": " << used << " children";
+    // Collapsing fills every node up to Width children unless all of them are leaves.
+    EXPECT_TRUE(used == Width || interior == 0) << "node " << item.node << ": " << used << " children";
   }
   for (size_t s = 0; s < seen.size(); ++s) ASSERT_EQ(seen[s], 1) << "leaf slot " << s;
   EXPECT_EQ(leaves, scene.bvh.leaf_count);
   EXPECT_EQ(max_leaf, scene.bvh.max_leaf_size);
-  EXPECT_EQ(max_depth, scene.wide_depth);
-  // The kernel's stack holds 3 entries per wide level: the wide tree is no deeper than the binary one.
-  EXPECT_LE(scene.wide_depth, scene.bvh.depth);
+  EXPECT_EQ(max_depth, wide_depth);
+  // The kernel's stack holds Width - 1 entries per wide level: the wide tree is no deeper than the binary one.
+  EXPECT_LE(wide_depth, scene.bvh.depth);
+  EXPECT_LT(nodes.size(), scene.bvh.node_count / (Width / 2));
+}
+
+}  // namespace
+
+TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
+  DeviceScene scene = load_device_scene(write_temp_file("bvh-structure.json", random_scene_json(3000, 30, 1)));
+  ASSERT_EQ(scene.prims.size(), 3030u);
+  check_wide_tree<Bvh4Node, 4>(scene, scene.nodes, scene.wide_depth);
+  check_wide_tree<Bvh8Node, 8>(scene, scene.nodes8, scene.wide8_depth);
+  EXPECT_LT(scene.wide8_depth, scene.wide_depth);
   EXPECT_LE(scene.bvh.depth, kBvhMaxDepth);
-  EXPECT_LT(scene.nodes.size(), scene.bvh.node_count / 2);
   // A SAH tree over 3000 scattered primitives is far cheaper than testing them all.
   EXPECT_LT(scene.bvh.sah_cost, 100.0);
   EXPECT_GT(scene.bvh.sah_cost, 1.0);
@@ -135,16 +145,54 @@ TEST(Bvh, SmallSceneIsOneLeafUnderTheRoot) {
   const Bvh4Node& root = scene.nodes[0];
   EXPECT_EQ(root.child[0], PC_BVH4_LEAF | 0u);  // slot 0, one primitive
   for (int i = 1; i < 4; ++i) EXPECT_GT(lane_box(root, i).first.x, lane_box(root, i).second.x);
+  ASSERT_EQ(scene.nodes8.size(), 1u);
+  EXPECT_EQ(scene.nodes8[0].child[0], PC_BVH4_LEAF | 0u);
+  for (int i = 1; i < 8; ++i) EXPECT_GT(lane_box(scene.nodes8[0], i).first.x, lane_box(scene.nodes8[0], i).second.x);
 }
 
-TEST(Bvh, TraversalMatchesBruteForceOnRandomRays) {
+// A random soup, plus a 12 x 12 grid of quads placed twice (two shapes, the same triangles): rays through
+// the grid meet two primitives at exactly the same t everywhere, and both triangles of an edge on it.
+std::string scene_with_ties_json() {
+  std::string soup = random_scene_json(1500, 20, 2);
+  std::ostringstream grid;
+  grid << R"(, {"type": "triangles", "material": "m", "positions": [)";
+  for (int y = 0; y <= 12; ++y)
+    for (int x = 0; x <= 12; ++x) grid << (x || y ? "," : "") << "[" << x - 6 << "," << y - 6 << ",12]";
+  grid << R"(], "indices": [)";
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 12; ++x) {
+      int v = 13 * y + x;
+      grid << (x || y ? "," : "") << "[" << v << "," << v + 1 << "," << v + 14 << "],[" << v << "," << v + 14 << ","
+           << v + 13 << "]";
+    }
+  grid << "]}";
+  std::string shapes = grid.str() + grid.str();
+  return soup.substr(0, soup.size() - 2) + shapes + "]}";
+}
+
+// Rays at the grid's vertices, edges and faces from above, and random rays.
+std::vector<RayRecord> rays_with_ties(size_t n, uint32_t seed) {
+  std::vector<RayRecord> rays = random_rays(n, seed);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> cell(-6, 6), part(0, 3);
+  for (size_t i = 0; i < n / 2; ++i) {
+    float x = float(cell(rng)), y = float(cell(rng));
+    int p = part(rng);  // a vertex, a horizontal edge, a diagonal edge, a face
+    if (p == 1) x += 0.5f;
+    if (p == 2) x += 0.25f, y += 0.25f;
+    if (p == 3) x += 0.75f, y += 0.125f;
+    rays[2 * i] = {{x, y, 20}, 0, {0, 0, -1}, INFINITY};
+  }
+  return rays;
+}
+
+// Both layouts against brute force: the nearest hit by (t, primitive index) is one total order's minimum,
+// so they agree exactly, ties included (kernels/intersect.cl, intersect_prim).
+TEST(Bvh, BothLayoutsMatchBruteForceExactlyTiesIncluded) {
   ClContext& cl = test_device();
   // World origin: the brute-force kernel gets the (world) rays as they are.
-  DeviceScene scene =
-      load_device_scene(write_temp_file("bvh-random.json", random_scene_json(1500, 20, 2)), DeviceOrigin::world);
-  std::vector<RayRecord> rays = random_rays(100000, 3);
-  TraceTiming timing;
-  std::vector<HitRecord> bvh = trace_ray_records(cl, scene, rays, 1, timing);
+  DeviceScene scene = load_device_scene(write_temp_file("bvh-ties.json", scene_with_ties_json()), DeviceOrigin::world);
+  std::vector<RayRecord> rays = rays_with_ties(100000, 3);
 
   KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(scene.features));
   ClBuffer prims = upload(cl, scene.prims), rb = upload(cl, rays);
@@ -155,22 +203,29 @@ TEST(Bvh, TraversalMatchesBruteForceOnRandomRays) {
   k.arg(2, rb.mem);
   k.arg(3, out.mem);
   run_kernel(cl, k.k, rays.size());
-  std::vector<HitRecord> brute(rays.size());
-  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, brute.size() * sizeof(HitRecord), brute.data(), 0,
-                               nullptr, nullptr));
-  size_t hits = 0, mismatches = 0;
+  std::vector<HitRecord> brute = read_buffer<HitRecord>(cl, out, rays.size());
+  size_t hits = 0, grid_hits = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
     hits += brute[i].prim != PC_INVALID;
-    // The same arithmetic decides both, so the nearest distance agrees exactly; the primitive may differ
-    // only where two primitives are hit at exactly the same distance.
-    bool same = brute[i].t == bvh[i].t && (brute[i].prim == bvh[i].prim || brute[i].t != INFINITY);
-    if (!same && ++mismatches < 10)
-      ADD_FAILURE() << "ray " << i << ": brute force t=" << brute[i].t << " prim=" << brute[i].prim
-                    << ", bvh t=" << bvh[i].t << " prim=" << bvh[i].prim;
+    grid_hits += brute[i].prim != PC_INVALID && brute[i].t == 8.0f;
   }
-  EXPECT_EQ(mismatches, 0u);
-  EXPECT_GT(hits, rays.size() / 5);  // the test means something only if many rays hit
+  EXPECT_GT(hits, rays.size() / 2);  // the test means something only if many rays hit
   EXPECT_LT(hits, rays.size());
+  EXPECT_GT(grid_hits, rays.size() / 4);  // and many of them meet the doubled grid
+  for (uint32_t width : {4u, 8u}) {
+    BvhWidthScope scope(width);
+    TraceTiming timing;
+    std::vector<HitRecord> bvh = trace_ray_records(cl, scene, rays, 1, timing);
+    size_t mismatches = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      bool same = brute[i].t == bvh[i].t && brute[i].prim == bvh[i].prim &&
+                  (brute[i].prim == PC_INVALID || (brute[i].u == bvh[i].u && brute[i].v == bvh[i].v));
+      if (!same && ++mismatches < 10)
+        ADD_FAILURE() << width << "-wide, ray " << i << ": brute force t=" << brute[i].t << " prim=" << brute[i].prim
+                      << ", bvh t=" << bvh[i].t << " prim=" << bvh[i].prim;
+    }
+    EXPECT_EQ(mismatches, 0u) << width << "-wide";
+  }
 }
 
 TEST(Bvh, EmptySceneMissesEverything) {

@@ -1,6 +1,7 @@
 // A render is a pure function of scene, settings and seed: the same pixels on every run, for any
-// work-group size and any split of the samples into passes.
+// work-group size, any split of the samples into passes and either BVH layout.
 #include <cstring>
+#include <filesystem>
 
 #include <gtest/gtest.h>
 
@@ -67,4 +68,27 @@ TEST(Determinism, WorkGroupSizeDoesNotChangePixels) {
   DeviceScene scene = small_cornell();
   std::vector<float> reference = render_with(scene, 9, 4, 0);
   for (size_t wg : {size_t(16), size_t(64)}) EXPECT_TRUE(bitwise_equal(reference, render_with(scene, 9, 4, wg))) << wg;
+}
+
+// The 4- and 8-wide BVHs (kernels/intersect.cl) give the same hits, ties included, so the same pixels:
+// every bundled scene and every test scene that loads.
+TEST(Determinism, BothBvhLayoutsGiveIdenticalPixels) {
+  std::vector<std::string> files;
+  for (std::string dir : {std::string(PATHCL_TEST_SCENES), std::string(PATHCL_TEST_SCENES) + "/../../scenes"})
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+      if (entry.path().extension() == ".json" && entry.path().filename().string().rfind("bad-", 0) != 0)
+        files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 6u);
+  for (const std::string& file : files) {
+    DeviceScene scene = load_device_scene(file);
+    scene.header.width = 32;
+    scene.header.height = 24;
+    std::vector<float> image[2];
+    for (int i = 0; i < 2; ++i) {
+      BvhWidthScope width(i ? 8 : 4);
+      image[i] = render_with(scene, 5, 0, 0);
+    }
+    EXPECT_TRUE(bitwise_equal(image[0], image[1])) << file;
+  }
 }

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/ray_trace.h"
+#include "runtime/scene_buffers.h"
 #include "test_support.h"
 
 namespace {
@@ -45,7 +46,7 @@ std::string triangles_json(const std::vector<glm::dvec3>& v, const std::vector<s
 std::vector<uint32_t> spawn(const DeviceScene& scene, const std::vector<float>& queries, uint32_t mode) {
   ClContext& cl = test_device();
   static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
-  ClBuffer nodes = upload(cl, scene.nodes), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
+  ClBuffer nodes = upload_bvh(cl, scene), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
            normals = upload(cl, scene.normals), q = upload(cl, queries);
   size_t n = queries.size() / 8;
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, n * 4);

@@ -30,6 +30,18 @@ const KernelProgram& sampling_test_program() {
   return program;
 }
 
+BvhWidthScope::BvhWidthScope(uint32_t width) {
+  if (const char* old = std::getenv("PATHCL_BVH_WIDTH")) saved = old, had = true;
+  setenv("PATHCL_BVH_WIDTH", std::to_string(width).c_str(), 1);
+}
+
+BvhWidthScope::~BvhWidthScope() {
+  if (had)
+    setenv("PATHCL_BVH_WIDTH", saved.c_str(), 1);
+  else
+    unsetenv("PATHCL_BVH_WIDTH");
+}
+
 std::string temp_dir() {
   static std::string dir;
   if (dir.empty()) {

@@ -16,6 +16,14 @@
 // The device named by $PATHCL_TEST_DEVICE (default: pathcl's own default), one per test process.
 ClContext& test_device();
 
+// Sets PATHCL_BVH_WIDTH (runtime/device.h, bvh_width) for a scope: the BVH layout of every device.
+struct BvhWidthScope {
+  explicit BvhWidthScope(uint32_t width);
+  ~BvhWidthScope();
+  std::string saved;
+  bool had = false;
+};
+
 // The test kernels of kernels/tests_sampling.cl, all features on, built once per process.
 const KernelProgram& sampling_test_program();
 

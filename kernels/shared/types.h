@@ -60,8 +60,10 @@ typedef uint32_t pc_uint;
 #define PC_FLAG_FLIP_NORMAL 2u /* sphere: normal points to the centre */
 #define PC_FLAG_SMOOTH 4u      /* shading normals in the normals array */
 
-/* The device's BVH: 4-wide, collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened
- * depth-first. Child boxes are stored by coordinate so one float4 slab test checks all four:
+/* The device's BVH, in the layout chosen for the device (runtime/device.h, bvh_width): 4-wide (GPUs) or
+ * 8-wide (CPUs), collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened depth-first.
+ * Both layouts have the binary tree's leaves and primitive order, and a hit is the nearest by (t, primitive
+ * index), so every layout gives the same hit records (kernels/intersect.cl). 4-wide: Child boxes are stored by coordinate so one float4 slab test checks all four:
  * lo_x, lo_y, lo_z, hi_x, hi_y, hi_z (6 x 16) + child (16) = 112 bytes.
  * child[i] is an interior node index, or a leaf reference (PC_BVH4_LEAF set): primitives
  * [first, first + count) with first = (ref & ~PC_BVH4_LEAF) >> 4 and count = (ref & 15) + 1.
@@ -73,6 +75,14 @@ typedef struct {
   pc_float4 hi_x, hi_y, hi_z;
   pc_uint child[4];
 } Bvh4Node;
+
+/* 8-wide (one float8 slab test checks all eight children): lo_x .. hi_z (6 x 32) + child (32) = 224 bytes;
+ * child references and unused slots as in Bvh4Node. */
+typedef struct {
+  float lo_x[8], lo_y[8], lo_z[8];
+  float hi_x[8], hi_y[8], hi_z[8];
+  pc_uint child[8];
+} Bvh8Node;
 
 /* Geometry in BVH leaf order: 3 x 16 = 48 bytes.
  * Triangle: a, b, c are the vertices. Sphere: a.xyz is the centre, b.x the radius.
@@ -200,16 +210,17 @@ typedef struct {
  * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
-  X(Bvh4Node, nodes) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
+  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
   X(Material, materials) X(Light, lights) X(float, light_cdf) X(Texture, textures) X(pc_float4, texels)  \
   X(float, env_dist)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(Bvh4Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
+  X(Bvh4Node) X(Bvh8Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
-  X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Primitive, a)                \
+  X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
+  X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
@@ -225,6 +236,7 @@ typedef struct {
 
 #ifndef __OPENCL_VERSION__
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
+static_assert(sizeof(Bvh8Node) == 224, "Bvh8Node is 224 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
 static_assert(sizeof(Material) == 80, "Material is 80 bytes");

@@ -1,0 +1,122 @@
+"""BVH layouts side by side (issue 15; a benchmark, not a test): `pathcl rays` with the 4- and the 8-wide
+BVH (PATHCL_BVH_WIDTH) against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads) on the same
+camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
+the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
+Checks that both layouts give the same hit records as each other.
+Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts-*.json)
+"""
+import argparse
+import datetime
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+BUILD = os.path.join(ROOT, "build")
+PATHCL = os.path.join(BUILD, "pathcl")
+MAKE_RAYS = os.path.join(BUILD, "make_rays")
+EMBREE_RAYS = os.path.join(BUILD, "embree_rays")
+
+
+def run(cmd, env=None):
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if r.returncode:
+        sys.exit("%s: exit %d\n%s" % (" ".join(cmd), r.returncode, r.stderr[-2000:]))
+    return r.stdout
+
+
+def with_width(width):
+    return dict(os.environ, PATHCL_BVH_WIDTH=str(width))
+
+
+def pathcl_rays(scene, rays, width, work, hits=None):
+    stats = os.path.join(work, "stats.json")
+    cmd = [PATHCL, "rays", scene, "--rays", rays, "--repeat", "5", "--stats", stats]
+    if hits:
+        cmd += ["--hits", hits]
+    run(cmd, with_width(width))
+    with open(stats) as f:
+        return json.load(f)["rays_per_second_kernel"]
+
+
+def resized(scene, size, out):
+    """A copy of the scene file with a size x size film."""
+    with open(scene) as f:
+        j = json.load(f)
+    j["camera"]["width"] = j["camera"]["height"] = size
+    with open(out, "w") as f:
+        json.dump(j, f)
+    return out
+
+
+def pathcl_samples(scene, width, work, spp):
+    stats = os.path.join(work, "render-stats.json")
+    run([PATHCL, "render", scene, "-o", os.path.join(work, "render.exr"), "--spp", str(spp), "--quiet", "--stats",
+         stats], with_width(width))
+    with open(stats) as f:
+        return json.load(f)["samples_per_second"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--size", type=int, default=768, help="terrain film side: camera rays, 2 a pixel")
+    args = ap.parse_args()
+    work = os.path.join(BUILD, "bench-layouts")
+    os.makedirs(work, exist_ok=True)
+    scenes = os.path.join(work, "scenes")
+    run([PATHCL, "bench", "--write-scenes", scenes])
+    big = resized(os.path.join(scenes, "terrain.json"), args.size, os.path.join(scenes, "terrain-rays.json"))
+    obj = os.path.join(work, "terrain.obj")
+    run([PATHCL, "info", big, "--dump-obj", obj])
+    cam, cam_hits, bounce = (os.path.join(work, n) for n in ("camera.rays", "camera.hits", "bounce.rays"))
+    run([MAKE_RAYS, "camera", big, cam, "2"])
+    run([PATHCL, "rays", big, "--rays", cam, "--hits", cam_hits, "--repeat", "1"], with_width(4))
+    run([MAKE_RAYS, "bounce", big, cam, cam_hits, bounce])
+
+    result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
+              "pathcl": run([PATHCL, "--version"]).splitlines()[0], "rounds": args.rounds, "rays": {}, "samples": {}}
+    for name, rays in (("camera", cam), ("diffuse_bounce", bounce)):
+        runs = {"bvh4": [], "bvh8": [], "embree-1": [], "embree-2": []}
+        hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in (4, 8)}
+        for _ in range(args.rounds):
+            for w in (4, 8):
+                runs["bvh%d" % w].append(pathcl_rays(big, rays, w, work, hits[w]))
+            for threads in (1, 2):
+                out = run([EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5", "--compare", hits[8]])
+                e = json.loads(out)
+                runs["embree-%d" % threads].append(e["rays_per_second"])
+                same = e["same_primitive_fraction"]
+        with open(hits[4], "rb") as a, open(hits[8], "rb") as b:
+            identical = a.read() == b.read()
+        med = {k: statistics.median(v) for k, v in runs.items()}
+        result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
+                                "embree_same_primitive_fraction": same,
+                                "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
+                                "bvh8_over_bvh4": med["bvh8"] / med["bvh4"]}
+        print("%s rays: 4-wide %.2f, 8-wide %.2f, Embree 1 thread %.2f, 2 threads %.2f Mrays/s; 8-wide / Embree-2 "
+              "%.2f; hit records of the layouts identical: %s; same primitive as Embree: %.4f" %
+              (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["embree-1"] / 1e6, med["embree-2"] / 1e6,
+               med["bvh8"] / med["embree-2"], identical, same))
+    for scene, size, spp in (("cornell-box", 256, 64), ("glass-metal", 256, 64), ("terrain", 256, 16)):
+        runs = {"bvh4": [], "bvh8": []}
+        file = resized(os.path.join(scenes, scene + ".json"), size, os.path.join(scenes, "%s-%d.json" % (scene, size)))
+        for _ in range(args.rounds):
+            for w in (4, 8):
+                runs["bvh%d" % w].append(pathcl_samples(file, w, work, spp))
+        med = {k: statistics.median(v) for k, v in runs.items()}
+        result["samples"][scene] = {"size": size, "spp": spp, "median_samples_per_second": med, "runs": runs}
+        print("%s %dx%d, %d spp: 4-wide %.3f, 8-wide %.3f Msamples/s (%.2fx)" %
+              (scene, size, size, spp, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh8"] / med["bvh4"]))
+    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
+    out = os.path.join(ROOT, "bench", "results", "layouts-%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
+    with open(out, "w") as f:
+        json.dump(result, f, indent=1)
+    print("results:", os.path.relpath(out, ROOT))
+
+
+if __name__ == "__main__":
+    main()
