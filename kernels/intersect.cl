@@ -268,11 +268,82 @@ __attribute__((always_inline)) inline bool trace_bvh4_axis(__global const Bvh4No
   }
 }
 
+/* A LeafBlock's vertex coordinate by vertex (0 a, 1 b, 2 c) and axis, for literal indices. */
+inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
+  if (vertex == 0u) return axis == 0u ? b->ax : axis == 1u ? b->ay : b->az;
+  if (vertex == 1u) return axis == 0u ? b->bx : axis == 1u ? b->by : b->bz;
+  return axis == 0u ? b->cx : axis == 1u ? b->cy : b->cz;
+}
+
+/* The watertight test of ray_triangle on a block's four triangles at once: per lane the same IEEE
+ * operations in the same order, so the same t, u, v bits. Then the hits update *hit lane by lane by
+ * intersect_prim's rule (nearest by t, then lower primitive index), spheres through intersect_prim. */
+__attribute__((always_inline)) inline bool intersect_block(__global const LeafBlock* b, __global const Primitive* prims,
+                                                           const Ray* ray, const RayPrecomp* rp, bool any_hit, Hit* hit,
+                                                           uint kz) {
+  uint kx = kz == 2u ? 0u : kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
+  float ox = axis_component(ray->o, kx), oy = axis_component(ray->o, ky), oz = axis_component(ray->o, kz);
+  float4 Akz = block_coord(b, 0u, kz) - oz, Bkz = block_coord(b, 1u, kz) - oz, Ckz = block_coord(b, 2u, kz) - oz;
+  float4 Ax = (block_coord(b, 0u, kx) - ox) + rp->sx * Akz, Ay = (block_coord(b, 0u, ky) - oy) + rp->sy * Akz;
+  float4 Bx = (block_coord(b, 1u, kx) - ox) + rp->sx * Bkz, By = (block_coord(b, 1u, ky) - oy) + rp->sy * Bkz;
+  float4 Cx = (block_coord(b, 2u, kx) - ox) + rp->sx * Ckz, Cy = (block_coord(b, 2u, ky) - oy) + rp->sy * Ckz;
+  float4 U = Cx * By - Cy * Bx;
+  float4 V = Ax * Cy - Ay * Cx;
+  float4 W = Bx * Ay - By * Ax;
+  int4 outside = ((U < 0.0f) | (V < 0.0f) | (W < 0.0f)) & ((U > 0.0f) | (V > 0.0f) | (W > 0.0f));
+  float4 det = U + V + W;
+  float4 Az = rp->sz * Akz, Bz = rp->sz * Bkz, Cz = rp->sz * Ckz;
+  float4 T = U * Az + V * Bz + W * Cz;
+  int4 before_tmin = select(T <= ray->tmin * det, T >= ray->tmin * det, det < 0.0f);
+  float4 inv_det = 1.0f / det;
+  float4 t = T * inv_det;
+  uint4 prim = vload4(0, b->prim);
+  int4 candidate = ~outside & (det != 0.0f) & ~before_tmin & (t <= (float4)(hit->t)) &
+                   ((int4)(0, 1, 2, 3) < (int4)((int)b->count)) & (prim != (uint4)(ray->skip_prim));
+  bool any_sphere = b->sphere_mask != 0u;
+  if (!any(candidate) && !any_sphere) return false;
+  float ts[4], us[4], vs[4];
+  int ok[4];
+  uint ps[4];
+  vstore4(t, 0, ts);
+  vstore4(V * inv_det, 0, us);
+  vstore4(W * inv_det, 0, vs);
+  vstore4(candidate, 0, ok);
+  vstore4(prim, 0, ps);
+  bool found = false;
+  for (uint i = 0; i < b->count; ++i) {
+    if (b->sphere_mask & (1u << i)) {
+      found |= intersect_prim(prims, b->first_slot + i, ray, rp, kz, hit->t, hit);
+      continue;
+    }
+    if (!ok[i] || ts[i] > hit->t || (ts[i] == hit->t && ps[i] >= hit->prim)) continue;
+    hit->t = ts[i];
+    hit->slot = b->first_slot + i;
+    hit->prim = ps[i];
+    hit->u = us[i];
+    hit->v = vs[i];
+    found = true;
+  }
+  return found && any_hit;
+}
+
+/* The leaf reference's blocks (kernels/shared/types.h); with any_hit, true at the first hit. */
+__attribute__((always_inline)) inline bool intersect_blocks(__global const LeafBlock* blocks,
+                                                            __global const Primitive* prims, uint ref, const Ray* ray,
+                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
+  uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
+  for (uint i = 0; i < (count + 3u) / 4u; ++i) {
+    if (intersect_block(blocks + first + i, prims, ray, rp, any_hit, hit, kz)) return true;
+  }
+  return false;
+}
+
 /* Traversal of the 8-wide BVH (CPU devices): one float8 slab test per node. As in Embree, one hit child
  * is entered at once, of two the nearer is entered and the other pushed, more are insertion-sorted onto
  * the stack by entry distance, nearest on top, and the nearest is popped. The stack holds at most 7
  * entries per level. */
 __attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8Node* nodes,
+                                                           __global const LeafBlock* blocks,
                                                            __global const Primitive* prims, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   hit->t = ray->tmax;
@@ -285,7 +356,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8No
   uint ref = 0; /* the root node */
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
-      if (intersect_leaf(prims, ref, ray, rp, any_hit, hit, kz)) return true;
+      if (intersect_blocks(blocks, prims, ref, ray, rp, any_hit, hit, kz)) return true;
     } else {
       __global const Bvh8Node* n = nodes + ref;
       float8 entry = ray_boxes8(ray->o, rp->inv_d, negative, ray->tmin, hit->t, vload8(0, n->lo_x), vload8(0, n->lo_y),
@@ -355,17 +426,17 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8No
 }
 
 /* The device's layout; kz as a literal, so each copy's triangle test has constant axis indices. */
-inline bool trace_bvh(__global const WideNode* nodes, __global const Primitive* prims, const Ray* ray, bool any_hit,
-                      Hit* hit) {
+inline bool trace_bvh(__global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
+                      const Ray* ray, bool any_hit, Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
 #ifdef PC_BVH8
-#define PC_TRACE_AXIS trace_bvh8_axis
+#define PC_TRACE_AXIS(kz) trace_bvh8_axis(nodes, blocks, prims, ray, &rp, any_hit, hit, kz)
 #else
-#define PC_TRACE_AXIS trace_bvh4_axis
+#define PC_TRACE_AXIS(kz) trace_bvh4_axis(nodes, prims, ray, &rp, any_hit, hit, kz)
 #endif
-  if (rp.kz == 0u) return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 0u);
-  if (rp.kz == 1u) return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 1u);
-  return PC_TRACE_AXIS(nodes, prims, ray, &rp, any_hit, hit, 2u);
+  if (rp.kz == 0u) return PC_TRACE_AXIS(0u);
+  if (rp.kz == 1u) return PC_TRACE_AXIS(1u);
+  return PC_TRACE_AXIS(2u);
 #undef PC_TRACE_AXIS
 }
 

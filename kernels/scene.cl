@@ -14,11 +14,12 @@ typedef struct {
 } SceneData;
 #undef PC_SCENE_FIELD
 
-/* The BVH nodes of the layout this program was built for (kernels/intersect.cl). */
+/* The BVH of the layout this program was built for, as trace_bvh's first two arguments: the nodes and
+ * the leaf blocks (kernels/intersect.cl). */
 #ifdef PC_BVH8
-#define PC_SCENE_BVH(sc) ((sc)->nodes8)
+#define PC_SCENE_BVH(sc) (sc)->nodes8, (sc)->leaf_blocks
 #else
-#define PC_SCENE_BVH(sc) ((sc)->nodes)
+#define PC_SCENE_BVH(sc) (sc)->nodes, (sc)->leaf_blocks
 #endif
 
 /* A kernel's first parameters: the header and every scene array (bound by runtime/scene_buffers.h). */

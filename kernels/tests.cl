@@ -106,7 +106,7 @@ inline Surface query_surface(__global const Primitive* prims, __global const Pri
   return surface_at(prims, shading, normals, &unused, &at);
 }
 
-__kernel void spawn_test(__global const WideNode* nodes, __global const Primitive* prims,
+__kernel void spawn_test(__global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
                          __global const PrimShading* shading, __global const float4* normals,
                          __global const float* queries, uint mode, __global uint* out) {
   uint i = get_global_id(0);
@@ -124,7 +124,7 @@ __kernel void spawn_test(__global const WideNode* nodes, __global const Primitiv
     ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, target.p, target.p_err, target.ng);
   }
   Hit hit;
-  out[i] = trace_bvh(nodes, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
+  out[i] = trace_bvh(nodes, blocks, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
 }
 
 #include "texture.cl"

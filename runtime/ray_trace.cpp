@@ -25,15 +25,15 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
     for (RayRecord& r : moved)
       for (int k = 0; k < 3; ++k) r.org[k] = float(double(r.org[k]) - scene.origin[k]);
   }
-  ClBuffer nodes = upload_bvh(cl, scene), prims = upload(cl, scene.prims),
-           ray_buf = upload(cl, moved.empty() ? rays : moved);
+  BvhBuffers bvh = upload_bvh(cl, scene);
+  ClBuffer prims = upload(cl, scene.prims), ray_buf = upload(cl, moved.empty() ? rays : moved);
   ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
   ClKernel kernel(program.kernel("trace_rays"));
-  kernel.arg(0, nodes.mem);
-  kernel.arg(1, prims.mem);
-  kernel.arg(2, ray_buf.mem);
-  kernel.arg(3, hit_buf.mem);
-  kernel.arg(4, cl_uint(rays.size()));
+  cl_uint next = bvh.bind(kernel, 0);
+  kernel.arg(next, prims.mem);
+  kernel.arg(next + 1, ray_buf.mem);
+  kernel.arg(next + 2, hit_buf.mem);
+  kernel.arg(next + 3, cl_uint(rays.size()));
   for (int r = 0; r < repeat; ++r) {
     auto start = std::chrono::steady_clock::now();
     timing.kernel_ms.push_back(run_kernel(cl, kernel.k, rays.size(), work_group));

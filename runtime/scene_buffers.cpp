@@ -4,7 +4,7 @@
 
 bool scene_array_used(const char* name, uint32_t bvh_width) {
   if (std::strcmp(name, "nodes") == 0) return bvh_width == 4;
-  if (std::strcmp(name, "nodes8") == 0) return bvh_width == 8;
+  if (std::strcmp(name, "nodes8") == 0 || std::strcmp(name, "leaf_blocks") == 0) return bvh_width == 8;
   return true;
 }
 
@@ -17,8 +17,15 @@ size_t scene_bytes(const DeviceScene& scene, uint32_t width) {
   return bytes;
 }
 
-ClBuffer upload_bvh(ClContext& cl, const DeviceScene& scene) {
-  return bvh_width(cl.info) == 8 ? upload(cl, scene.nodes8) : upload(cl, scene.nodes);
+BvhBuffers upload_bvh(ClContext& cl, const DeviceScene& scene) {
+  if (bvh_width(cl.info) == 8) return {upload(cl, scene.nodes8), upload(cl, scene.leaf_blocks)};
+  return {upload(cl, scene.nodes), upload(cl, std::vector<LeafBlock>())};
+}
+
+cl_uint BvhBuffers::bind(ClKernel& kernel, cl_uint first) const {
+  kernel.arg(first, nodes.mem);
+  kernel.arg(first + 1, blocks.mem);
+  return first + 2;
 }
 
 // An array the device does not read gets the one-element buffer of an empty vector.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include <glm/common.hpp>
 
@@ -186,14 +187,31 @@ template <class Node, int Width>
 struct Collapser {
   const std::vector<BvhNode>& binary;
   WideBvh<Node>& out;
+  // Binary subtrees of at most this many primitives become one wide leaf (0: only binary leaves do).
+  uint32_t merge_size = 0;
+  std::vector<uint32_t> subtree_first, subtree_count;  // per binary node: its leaf slots
+
+  void count_subtrees() {
+    subtree_first.resize(binary.size());
+    subtree_count.resize(binary.size());
+    for (size_t i = binary.size(); i-- > 0;) {  // children come after their parent
+      const BvhNode& n = binary[i];
+      bool interior = n.prim_count == 0 && n.left_first != 0;
+      subtree_first[i] = interior ? subtree_first[i + 1] : n.left_first;
+      subtree_count[i] = interior ? subtree_count[i + 1] + subtree_count[n.left_first] : n.prim_count;
+    }
+  }
+  bool is_leaf(uint32_t b) const {
+    return binary[b].prim_count > 0 || (merge_size > 0 && subtree_count[b] > 0 && subtree_count[b] <= merge_size);
+  }
 
   // Fills out.nodes[wide] with the subtrees of binary node `b`: its children, opened further (largest
-  // interior child first) while fewer than Width. A binary leaf at the root becomes the only child; the
+  // interior child first) while fewer than Width. A leaf at the root becomes the only child; the
   // empty scene's root (neither leaf nor interior) gives a node with no children.
   void fill(uint32_t wide, uint32_t b, uint32_t depth) {
     out.depth = std::max(out.depth, depth + 1);
     std::vector<uint32_t> kids;
-    if (binary[b].prim_count > 0) {
+    if (is_leaf(b)) {
       kids = {b};
     } else if (binary[b].left_first != 0) {
       kids = {b + 1, binary[b].left_first};
@@ -201,7 +219,7 @@ struct Collapser {
         int open = -1;
         for (int i = 0; i < int(kids.size()); ++i) {
           const BvhNode& k = binary[kids[i]];
-          if (k.prim_count == 0 && (open < 0 || node_half_area(k) > node_half_area(binary[kids[open]]))) open = i;
+          if (!is_leaf(kids[i]) && (open < 0 || node_half_area(k) > node_half_area(binary[kids[open]]))) open = i;
         }
         if (open < 0) break;
         uint32_t k = kids[open];
@@ -220,11 +238,12 @@ struct Collapser {
       set_lane(node.hi_y, lane, used ? k->hi[1] : -INFINITY);
       set_lane(node.hi_z, lane, used ? k->hi[2] : -INFINITY);
       node.child[lane] = PC_INVALID;
-      if (used && k->prim_count > 0) node.child[lane] = PC_BVH4_LEAF | k->left_first << 4 | (k->prim_count - 1);
+      if (used && is_leaf(kids[lane]))
+        node.child[lane] = PC_BVH4_LEAF | subtree_first[kids[lane]] << 4 | (subtree_count[kids[lane]] - 1);
     }
     out.nodes[wide] = node;
     for (int lane = 0; lane < int(kids.size()); ++lane) {
-      if (binary[kids[lane]].prim_count > 0) continue;
+      if (is_leaf(kids[lane])) continue;
       uint32_t child = uint32_t(out.nodes.size());
       out.nodes.emplace_back();
       out.nodes[wide].child[lane] = child;
@@ -234,15 +253,49 @@ struct Collapser {
 };
 
 template <class Node, int Width>
-WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
+WideBvh<Node> collapse(const std::vector<BvhNode>& binary, uint32_t merge_size) {
   WideBvh<Node> out;
   out.nodes.reserve(binary.size() / (Width / 2) + 1);
   out.nodes.emplace_back();
-  Collapser<Node, Width>{binary, out}.fill(0, 0, 0);
+  Collapser<Node, Width> collapser{binary, out, merge_size};
+  collapser.count_subtrees();
+  collapser.fill(0, 0, 0);
   return out;
 }
 
+void set_block_lane(pc_float4& v, int lane, float x) { set_lane(v, lane, x); }
+
 }  // namespace
 
-Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary); }
-Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary) { return collapse<Bvh8Node, 8>(binary); }
+Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary, 0); }
+Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary) { return collapse<Bvh8Node, 8>(binary, 4); }
+
+std::vector<LeafBlock> make_leaf_blocks(std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims) {
+  std::vector<LeafBlock> blocks;
+  blocks.reserve(prims.size() / 3 + 1);
+  for (Bvh8Node& node : nodes)
+    for (pc_uint& ref : node.child) {
+      if (ref == PC_INVALID || !(ref & PC_BVH4_LEAF)) continue;
+      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1;
+      ref = PC_BVH4_LEAF | uint32_t(blocks.size()) << 4 | (count - 1);
+      for (uint32_t start = 0; start < count; start += 4) {
+        LeafBlock b{};
+        b.first_slot = first + start;
+        b.count = std::min(count - start, 4u);
+        for (int lane = 0; lane < 4; ++lane) {
+          // Unused lanes repeat the last primitive (and are masked off by count).
+          const Primitive& p = prims[first + start + std::min(uint32_t(lane), b.count - 1)];
+          set_block_lane(b.ax, lane, p.a.x), set_block_lane(b.ay, lane, p.a.y), set_block_lane(b.az, lane, p.a.z);
+          set_block_lane(b.bx, lane, p.b.x), set_block_lane(b.by, lane, p.b.y), set_block_lane(b.bz, lane, p.b.z);
+          set_block_lane(b.cx, lane, p.c.x), set_block_lane(b.cy, lane, p.c.y), set_block_lane(b.cz, lane, p.c.z);
+          uint32_t prim, kind;
+          std::memcpy(&prim, &p.a.w, 4);
+          std::memcpy(&kind, &p.b.w, 4);
+          b.prim[lane] = prim;
+          if (uint32_t(lane) < b.count && kind == PC_PRIM_SPHERE) b.sphere_mask |= 1u << lane;
+        }
+        blocks.push_back(b);
+      }
+    }
+  return blocks;
+}

@@ -52,4 +52,9 @@ struct WideBvh {
 using Bvh4 = WideBvh<Bvh4Node>;
 using Bvh8 = WideBvh<Bvh8Node>;
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
+// The 8-wide tree's leaves are binary subtrees of at most four primitives (or binary leaves), to be
+// tested four at a time (make_leaf_blocks); their references hold primitive slots until then.
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);
+// The 8-wide tree's leaves as LeafBlocks of prims (in leaf order); rewrites the leaf references of nodes
+// to refer to the blocks (kernels/shared/types.h).
+std::vector<LeafBlock> make_leaf_blocks(std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims);

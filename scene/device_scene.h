@@ -50,6 +50,7 @@ struct BvhStats {
 // The arrays (PC_SCENE_ARRAYS of kernels/shared/types.h):
 //   nodes      the 4-wide BVH (collapse_to_bvh4 of the binary tree)
 //   nodes8     the 8-wide BVH (collapse_to_bvh8 of the same tree); a device gets one of the two
+//   leaf_blocks  the 8-wide BVH's leaves, four primitives a block (make_leaf_blocks)
 //   prims      geometry in BVH leaf order
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes

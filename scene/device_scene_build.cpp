@@ -243,6 +243,7 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
     out.prims.push_back(prims[bvh.prim_order[slot]]);
     out.leaf_slot[bvh.prim_order[slot]] = slot;
   }
+  out.leaf_blocks = make_leaf_blocks(out.nodes8, out.prims);
   // The scene's bounding sphere sizes the power of lights at infinity.
   Aabb bounds;
   for (const Aabb& box : boxes) bounds.grow(box);

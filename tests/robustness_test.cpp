@@ -46,18 +46,19 @@ std::string triangles_json(const std::vector<glm::dvec3>& v, const std::vector<s
 std::vector<uint32_t> spawn(const DeviceScene& scene, const std::vector<float>& queries, uint32_t mode) {
   ClContext& cl = test_device();
   static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
-  ClBuffer nodes = upload_bvh(cl, scene), prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
+  BvhBuffers bvh = upload_bvh(cl, scene);
+  ClBuffer prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
            normals = upload(cl, scene.normals), q = upload(cl, queries);
   size_t n = queries.size() / 8;
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, n * 4);
   ClKernel k(program.kernel("spawn_test"));
-  k.arg(0, nodes.mem);
-  k.arg(1, prims.mem);
-  k.arg(2, shading.mem);
-  k.arg(3, normals.mem);
-  k.arg(4, q.mem);
-  k.arg(5, cl_uint(mode));
-  k.arg(6, out.mem);
+  cl_uint next = bvh.bind(k, 0);
+  k.arg(next, prims.mem);
+  k.arg(next + 1, shading.mem);
+  k.arg(next + 2, normals.mem);
+  k.arg(next + 3, q.mem);
+  k.arg(next + 4, cl_uint(mode));
+  k.arg(next + 5, out.mem);
   run_kernel(cl, k.k, n);
   std::vector<uint32_t> result(n);
   CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, n * 4, result.data(), 0, nullptr, nullptr));

@@ -77,12 +77,26 @@ typedef struct {
 } Bvh4Node;
 
 /* 8-wide (one float8 slab test checks all eight children): lo_x .. hi_z (6 x 32) + child (32) = 224 bytes;
- * child references and unused slots as in Bvh4Node. */
+ * interior references and unused slots as in Bvh4Node. Its leaves are binary subtrees of at most four
+ * primitives (or a binary leaf) stored as LeafBlocks: a leaf reference (PC_BVH4_LEAF set) holds the first
+ * block (ref & ~PC_BVH4_LEAF) >> 4 and the primitive count (ref & 15) + 1, in (count + 3) / 4 blocks. */
 typedef struct {
   float lo_x[8], lo_y[8], lo_z[8];
   float hi_x[8], hi_y[8], hi_z[8];
   pc_uint child[8];
 } Bvh8Node;
+
+/* Up to four primitives of an 8-wide BVH leaf, vertices by coordinate, so that one float4 watertight
+ * test checks four triangles: a, b, c by coordinate (9 x 16) + prim (16) + first_slot, count,
+ * sphere_mask, pad (16) = 176 bytes. Lane i is prims[first_slot + i]; a sphere's lane is tested alone. */
+typedef struct {
+  pc_float4 ax, ay, az, bx, by, bz, cx, cy, cz;
+  pc_uint prim[4];     /* scene-order primitive index of each lane */
+  pc_uint first_slot;
+  pc_uint count;       /* lanes in use, 1 to 4 */
+  pc_uint sphere_mask; /* bit i: lane i is a sphere */
+  pc_uint pad;
+} LeafBlock;
 
 /* Geometry in BVH leaf order: 3 x 16 = 48 bytes.
  * Triangle: a, b, c are the vertices. Sphere: a.xyz is the centre, b.x the radius.
@@ -210,17 +224,18 @@ typedef struct {
  * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
-  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
+  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
   X(Material, materials) X(Light, lights) X(float, light_cdf) X(Texture, textures) X(pc_float4, texels)  \
   X(float, env_dist)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(Bvh4Node) X(Bvh8Node) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
+  X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
-  X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(Primitive, a)                \
+  X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(LeafBlock, ax) \
+  X(LeafBlock, cz) X(LeafBlock, prim) X(LeafBlock, first_slot) X(LeafBlock, count) X(LeafBlock, sphere_mask) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
@@ -237,6 +252,7 @@ typedef struct {
 #ifndef __OPENCL_VERSION__
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
 static_assert(sizeof(Bvh8Node) == 224, "Bvh8Node is 224 bytes");
+static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
 static_assert(sizeof(Material) == 80, "Material is 80 bytes");
