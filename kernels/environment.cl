@@ -51,7 +51,7 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
     float2 uv = env_uv(d);
     /* sin(theta) from d itself: near the -y pole v is close to 1, where a float keeps few digits of
      * pi - theta (at 1e-4 of the pole, pc_sin(PC_PI * v) came out 0.2 % off). */
-    float sin_theta = sqrt((d.x * d.x + d.z * d.z) / dot(d, d));
+    float sin_theta = sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); /* pc_dot: dot() may fuse or reorder */
     if (sin_theta <= 0.0f) return 0.0f;
     uint2 c = env_texel(t, uv);
     __global const float* row = dist + t.height + 1 + c.y * (t.width + 1);
