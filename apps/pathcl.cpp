@@ -55,7 +55,7 @@ LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::ca
   auto start = std::chrono::steady_clock::now();
   s.description = load_scene(path);
   s.load_ms = ms_since(start);
-  s.device = build_device_scene(s.description, origin);
+  s.device = build_device_scene_taking_texels(s.description, origin);
   return s;
 }
 

@@ -1,12 +1,16 @@
 /* The environment light: radiance from every direction no surface blocks, a constant or a lat-long map
- * (nearest texel, so that the importance-sampling density is exactly proportional to what is seen).
+ * looked up bilinearly (texture.cl; columns wrap around, rows clamp at the poles).
  * Directions: +y is up; v = theta / pi from +y (row 0 = top of the image), u = phi / (2 pi) with
- * phi = atan2(z, x). The map's sampling distribution (built on the host, env_dist) is piecewise
- * constant over texels in (u, v), proportional to luminance times sin(theta):
+ * phi = atan2(z, x). The map's sampling distribution (built on the host, env_dist,
+ * scene/environment_distribution.cpp) is piecewise constant over texel cells in (u, v), proportional to
+ * sin(theta) times the largest luminance the bilinear lookup takes in the cell, so it bounds the radiance
+ * it samples and is > 0 wherever the radiance is; env_pdf is exactly that density:
  *   env_dist[0 .. h]                      marginal cdf over rows (h + 1 entries)
  *   env_dist[h + 1 + r (w + 1) .. + w]    conditional cdf over the columns of row r (w + 1 entries) */
 #ifndef PATHCL_ENVIRONMENT_CL
 #define PATHCL_ENVIRONMENT_CL
+
+#include "texture.cl"
 
 inline float3 env_direction(float2 uv) {
   float phi = 2.0f * PC_PI * uv.x, theta = PC_PI * uv.y;
@@ -26,13 +30,20 @@ inline uint2 env_texel(Texture t, float2 uv) {
   return (uint2)(min((uint)(uv.x * (float)t.width), t.width - 1u), min((uint)(uv.y * (float)t.height), t.height - 1u));
 }
 
-inline float3 env_radiance(Light light, __global const Texture* textures, __global const float4* texels, float3 d) {
+/* sin(theta) from the direction itself: near the -y pole v is close to 1, where a float keeps few digits
+ * of pi - theta (at 1e-4 of the pole, pc_sin(PC_PI * v) came out 0.2 % off). pc_dot: dot() may fuse or
+ * reorder. */
+inline float env_sin_theta(float3 d) { return sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); }
+
+/* The map's bilinear radiance at (u, v), scale included. */
+inline float3 env_map_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
+  return light.emission.xyz * texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, uv.y * (float)t.height - 0.5f,
+                                               PC_WRAP_REPEAT, PC_WRAP_CLAMP);
+}
+
+inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
-  if (light.texture != PC_INVALID) {
-    Texture t = textures[light.texture];
-    uint2 c = env_texel(t, env_uv(d));
-    return light.emission.xyz * texels[t.offset + c.y * t.width + c.x].xyz;
-  }
+  if (light.texture != PC_INVALID) return env_map_radiance(light, textures[light.texture], texels, env_uv(d));
 #endif
   return light.emission.xyz;
 }
@@ -43,7 +54,7 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
     float2 uv = env_uv(d);
-    float sin_theta = pc_sin(PC_PI * uv.y);
+    float sin_theta = env_sin_theta(d);
     if (sin_theta <= 0.0f) return 0.0f;
     uint2 c = env_texel(t, uv);
     __global const float* row = dist + t.height + 1 + c.y * (t.width + 1);
@@ -54,11 +65,11 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
   return 0.25f * PC_INV_PI;
 }
 
-/* A direction drawn from the map's distribution: *pdf its density and *le its radiance, both of the texel
- * it was drawn from. The radiance is not looked up again from the direction: the float direction of a
- * sample at a texel's edge may lie in the neighbouring texel, and a radiance from one texel over the
- * density of a dimmer one would be a firefly (next to a sun, a very bright one). */
-inline float3 env_sample(Light light, __global const Texture* textures, __global const float4* texels,
+/* A direction drawn from the map's distribution: *pdf the density of the cell it was drawn from and *le
+ * the radiance at the (u, v) drawn. Neither is looked up again from the direction: the float direction of
+ * a sample at a cell's edge may lie in the neighbouring cell, whose density need not bound this radiance
+ * (the bilinear radiance itself is continuous across the edge). */
+inline float3 env_sample(Light light, __global const Texture* textures, __global const uint* texels,
                          __global const float* dist, float2 u, float* pdf, float3* le) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
@@ -70,13 +81,13 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
     uint c = find_interval(row, t.width, u.x);
     float dc = row[c + 1] - row[c];
     float uu = ((float)c + clamp((u.x - row[c]) / dc, 0.0f, 1.0f)) / (float)t.width;
-    /* Keep the sample inside its texel despite rounding, so its density is the one sampled. */
+    /* Keep the sample inside its cell despite rounding, so its density is the one sampled. */
     uu = clamp(uu, (float)c / (float)t.width, nextafter((float)(c + 1) / (float)t.width, 0.0f));
     v = clamp(v, (float)r / (float)t.height, nextafter((float)(r + 1) / (float)t.height, 0.0f));
     float3 d = env_direction((float2)(uu, v));
-    float sin_theta = pc_sin(PC_PI * v);
+    float sin_theta = env_sin_theta(d); /* as env_pdf computes it, so that MIS sees one density */
     *pdf = sin_theta > 0.0f ? dr * dc * (float)(t.width * t.height) / (2.0f * PC_PI * PC_PI * sin_theta) : 0.0f;
-    *le = light.emission.xyz * texels[t.offset + r * t.width + c].xyz;
+    *le = env_map_radiance(light, t, texels, (float2)(uu, v));
     return d;
   }
 #endif

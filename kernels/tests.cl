@@ -130,7 +130,7 @@ __kernel void spawn_test(__global const WideNode* nodes, __global const LeafBloc
 #include "texture.cl"
 
 /* Texture lookups: out[i] = texture_lookup(texture `index`, uvs[i]). */
-__kernel void texture_lookup_test(__global const Texture* textures, __global const float4* texels, uint index,
+__kernel void texture_lookup_test(__global const Texture* textures, __global const uint* texels, uint index,
                                   __global const float2* uvs, __global float4* out) {
   uint i = get_global_id(0);
   out[i] = (float4)(texture_lookup(textures, texels, index, uvs[i]), 0.0f);

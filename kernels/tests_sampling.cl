@@ -125,7 +125,7 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
 }
 
 /* One sample_light from x per item. out: 12 floats per item: wi (3), status (0 failed, 1 sampled,
- * 2 delta), pdf, direction_light_pdf(wi), Le (3), radiance seen along wi (first channel), distance to
+ * 2 delta; a failed sample has only wi, 0 if none), pdf, direction_light_pdf(wi), Le (3), radiance seen along wi (first channel), distance to
  * the sampled point p, distance to the first hit along wi (+inf for none). */
 __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global float* out) {
   uint i = get_global_id(0);
@@ -133,9 +133,13 @@ __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
   float3 x = x4.xyz;
   float4 u = test_random4(i, seed);
   LightSample ls;
+  ls.wi = (float3)(0.0f);
   bool ok = sample_light(&sc, x, u.xyz, &ls);
   __global float* o = out + 12 * i;
   for (int k = 0; k < 12; ++k) o[k] = 0.0f;
+  /* A failed sample keeps the direction it was drawn at, if any (an environment map's sample where the
+   * radiance is 0 is one), so that tests can bin it. */
+  vstore3(ls.wi, 0, o);
   if (!ok) return;
   vstore3(ls.wi, 0, o);
   o[3] = ls.delta ? 2.0f : 1.0f;

@@ -1,7 +1,14 @@
-/* Image textures: linear RGB texels (sRGB images are converted on the host), bilinear filtering,
- * repeat / clamp / mirror wrapping. v = 0 is the bottom row of the image, as in OBJ files. */
+/* Image textures: texels at the precision of their file (8-bit sRGB, half or float; PC_TEXELS_* of
+ * shared/types.h), decoded to linear RGB here, bilinear filtering, repeat / clamp / mirror wrapping.
+ * v = 0 is the bottom row of the image, as in OBJ files. */
 #ifndef PATHCL_TEXTURE_CL
 #define PATHCL_TEXTURE_CL
+
+#include "shared/types.h"
+#include "shared/srgb_table.h"
+
+/* A table, not pow(): every implementation then decodes a byte to the same float (srgb_table.h). */
+__constant float pc_srgb_to_linear[256] = PC_SRGB_TO_LINEAR_TABLE;
 
 /* Texel index along an axis of n texels for integer coordinate i under the wrap mode. */
 inline int wrap_texel(int i, int n, uint wrap) {
@@ -14,25 +21,39 @@ inline int wrap_texel(int i, int n, uint wrap) {
   return ((i % n) + n) % n;
 }
 
-inline float3 texel_at(__global const float4* texels, Texture t, int x, int y) {
-  return texels[t.offset + (uint)y * t.width + (uint)x].xyz;
+/* The linear RGB of texel (x, y); the conversions from bytes and halves are exact. */
+inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
+  uint i = (uint)y * t.width + (uint)x;
+  __global const uint* image = texels + t.offset;
+  if (t.format == PC_TEXELS_SRGB8) {
+    uchar4 b = vload4(i, (__global const uchar*)image);
+    return (float3)(pc_srgb_to_linear[b.x], pc_srgb_to_linear[b.y], pc_srgb_to_linear[b.z]);
+  }
+  if (t.format == PC_TEXELS_HALF) return vload_half3(i, (__global const half*)image);
+  return vload3(i, (__global const float*)image);
 }
 
-/* Bilinear lookup at (u, v); texel centres at half-integer coordinates. */
-inline float3 texture_lookup(__global const Texture* textures, __global const float4* texels, uint index, float2 uv) {
-  Texture t = textures[index];
-  float x = uv.x * (float)t.width - 0.5f, y = (1.0f - uv.y) * (float)t.height - 0.5f;
-  /* Far outside [0, 1] the coordinates lose precision; keep them bounded. */
+/* Bilinear interpolation at texel coordinates (x, y), texel centres at integers, columns wrapped by
+ * wrap_x and rows by wrap_y. */
+inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, float y, uint wrap_x, uint wrap_y) {
+  /* Far outside the image the coordinates lose precision; keep them bounded. */
   x = clamp(x, -1.0e6f, 1.0e6f);
   y = clamp(y, -1.0e6f, 1.0e6f);
   float fx = floor(x), fy = floor(y);
   float ax = x - fx, ay = y - fy;
   int x0 = (int)fx, y0 = (int)fy;
   int w = (int)t.width, h = (int)t.height;
-  int xa = wrap_texel(x0, w, t.wrap), xb = wrap_texel(x0 + 1, w, t.wrap);
-  int ya = wrap_texel(y0, h, t.wrap), yb = wrap_texel(y0 + 1, h, t.wrap);
+  int xa = wrap_texel(x0, w, wrap_x), xb = wrap_texel(x0 + 1, w, wrap_x);
+  int ya = wrap_texel(y0, h, wrap_y), yb = wrap_texel(y0 + 1, h, wrap_y);
   return (1.0f - ay) * ((1.0f - ax) * texel_at(texels, t, xa, ya) + ax * texel_at(texels, t, xb, ya)) +
          ay * ((1.0f - ax) * texel_at(texels, t, xa, yb) + ax * texel_at(texels, t, xb, yb));
+}
+
+/* Bilinear lookup at (u, v) under the texture's wrap mode; texel centres at half-integer coordinates. */
+inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
+  Texture t = textures[index];
+  return texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, (1.0f - uv.y) * (float)t.height - 0.5f, t.wrap,
+                          t.wrap);
 }
 
 #endif

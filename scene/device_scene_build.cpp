@@ -12,6 +12,7 @@
 #include <glm/trigonometric.hpp>
 
 #include "scene/bvh_build.h"
+#include "scene/environment_distribution.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -40,40 +41,6 @@ Material device_material(const MaterialDesc& m) {
   mat.exponent = m.exponent;
   mat.ior = m.ior;
   return mat;
-}
-
-// The environment map's sampling distribution, piecewise constant over texels in (u, v) with density
-// proportional to luminance times sin(theta) (layout in kernels/environment.cl). Returns the integral of
-// the luminance over the sphere.
-double build_env_distribution(const TextureImage& map, std::vector<float>& dist) {
-  uint32_t w = map.width, h = map.height;
-  std::vector<double> row_sum(h, 0.0), func(size_t(w) * h);
-  double total = 0, integral = 0;
-  for (uint32_t r = 0; r < h; ++r) {
-    double sin_theta = std::sin(M_PI * (r + 0.5) / h);
-    for (uint32_t c = 0; c < w; ++c) {
-      const glm::vec4& t = map.texels[size_t(r) * w + c];
-      double lum = luminance(glm::vec3(t));
-      func[size_t(r) * w + c] = lum * sin_theta;
-      row_sum[r] += lum * sin_theta;
-      // Solid angle of the texel: (2 pi / w) (cos theta_top - cos theta_bottom).
-      integral += lum * (2 * M_PI / w) * (std::cos(M_PI * r / h) - std::cos(M_PI * (r + 1) / h));
-    }
-    total += row_sum[r];
-  }
-  dist.assign(h + 1 + size_t(h) * (w + 1), 0.0f);
-  // A cdf as floats, its last entry exactly 1; an all-zero function gets a uniform cdf.
-  auto write_cdf = [](const double* f, uint32_t n, double sum, float* cdf) {
-    double running = 0;
-    cdf[0] = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      running += sum > 0 ? f[i] / sum : 1.0 / n;
-      cdf[i + 1] = i + 1 == n ? 1.0f : float(running);
-    }
-  };
-  write_cdf(row_sum.data(), h, total, dist.data());
-  for (uint32_t r = 0; r < h; ++r) write_cdf(&func[size_t(r) * w], w, row_sum[r], &dist[h + 1 + size_t(r) * (w + 1)]);
-  return integral;
 }
 
 SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
@@ -105,7 +72,8 @@ Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
 }
 
-DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin) {
+// Everything but the texel words (DeviceScene::texels), which the two public functions below copy or move.
+static DeviceScene build_device_scene_without_texels(const SceneDescription& scene, DeviceOrigin origin) {
   DeviceScene out;
   out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
   out.header = camera_header(scene.camera, out.origin);
@@ -127,9 +95,12 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
     out.features |= kMaterialFeature[m.type_id];
     if (m.color_texture != PC_INVALID) out.features |= kFeatureTextures;
   }
+  // The texel words themselves are appended by the callers (build_device_scene copies them,
+  // build_device_scene_taking_texels moves them).
+  uint64_t texel_words = 0;
   for (const TextureImage& t : scene.textures) {
-    out.textures.push_back({t.width, t.height, uint32_t(out.texels.size()), t.wrap});
-    for (const glm::vec4& texel : t.texels) out.texels.push_back({texel.x, texel.y, texel.z, texel.w});
+    out.textures.push_back({t.width, t.height, uint32_t(texel_words), t.wrap, t.format, {}});
+    texel_words += t.words.size();
   }
 
   // Primitives in scene order, with their boxes and (for emitters) light candidates.
@@ -314,5 +285,25 @@ DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origi
   out.header.prim_count = uint32_t(prims.size());
   out.header.light_count = uint32_t(out.lights.size());
   out.header.node_count = uint32_t(out.nodes.size());
+  return out;
+}
+
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin);
+  for (const TextureImage& t : scene.textures) out.texels.insert(out.texels.end(), t.words.begin(), t.words.end());
+  return out;
+}
+
+DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin);
+  if (scene.textures.size() == 1) {
+    out.texels = std::move(scene.textures[0].words);
+    scene.textures[0].words.clear();  // a moved-from vector is only valid; now it is empty
+  } else {
+    for (TextureImage& t : scene.textures) {
+      out.texels.insert(out.texels.end(), t.words.begin(), t.words.end());
+      std::vector<uint32_t>().swap(t.words);  // freed now: the peak is all texels plus one image's
+    }
+  }
   return out;
 }

@@ -11,6 +11,10 @@
 // geometry lies farther than kMaxSceneExtent from the origin.
 DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
 
+// The same, but moves the texels of scene's textures into the device scene instead of copying them
+// (each TextureImage keeps its size and format and loses its words), so that the host holds them once.
+DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin = DeviceOrigin::camera);
+
 // Geometry of a scene-order primitive as the device sees it (world minus DeviceScene::origin), for tests
 // and ray generation.
 Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index);

@@ -23,7 +23,8 @@ struct InputKind {
 inline constexpr InputKind kSceneInput{"scene file", "a JSON scene file", "a scene"};
 inline constexpr InputKind kMeshInput{"mesh file", "a Wavefront OBJ file", "a mesh"};
 inline constexpr InputKind kMaterialInput{"material file", "an MTL material file", "a material file"};
-inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG or OpenEXR)", "an image"};
+inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR)",
+                                         "an image"};
 
 // Reads up to `limit` bytes from the start of the file, or throws SceneError naming it: a directory, a
 // file that cannot be opened (and why), or a Git LFS pointer (what a clone without git lfs has in place of

@@ -37,13 +37,18 @@ struct MaterialDesc {
   float alpha = 0, sigma = 0, exponent = 1, ior = 1.5f;
 };
 
-// An image texture, linear RGB, rows from the top.
+// An image texture, rows from the top, its texels stored as the device reads them, at the precision of
+// the file (PC_TEXELS_* of kernels/shared/types.h): 8-bit sRGB, or linear half or float RGB.
+// scene/texture_load.h decodes a texel to linear RGB as the device does.
 struct TextureImage {
   std::string file;
   uint32_t width = 0, height = 0;
   uint32_t wrap = 0;               // PC_WRAP_*
+  uint32_t format = 0;             // PC_TEXELS_*
   bool reflectance = false;        // a material colour: texels clamped to [0, 1] (an environment map is not)
-  std::vector<glm::vec4> texels;
+  // The texel words (Texture.format); emptied by build_device_scene_taking_texels, which moves them
+  // into the device scene.
+  std::vector<uint32_t> words;
 };
 
 // A light that is not an emitting shape.

@@ -11,10 +11,10 @@ constexpr uint32_t kMaxFilmSide = 16384;      // camera.width and camera.height,
 // A pixel filter wider than the largest film makes no sense, and pixel positions plus filter offsets
 // stay exact to 1/256 pixel in float below 2 kMaxFilmSide.
 constexpr double kMaxFilterRadius = kMaxFilmSide;  // pixels, for "radius", and 3 "sigma" (its default radius)
-// Texels of one image (4 GiB as float4 texels), and of all textures together: texel indices on the
-// device are 32-bit (kernels/texture.cl, Texture::offset).
+// Texels of one image (3 GiB as float texels), and the 4-byte words of all textures' texels together
+// (16 GiB): word indices on the device are 32-bit (kernels/texture.cl, Texture::offset).
 constexpr uint64_t kMaxTextureTexels = uint64_t(1) << 28;
-constexpr uint64_t kMaxSceneTexels = uint64_t(1) << 32;
+constexpr uint64_t kMaxSceneTexelWords = uint64_t(1) << 32;
 // The largest value of a light's colour channel (emission, MTL Ke, intensity, irradiance, radiance, an
 // environment map's scale). The film sums each sample's square over up to kMaxSpp samples in float: a
 // radiance of 1e12 seen directly sums to 1.7e31 there, which leaves a factor of 1e7 below FLT_MAX for

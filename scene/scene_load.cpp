@@ -241,20 +241,16 @@ uint32_t add_texture_file(SceneDescription& scene, const std::string& file, cons
   } catch (const SceneError& e) {
     throw SceneError(where + ": " + e.what());
   }
-  uint64_t texels = image.texels.size();
-  for (const TextureImage& t : scene.textures) texels += t.texels.size();
-  if (texels > kMaxSceneTexels)
-    throw SceneError(where + ": " + file + ": the scene's textures would have " + std::to_string(texels) +
-                     " texels, more than the largest of " + std::to_string(kMaxSceneTexels) +
-                     " (texel indices are 32-bit on the device)");
+  uint64_t words = image.words.size();
+  for (const TextureImage& t : scene.textures) words += t.words.size();
+  if (words > kMaxSceneTexelWords)
+    throw SceneError(where + ": " + file + ": the scene's textures would take " + std::to_string(words) +
+                     " words of texels, more than the largest of " + std::to_string(kMaxSceneTexelWords) +
+                     " (texel word indices are 32-bit on the device)");
   image.wrap = wrap;
   image.reflectance = reflectance;
   if (reflectance) {
-    size_t clamped = 0;
-    for (glm::vec4& t : image.texels) {
-      if (t.x > 1 || t.y > 1 || t.z > 1) ++clamped;
-      t = glm::vec4(glm::min(glm::vec3(t), glm::vec3(1)), t.w);
-    }
+    size_t clamped = clamp_texels_to_one(image);
     if (clamped > 0)
       scene.warnings.push_back(where + ": " + file + ": " + std::to_string(clamped) +
                                " texels above 1 clamped to 1 (a reflectance above 1 would create energy)");
@@ -272,7 +268,7 @@ uint32_t add_texture(SceneDescription& scene, const Node& n, const std::filesyst
 // The largest texel value per channel.
 glm::vec3 texture_max(const TextureImage& t) {
   glm::vec3 m(0);
-  for (const glm::vec4& texel : t.texels) m = glm::max(m, glm::vec3(texel));
+  for (size_t i = 0, n = size_t(t.width) * t.height; i < n; ++i) m = glm::max(m, texel_linear(t, i));
   return m;
 }
 

@@ -1,6 +1,7 @@
 #include "scene/texture_load.h"
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <vector>
@@ -11,8 +12,10 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfRgbaFile.h>
+#include <Imath/half.h>
 #include <stb_image.h>
 
+#include "kernels/shared/srgb_table.h"
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_limits.h"
@@ -28,102 +31,130 @@ void check_size(const std::string& path, int64_t width, int64_t height) {
                      " texels is larger than the largest of " + std::to_string(kMaxTextureTexels) + " texels");
 }
 
-float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+const float kSrgbToLinear[256] = PC_SRGB_TO_LINEAR_TABLE;
 
-// RGB files are read as 32-bit floats (missing channels read as 0); only files without R, G and B
-// (luminance / chroma) go through the RGBA interface, which converts them but rounds to half floats.
-TextureImage load_exr(const std::string& path) {
+// Words for n texels of `format`; a half image ends on a whole word.
+size_t texel_words(uint32_t format, size_t n) {
+  return format == PC_TEXELS_SRGB8 ? n : format == PC_TEXELS_HALF ? (3 * n + 1) / 2 : 3 * n;
+}
+
+TextureImage empty_image(uint32_t width, uint32_t height, uint32_t format) {
   TextureImage image;
+  image.width = width;
+  image.height = height;
+  image.format = format;
+  image.words.assign(texel_words(format, size_t(width) * height), 0);
+  return image;
+}
+
+// RGB files are read as they are stored: all of R, G, B (those present) HALF as halves, anything else as
+// floats (missing channels read as 0). Only files without R, G and B (luminance / chroma) go through the
+// RGBA interface, which converts them to halves.
+TextureImage load_exr(const std::string& path) {
   try {
     Imf::InputFile file(path.c_str());
     Imath::Box2i dw = file.header().dataWindow();
     // In 64 bits: the window's corners are ints, and its width can overflow one.
     int64_t width = int64_t(dw.max.x) - dw.min.x + 1, height = int64_t(dw.max.y) - dw.min.y + 1;
     check_size(path, width, height);
-    image.width = uint32_t(width);
-    image.height = uint32_t(height);
-    image.texels.reserve(size_t(width) * height);
     const Imf::ChannelList& channels = file.header().channels();
-    if (channels.findChannel("R") || channels.findChannel("G") || channels.findChannel("B")) {
-      std::vector<float> rgb(size_t(width) * height * 3);
+    const char* names[3] = {"R", "G", "B"};
+    bool any = false, all_half = true;
+    for (const char* name : names)
+      if (const Imf::Channel* c = channels.findChannel(name)) {
+        any = true;
+        all_half = all_half && c->type == Imf::HALF;
+      }
+    if (any) {
+      const uint32_t format = all_half ? PC_TEXELS_HALF : PC_TEXELS_FLOAT;
+      const size_t channel_bytes = all_half ? 2 : 4;
+      TextureImage image = empty_image(uint32_t(width), uint32_t(height), format);
       // The frame buffer is addressed by data-window coordinates.
-      char* base = reinterpret_cast<char*>(rgb.data()) - (dw.min.x + long(dw.min.y) * width) * 3 * long(sizeof(float));
-      size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
+      size_t xs = 3 * channel_bytes, ys = xs * size_t(width);
+      char* base = reinterpret_cast<char*>(image.words.data()) - (dw.min.x + long(dw.min.y) * width) * long(xs);
       Imf::FrameBuffer fb;
-      fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-      fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-      fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+      for (size_t c = 0; c < 3; ++c)
+        fb.insert(names[c], Imf::Slice(all_half ? Imf::HALF : Imf::FLOAT, base + c * channel_bytes, xs, ys));
       file.setFrameBuffer(fb);
       file.readPixels(dw.min.y, dw.max.y);
-      for (size_t i = 0; i < size_t(width) * height; ++i)
-        image.texels.push_back({rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2], 1.0f});
       return image;
     }
     Imf::RgbaInputFile rgba(path.c_str());
     Imf::Array2D<Imf::Rgba> pixels(height, width);
     rgba.setFrameBuffer(&pixels[0][0] - dw.min.x - dw.min.y * width, 1, width);
     rgba.readPixels(dw.min.y, dw.max.y);
+    TextureImage image = empty_image(uint32_t(width), uint32_t(height), PC_TEXELS_HALF);
+    uint16_t* halves = reinterpret_cast<uint16_t*>(image.words.data());
     for (long y = 0; y < height; ++y)
       for (long x = 0; x < width; ++x) {
         const Imf::Rgba& p = pixels[y][x];
-        image.texels.push_back({float(p.r), float(p.g), float(p.b), 1.0f});
+        uint16_t* t = halves + 3 * (size_t(y) * width + x);
+        t[0] = p.r.bits();
+        t[1] = p.g.bits();
+        t[2] = p.b.bits();
       }
+    return image;
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception&) {
     // OpenEXR's own message names the file again and its internals ("Cannot read image file ...").
     throw SceneError(path + ": cannot decode the OpenEXR image (corrupt or truncated)");
   }
-  return image;
 }
 
-TextureImage load_8bit(const std::string& path) {
+// Through stb_image: 8-bit formats as sRGB bytes (RGBA), Radiance HDR (`hdr`) as floats.
+TextureImage load_stb(const std::string& path, const char* format_name, bool hdr) {
   int width = 0, height = 0, channels = 0;
   // The header alone first: stb_image would decode anything it can allocate.
   if (stbi_info(path.c_str(), &width, &height, &channels)) check_size(path, width, height);
-  std::unique_ptr<unsigned char, void (*)(void*)> data(stbi_load(path.c_str(), &width, &height, &channels, 3),
-                                                       stbi_image_free);
+  std::unique_ptr<void, void (*)(void*)> data(hdr ? static_cast<void*>(stbi_loadf(path.c_str(), &width, &height, &channels, 3))
+                                                  : static_cast<void*>(stbi_load(path.c_str(), &width, &height, &channels, 4)),
+                                              stbi_image_free);
   // stb_image's reasons are terse internals ("bad zlib header"), not for users.
-  if (!data) throw SceneError(path + ": cannot decode the PNG or JPEG image (corrupt or truncated)");
-  TextureImage image;
-  image.width = uint32_t(width);
-  image.height = uint32_t(height);
-  float table[256];
-  for (int i = 0; i < 256; ++i) table[i] = srgb_to_linear(i / 255.0f);
-  const unsigned char* p = data.get();
-  image.texels.reserve(size_t(width) * height);
-  for (size_t i = 0; i < size_t(width) * height; ++i)
-    image.texels.push_back({table[p[3 * i]], table[p[3 * i + 1]], table[p[3 * i + 2]], 1.0f});
+  if (!data) throw SceneError(path + ": cannot decode the " + format_name + " image (corrupt or truncated)");
+  TextureImage image = empty_image(uint32_t(width), uint32_t(height), hdr ? PC_TEXELS_FLOAT : PC_TEXELS_SRGB8);
+  std::memcpy(image.words.data(), data.get(), image.words.size() * sizeof(uint32_t));
   return image;
 }
 
-// Image formats pathcl does not read (stb_image could read some of them, but they are neither the 8-bit
-// sRGB nor the linear float images the format defines), by how their files begin and by extension.
+// Image formats pathcl does not read (stb_image could read some of them: GIF's palettes, Photoshop's
+// layers and PNM are not what users bring as textures), by how their files begin and by extension.
 struct ImageFormat {
   const char* name;
   std::vector<std::string> extensions, starts;
 };
 const ImageFormat kOtherImageFormats[] = {
     {"GIF", {".gif"}, {"GIF87a", "GIF89a"}},
-    {"BMP", {".bmp"}, {"BM"}},
     {"TIFF", {".tif", ".tiff"}, {std::string("II*\0", 4), std::string("MM\0*", 4)}},
     {"WebP", {".webp"}, {}},
-    {"Radiance HDR", {".hdr", ".pic"}, {"#?RADIANCE", "#?RGBE"}},
     {"Photoshop", {".psd"}, {"8BPS"}},
     {"DDS", {".dds"}, {"DDS "}},
     {"KTX", {".ktx", ".ktx2"}, {"\xabKTX"}},
     {"PFM", {".pfm"}, {"PF\n", "Pf\n"}},
-    {"TGA", {".tga"}, {}},
     {"PNM", {".ppm", ".pgm", ".pnm", ".pbm"}, {}},
     {"JPEG 2000", {".jp2", ".j2k"}, {std::string("\0\0\0\x0cjP  ", 8)}},
     {"HEIF", {".heic", ".heif", ".avif"}, {}},
 };
 
-// Names the format of an image that is not PNG, JPEG or OpenEXR, by content, then by extension.
-[[noreturn]] void refuse_image_format(const std::string& path, const std::string& head) {
-  const char* accepted = " (expected PNG, JPEG or OpenEXR: .png, .jpg, .jpeg or .exr)";
+std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// Whether the file begins like one of kOtherImageFormats.
+bool is_other_image_format(const std::string& head) {
+  for (const ImageFormat& f : kOtherImageFormats)
+    for (const std::string& s : f.starts)
+      if (head.rfind(s, 0) == 0) return true;
+  return false;
+}
+
+// Names the format of an image pathcl does not read, by content, then by extension.
+[[noreturn]] void refuse_image_format(const std::string& path, const std::string& head) {
+  const char* accepted =
+      " (expected PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR: .png, .jpg, .jpeg, .bmp, .tga, .hdr or .exr)";
+  const std::string ext = lower_extension(path);
   for (const ImageFormat& f : kOtherImageFormats)
     for (const std::string& s : f.starts)
       if (head.rfind(s, 0) == 0) throw SceneError(path + ": " + f.name + " images are not supported" + accepted);
@@ -139,16 +170,70 @@ TextureImage load_texture_image(const std::string& path) {
   const std::string head = read_input_file(path, kImageInput, 64);
   auto starts = [&](const char* magic) { return head.rfind(magic, 0) == 0; };
   TextureImage image;
-  // The format is told by the content, which is what the readers go by, not by the name.
+  // The format is told by the content, which is what the readers go by, not by the name; TGA files have
+  // no signature, so a .tga file that is no other format is read as TGA.
   if (starts("\x76\x2f\x31\x01"))
     image = load_exr(path);
-  else if (starts("\x89PNG\r\n\x1a\n") || starts("\xff\xd8\xff"))
-    image = load_8bit(path);
+  else if (starts("\x89PNG\r\n\x1a\n"))
+    image = load_stb(path, "PNG", false);
+  else if (starts("\xff\xd8\xff"))
+    image = load_stb(path, "JPEG", false);
+  else if (starts("BM"))
+    image = load_stb(path, "BMP", false);
+  else if (starts("#?RADIANCE") || starts("#?RGBE"))
+    image = load_stb(path, "Radiance HDR", true);
+  else if (lower_extension(path) == ".tga" && !is_other_image_format(head))
+    image = load_stb(path, "TGA", false);
   else
     refuse_image_format(path, head);
-  for (const glm::vec4& t : image.texels)
-    if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z)) || t.x < 0 || t.y < 0 || t.z < 0)
-      throw SceneError(path + ": texels must be finite and non-negative");
+  if (image.format != PC_TEXELS_SRGB8)
+    for (size_t i = 0, n = size_t(image.width) * image.height; i < n; ++i) {
+      glm::vec3 t = texel_linear(image, i);
+      if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z)) || t.x < 0 || t.y < 0 || t.z < 0)
+        throw SceneError(path + ": texels must be finite and non-negative");
+    }
   image.file = path;
   return image;
+}
+
+glm::vec3 texel_linear(const TextureImage& image, size_t i) {
+  const char* bytes = reinterpret_cast<const char*>(image.words.data());
+  if (image.format == PC_TEXELS_SRGB8) {
+    const unsigned char* b = reinterpret_cast<const unsigned char*>(bytes + 4 * i);
+    return {kSrgbToLinear[b[0]], kSrgbToLinear[b[1]], kSrgbToLinear[b[2]]};
+  }
+  if (image.format == PC_TEXELS_HALF) {
+    uint16_t h[3];
+    std::memcpy(h, bytes + 6 * i, 6);
+    half r, g, b;
+    r.setBits(h[0]);
+    g.setBits(h[1]);
+    b.setBits(h[2]);
+    return {float(r), float(g), float(b)};
+  }
+  float f[3];
+  std::memcpy(f, bytes + 12 * i, 12);
+  return {f[0], f[1], f[2]};
+}
+
+size_t clamp_texels_to_one(TextureImage& image) {
+  if (image.format == PC_TEXELS_SRGB8) return 0;
+  size_t clamped = 0;
+  char* bytes = reinterpret_cast<char*>(image.words.data());
+  for (size_t i = 0, n = size_t(image.width) * image.height; i < n; ++i) {
+    glm::vec3 t = texel_linear(image, i);
+    if (!(t.x > 1 || t.y > 1 || t.z > 1)) continue;
+    ++clamped;
+    for (int c = 0; c < 3; ++c) {
+      if (!(t[c] > 1)) continue;
+      if (image.format == PC_TEXELS_HALF) {
+        uint16_t one = half(1.0f).bits();
+        std::memcpy(bytes + 6 * i + 2 * c, &one, 2);
+      } else {
+        float one = 1.0f;
+        std::memcpy(bytes + 12 * i + 4 * c, &one, 4);
+      }
+    }
+  }
+  return clamped;
 }

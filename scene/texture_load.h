@@ -1,11 +1,23 @@
 // Image files for textures and environment maps.
 #pragma once
+#include <cstddef>
 #include <string>
+
+#include <glm/vec3.hpp>
 
 #include "scene/scene_description.h"
 
-// Reads a PNG or JPEG file (8-bit sRGB, converted to linear) or an OpenEXR file (linear) into linear
-// RGB texels, rows from the top; the format is recognised by the file's content, whatever its name.
-// Throws SceneError naming the file on anything it cannot read (another image format is named, with
-// the formats accepted), or on texels that are not finite and non-negative.
+// Reads an image file into texels at the precision of the file (TextureImage::format), rows from the top:
+// PNG, JPEG, BMP and TGA as 8-bit sRGB (4 bytes a texel, alpha kept), OpenEXR as half or float (float when
+// any of R, G, B is not HALF), Radiance HDR as float. The format is recognised by the file's content,
+// whatever its name; TGA, which has no signature, by the extension .tga. Throws SceneError naming the
+// file on anything it cannot read (another image format is named, with the formats accepted), or on
+// texels that are not finite and non-negative.
 TextureImage load_texture_image(const std::string& path);
+
+// Linear RGB of texel i (rows from the top), as the device decodes it (kernels/texture.cl).
+glm::vec3 texel_linear(const TextureImage& image, size_t i);
+
+// Clamps every channel above 1 to 1 (an 8-bit texel never is above 1); returns the number of texels
+// that changed.
+size_t clamp_texels_to_one(TextureImage& image);

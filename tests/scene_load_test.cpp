@@ -77,7 +77,7 @@ TEST(SceneLoad, DirectoriesAndMissingFilesAreNamedAsSuch) {
        dir + "/meshes/../lib-dir.mtl: is a directory, expected an MTL material file"},
       {scene("texture-dir.json", R"("m": {"type": "diffuse", "reflectance": {"texture": "tex/dir.png"}})", sphere),
        dir + "/texture-dir.json: materials.m.reflectance.texture: " + dir +
-           "/tex/dir.png: is a directory, expected an image file (PNG, JPEG or OpenEXR)"},
+           "/tex/dir.png: is a directory, expected an image file (PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR)"},
       {scene("texture-missing.json", R"("m": {"type": "diffuse", "reflectance": {"texture": "tex/none.png"}})", sphere),
        dir + "/texture-missing.json: materials.m.reflectance.texture: " + dir +
            "/tex/none.png: cannot open the image file: no such file"},
@@ -1023,11 +1023,9 @@ TEST(SceneLoad, FloatExrTexelsKeepFullPrecisionAndRange) {
   TextureImage t = load_texture_image(path);
   ASSERT_EQ(t.width, 3u);
   ASSERT_EQ(t.height, 2u);
-  for (size_t i = 0; i < 6; ++i) {
-    EXPECT_EQ(t.texels[i].x, img.rgb[3 * i]) << "texel " << i;
-    EXPECT_EQ(t.texels[i].y, img.rgb[3 * i + 1]) << "texel " << i;
-    EXPECT_EQ(t.texels[i].z, img.rgb[3 * i + 2]) << "texel " << i;
-  }
+  ASSERT_EQ(t.format, PC_TEXELS_FLOAT);
+  for (size_t i = 0; i < 6; ++i)
+    EXPECT_EQ(texel_linear(t, i), glm::vec3(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2])) << "texel " << i;
 }
 
 TEST(SceneLoad, DeviceSceneIsCameraRelativeWithPositionsSubtractedInDouble) {

@@ -3,11 +3,18 @@
 // reflects exactly its reflectance times the sky's radiance.
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <random>
 #include <sstream>
+
+#include <ImfRgbaFile.h>
+#include <Imath/half.h>
+#include <stb_image_write.h>
 
 #include <gtest/gtest.h>
 
 #include "runtime/image_io.h"
+#include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
 #include "scene/texture_load.h"
 #include "test_support.h"
@@ -28,16 +35,28 @@ struct HostTexture {
   glm::vec3 at(int x, int y) const { return texels[size_t(y) * width + x]; }
 };
 
+// A float texture image (PC_TEXELS_FLOAT) of a host texture.
+TextureImage float_image(const HostTexture& t) {
+  TextureImage image;
+  image.width = t.width;
+  image.height = t.height;
+  image.wrap = t.wrap;
+  image.format = PC_TEXELS_FLOAT;
+  image.words.resize(3 * t.texels.size());
+  std::memcpy(image.words.data(), t.texels.data(), image.words.size() * 4);
+  return image;
+}
+
 // Runs texture_lookup on the device for texture `index` of `textures` at each uv.
-std::vector<glm::vec3> device_lookups(const std::vector<HostTexture>& textures, uint32_t index,
+std::vector<glm::vec3> device_lookups(const std::vector<TextureImage>& textures, uint32_t index,
                                       const std::vector<glm::vec2>& uvs) {
   ClContext& cl = test_device();
   static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
   std::vector<Texture> headers;
-  std::vector<pc_float4> texels;
-  for (const HostTexture& t : textures) {
-    headers.push_back({t.width, t.height, uint32_t(texels.size()), t.wrap});
-    for (const glm::vec3& c : t.texels) texels.push_back({c.x, c.y, c.z, 1});
+  std::vector<pc_uint> texels;
+  for (const TextureImage& t : textures) {
+    headers.push_back({t.width, t.height, uint32_t(texels.size()), t.wrap, t.format, {}});
+    texels.insert(texels.end(), t.words.begin(), t.words.end());
   }
   std::vector<float> flat;
   for (const glm::vec2& uv : uvs) flat.insert(flat.end(), {uv.x, uv.y});
@@ -94,7 +113,7 @@ TEST(TextureLookup, TexelCentresGiveTexelsAndBilinearBetweenThem) {
   uvs.push_back(centre_uv(t, 0.25, 1.75));
   want.push_back(0.75f * 0.25f * t.at(0, 1) + 0.25f * 0.25f * t.at(1, 1) + 0.75f * 0.75f * t.at(0, 2) +
                  0.25f * 0.75f * t.at(1, 2));
-  std::vector<glm::vec3> got = device_lookups({t}, 0, uvs);
+  std::vector<glm::vec3> got = device_lookups({float_image(t)}, 0, uvs);
   for (size_t i = 0; i < uvs.size(); ++i)
     expect_near(got[i], want[i], 1e-5f, "uv (" + std::to_string(uvs[i].x) + ", " + std::to_string(uvs[i].y) + ")");
 }
@@ -124,8 +143,10 @@ TEST(TextureLookup, WrapModesOutsideTheUnitSquare) {
   };
   std::vector<glm::vec2> uvs;
   for (const Case& c : cases) uvs.push_back(c.uv);
-  std::vector<glm::vec3> repeat = device_lookups(textures, 0, uvs), clamp = device_lookups(textures, 1, uvs),
-                         mirror = device_lookups(textures, 2, uvs);
+  std::vector<TextureImage> images;
+  for (const HostTexture& h : textures) images.push_back(float_image(h));
+  std::vector<glm::vec3> repeat = device_lookups(images, 0, uvs), clamp = device_lookups(images, 1, uvs),
+                         mirror = device_lookups(images, 2, uvs);
   for (size_t i = 0; i < cases.size(); ++i) {
     std::string where = "case " + std::to_string(i);
     // 1000 periods away the uv itself is only good to about 6e-5, a few thousandths of a texel.
@@ -138,6 +159,10 @@ TEST(TextureLookup, WrapModesOutsideTheUnitSquare) {
 
 // ---- Image files --------------------------------------------------------------------------------------
 
+const char* const kQuad = R"({"type": "triangles", "positions": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
+      "indices": [[0, 1, 2], [0, 2, 3]], "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]], "material": "m"})";
+
+
 TEST(TextureFile, PngIsDecodedWithTheSrgbCurveRowsFromTheTop) {
   std::vector<unsigned char> rgb;
   for (int row = 0; row < 2; ++row)
@@ -148,15 +173,110 @@ TEST(TextureFile, PngIsDecodedWithTheSrgbCurveRowsFromTheTop) {
   TextureImage image = load_texture_image(write_temp_png("srgb.png", 256, 2, rgb));
   ASSERT_EQ(image.width, 256u);
   ASSERT_EQ(image.height, 2u);
-  for (size_t i = 0; i < image.texels.size(); ++i)
+  // Stored as the file's bytes, 4 a texel (alpha 255 for an RGB file), decoded by the shared table to
+  // the float nearest to the formula.
+  ASSERT_EQ(image.format, PC_TEXELS_SRGB8);
+  ASSERT_EQ(image.words.size(), 512u);
+  for (size_t i = 0; i < 512; ++i) {
+    const unsigned char* bytes = reinterpret_cast<const unsigned char*>(&image.words[i]);
+    ASSERT_EQ(bytes[3], 255) << "texel " << i;
     for (int c = 0; c < 3; ++c) {
-      double want = srgb_decode(rgb[3 * i + c]);
-      ASSERT_NEAR(image.texels[i][c], want, 1e-6 * want + 1e-9) << "texel " << i << " channel " << c;
+      ASSERT_EQ(bytes[c], rgb[3 * i + c]) << "texel " << i << " channel " << c;
+      ASSERT_EQ(texel_linear(image, i)[c], float(srgb_decode(rgb[3 * i + c]))) << "texel " << i << " channel " << c;
     }
+  }
 }
 
-const char* const kQuad = R"({"type": "triangles", "positions": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
-      "indices": [[0, 1, 2], [0, 2, 3]], "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]], "material": "m"})";
+// ---- Texel formats on the device ----------------------------------------------------------------------
+
+// A w x h image of `format` whose texels hold the given linear values (exactly representable in it).
+TextureImage image_of(uint32_t format, uint32_t w, uint32_t h, const std::vector<glm::vec3>& values) {
+  TextureImage image;
+  image.width = w;
+  image.height = h;
+  image.wrap = PC_WRAP_REPEAT;
+  image.format = format;
+  if (format == PC_TEXELS_FLOAT) {
+    image.words.resize(3 * values.size());
+    std::memcpy(image.words.data(), values.data(), 12 * values.size());
+  } else if (format == PC_TEXELS_HALF) {
+    std::vector<uint16_t> halves;
+    for (const glm::vec3& v : values)
+      for (int c = 0; c < 3; ++c) halves.push_back(half(v[c]).bits());
+    image.words.resize((halves.size() + 1) / 2);
+    std::memcpy(image.words.data(), halves.data(), 2 * halves.size());
+  }
+  return image;
+}
+
+// The same texels as 8-bit sRGB, half and float textures (one texel array, so offsets and the half
+// image's odd length are exercised) give bit-identical lookups: the decoding is exact and the bilinear
+// arithmetic is the same, so an 8-bit texture renders exactly as the float image of its decoded values.
+TEST(TextureLookup, SrgbHalfAndFloatTexelsGiveTheSameLookups) {
+  const uint32_t w = 5, h = 3;
+  TextureImage srgb;
+  srgb.width = w;
+  srgb.height = h;
+  srgb.format = PC_TEXELS_SRGB8;
+  std::vector<glm::vec3> values;
+  for (uint32_t i = 0; i < w * h; ++i) {
+    unsigned char b[4] = {(unsigned char)(17 * i), (unsigned char)(255 - 13 * i), (unsigned char)(i * i), 0};
+    uint32_t word;
+    std::memcpy(&word, b, 4);
+    srgb.words.push_back(word);
+    values.push_back(texel_linear(srgb, i));
+  }
+  // Halves hold sRGB-decoded floats only approximately: the half image gets values halves hold exactly.
+  std::vector<glm::vec3> half_values;
+  for (const glm::vec3& v : values) half_values.push_back({float(half(v.x)), float(half(v.y)), float(half(v.z))});
+  std::vector<TextureImage> images = {image_of(PC_TEXELS_FLOAT, w, h, half_values), srgb,
+                                      image_of(PC_TEXELS_HALF, w, h, half_values), image_of(PC_TEXELS_FLOAT, w, h, values)};
+  std::vector<glm::vec2> uvs;
+  for (int i = 0; i < 64; ++i) uvs.push_back({0.37f * float(i) - 3.0f, 0.113f * float(i * i % 29) - 1.0f});
+  std::vector<glm::vec3> from_float = device_lookups(images, 3, uvs), from_srgb = device_lookups(images, 1, uvs);
+  std::vector<glm::vec3> from_half = device_lookups(images, 2, uvs), from_half_float = device_lookups(images, 0, uvs);
+  for (size_t i = 0; i < uvs.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(from_srgb[i][c], from_float[i][c]) << "uv " << i << " channel " << c;
+      ASSERT_EQ(from_half[i][c], from_half_float[i][c]) << "uv " << i << " channel " << c;
+    }
+  // And at texel centres, the texel itself (within the rounding of the float uv of a centre).
+  std::vector<glm::vec2> centres;
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x) centres.push_back({(x + 0.5f) / w, 1.0f - (y + 0.5f) / h});
+  std::vector<glm::vec3> at_centres = device_lookups(images, 1, centres);
+  for (size_t i = 0; i < centres.size(); ++i) expect_near(at_centres[i], values[i], 1e-6f, "texel " + std::to_string(i));
+}
+
+// The host's texel bytes for a large texture, and that the device scene takes them without a copy.
+TEST(TextureFile, TexelsAreStoredAtTheFilesPrecisionAndHeldOnceOnTheHost) {
+  const int w = 1024, h = 512;
+  std::vector<unsigned char> rgb(size_t(w) * h * 3);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = (unsigned char)(i * 7919 % 251);
+  write_temp_png("big/big.png", w, h, rgb);
+  Image exr;
+  exr.width = w;
+  exr.height = h;
+  exr.rgb.assign(size_t(w) * h * 3, 0.5f);
+  write_exr(temp_dir() + "/big/big.exr", exr);
+  std::string json = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "width": 4, "height": 4},
+    "materials": {"m": {"type": "diffuse", "reflectance": {"texture": "big/big.png"}}},
+    "shapes": [)" + std::string(kQuad) + R"(], "lights": [{"type": "environment", "file": "big/big.exr"}]})";
+  SceneDescription scene = load_scene(write_temp_file("big.json", json));
+  ASSERT_EQ(scene.textures.size(), 2u);
+  const size_t texels = size_t(w) * h;
+  EXPECT_EQ(scene.textures[0].words.size() * 4, 4 * texels);   // 8-bit sRGB: 4 bytes a texel (was 16)
+  EXPECT_EQ(scene.textures[1].words.size() * 4, 12 * texels);  // 32-bit float EXR: 12 bytes a texel (was 16)
+  DeviceScene copied = build_device_scene(scene);
+  EXPECT_EQ(copied.texels.size() * 4, 16 * texels);
+  DeviceScene taken = build_device_scene_taking_texels(scene);
+  EXPECT_EQ(taken.texels, copied.texels);
+  EXPECT_TRUE(scene.textures[0].words.empty() && scene.textures[1].words.empty());
+  EXPECT_EQ(taken.textures[1].offset, texels);
+  EXPECT_EQ(taken.textures[1].format, PC_TEXELS_FLOAT);
+  std::printf("  %d x %d: 8-bit texture %zu bytes, float texture %zu bytes, device texel array %zu bytes\n", w, h,
+              4 * texels, 12 * texels, taken.texels.size() * 4);
+}
 
 TEST(TextureFile, ExrReflectanceAboveOneIsClampedWithAWarningButAnEnvironmentMapIsNot) {
   Image exr;
@@ -174,11 +294,11 @@ TEST(TextureFile, ExrReflectanceAboveOneIsClampedWithAWarningButAnEnvironmentMap
   const TextureImage& reflectance = scene.textures[scene.materials[0].color_texture];
   EXPECT_TRUE(reflectance.reflectance);
   EXPECT_EQ(reflectance.wrap, PC_WRAP_CLAMP);
-  EXPECT_EQ(reflectance.texels[0], glm::vec4(1.0f, 0.5f, 1.0f, 1.0f));
-  EXPECT_EQ(reflectance.texels[1], glm::vec4(0.25f, 1.0f, 0.0f, 1.0f));
+  EXPECT_EQ(texel_linear(reflectance, 0), glm::vec3(1.0f, 0.5f, 1.0f));
+  EXPECT_EQ(texel_linear(reflectance, 1), glm::vec3(0.25f, 1.0f, 0.0f));
   const TextureImage& env = scene.textures[scene.lights[0].texture];
   EXPECT_FALSE(env.reflectance);
-  EXPECT_EQ(env.texels[0].x, 2.0f);
+  EXPECT_EQ(texel_linear(env, 0).x, 2.0f);
   ASSERT_EQ(scene.warnings.size(), 1u);
   EXPECT_NE(scene.warnings[0].find("materials.m.reflectance.texture"), std::string::npos) << scene.warnings[0];
   EXPECT_NE(scene.warnings[0].find("2 texels above 1 clamped to 1"), std::string::npos) << scene.warnings[0];
@@ -195,7 +315,7 @@ std::string png_header_only(const std::string& name, uint32_t width, uint32_t he
   return write_temp_file(name, std::string("\x89PNG\r\n\x1a\n", 8) + ihdr + be32(0) + "IEND" + be32(0));
 }
 
-// Images beyond 2^28 texels (4 GiB as float4 texels) are refused from their header, before decoding.
+// Images beyond 2^28 texels (3 GiB as float texels) are refused from their header, before decoding.
 TEST(TextureFile, ImagesBeyondTheTexelLimitAreRefusedFromTheirHeader) {
   std::string path = png_header_only("huge.png", 16384, 16385);
   try {
@@ -207,25 +327,101 @@ TEST(TextureFile, ImagesBeyondTheTexelLimitAreRefusedFromTheirHeader) {
   }
 }
 
+// TGA (plain and run-length encoded) and BMP files load to the same bytes as the PNG of the same pixels.
+TEST(TextureFile, TgaAndBmpGiveThePngsTexels) {
+  const int w = 37, h = 5;  // rows of 37 * 3 bytes: BMP pads them to 4
+  std::vector<unsigned char> rgb(size_t(w) * h * 3);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = (unsigned char)(i * 31 % 256 / (i % 5 == 0 ? 64 : 1));
+  TextureImage png = load_texture_image(write_temp_png("images/pixels.png", w, h, rgb));
+  ASSERT_EQ(png.format, PC_TEXELS_SRGB8);
+  std::string dir = temp_dir() + "/images/";
+  stbi_write_tga_with_rle = 0;
+  ASSERT_TRUE(stbi_write_tga((dir + "plain.tga").c_str(), w, h, 3, rgb.data()));
+  stbi_write_tga_with_rle = 1;
+  ASSERT_TRUE(stbi_write_tga((dir + "rle.TGA").c_str(), w, h, 3, rgb.data()));
+  ASSERT_TRUE(stbi_write_bmp((dir + "pixels.bmp").c_str(), w, h, 3, rgb.data()));
+  for (const char* name : {"plain.tga", "rle.TGA", "pixels.bmp"}) {
+    TextureImage t = load_texture_image(dir + name);
+    EXPECT_EQ(t.width, uint32_t(w)) << name;
+    EXPECT_EQ(t.height, uint32_t(h)) << name;
+    EXPECT_EQ(t.format, PC_TEXELS_SRGB8) << name;
+    EXPECT_EQ(t.words, png.words) << name;
+  }
+}
+
+// A Radiance HDR file loads to the same floats as the 32-bit EXR of the same pixels. The values are
+// those RGBE holds exactly (8-bit mantissas under the largest channel's exponent), over 60 octaves, far
+// beyond half's range; widths 5 and 40 are written without and with run-length encoding.
+TEST(TextureFile, RadianceHdrGivesTheExrsTexels) {
+  for (int w : {5, 40}) {
+    const int h = 3;
+    std::vector<float> rgb;
+    std::mt19937 gen{uint32_t(w)};
+    for (int i = 0; i < w * h; ++i) {
+      int exponent = int(gen() % 60) - 30;
+      unsigned char b[3] = {(unsigned char)(128 + gen() % 128), (unsigned char)(gen() % 256), (unsigned char)(gen() % 256)};
+      for (int c = 0; c < 3; ++c) rgb.push_back(std::ldexp(float(b[(c + i) % 3]), exponent - 8));
+    }
+    std::string hdr = temp_dir() + "/images/sky" + std::to_string(w) + ".hdr";
+    ASSERT_TRUE(stbi_write_hdr(hdr.c_str(), w, h, 3, rgb.data()));
+    Image exr;
+    exr.width = uint32_t(w);
+    exr.height = uint32_t(h);
+    exr.rgb = rgb;
+    write_exr(temp_dir() + "/images/sky.exr", exr);
+    TextureImage from_hdr = load_texture_image(hdr), from_exr = load_texture_image(temp_dir() + "/images/sky.exr");
+    ASSERT_EQ(from_hdr.format, PC_TEXELS_FLOAT);
+    ASSERT_EQ(from_exr.format, PC_TEXELS_FLOAT);
+    EXPECT_EQ(from_hdr.width, uint32_t(w));
+    EXPECT_EQ(from_hdr.words, from_exr.words) << "width " << w;
+    for (int i = 0; i < w * h; ++i)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(texel_linear(from_hdr, i)[c], rgb[3 * i + c]) << "texel " << i;
+  }
+}
+
+// A half-float EXR is kept as halves, 6 bytes a texel.
+TEST(TextureFile, HalfExrIsKeptAsHalves) {
+  const int w = 3, h = 1;
+  std::string path = temp_dir() + "/images/half.exr";
+  Imf::Rgba pixels[3] = {{half(0.5f), half(2.0f), half(60000.0f), half(1.0f)},
+                         {half(1e-3f), half(0.0f), half(3.25f), half(1.0f)},
+                         {half(7.0f), half(0.1f), half(0.2f), half(1.0f)}};
+  {
+    Imf::RgbaOutputFile out(path.c_str(), w, h, Imf::WRITE_RGB);
+    out.setFrameBuffer(pixels, 1, w);
+    out.writePixels(h);
+  }
+  TextureImage t = load_texture_image(path);
+  ASSERT_EQ(t.format, PC_TEXELS_HALF);
+  EXPECT_EQ(t.words.size(), 5u);  // 9 halves
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(texel_linear(t, i), glm::vec3(float(pixels[i].r), float(pixels[i].g), float(pixels[i].b))) << i;
+}
+
 // Images are recognised by content: another format is named, with the formats accepted; an undecodable
 // file is corrupt or truncated, in our words rather than stb_image's ("unknown image type", "bad IHDR
 // len") or OpenEXR's.
 TEST(TextureFile, OtherFormatsAndBrokenFilesAreNamed) {
   std::string png = read_text_file(write_temp_png("formats/real.png", 2, 1, {255, 0, 0, 0, 255, 0}));
-  const std::string accepted = " (expected PNG, JPEG or OpenEXR: .png, .jpg, .jpeg or .exr)";
+  const std::string accepted =
+      " (expected PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR: .png, .jpg, .jpeg, .bmp, .tga, .hdr or .exr)";
   struct Case {
     std::string file, content, expected;  // expected "" = it loads
   } cases[] = {
       {"anim.gif", "GIF89a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
       {"gif-inside.png", "GIF87a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
-      {"sky.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "Radiance HDR images are not supported" + accepted},
-      {"old.tga", std::string("\x00\x00\x02\x00", 4), "TGA images are not supported" + accepted},
+      {"sky.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", "cannot decode the Radiance HDR image (corrupt or truncated)"},
+      {"old.tga", std::string("\x00\x00\x02\x00", 4), "cannot decode the TGA image (corrupt or truncated)"},
+      {"old.bmp", "BM\x10\x00", "cannot decode the BMP image (corrupt or truncated)"},
+      {"gif-inside.tga", "GIF89a\x01\x00\x01\x00", "GIF images are not supported" + accepted},
+      {"layers.psd", "8BPS\x00\x01", "Photoshop images are not supported" + accepted},
+      {"notes.bmp", "not a bitmap", "unrecognised image format" + accepted},
       {"scan.tiff", std::string("II*\x00", 4), "TIFF images are not supported" + accepted},
       {"notes.png", "these are not pixels", "unrecognised image format" + accepted},
       {"empty.png", "", "unrecognised image format" + accepted},
       {"lfs.png", "version https://git-lfs.github.com/spec/v1\noid sha256:00\nsize 1\n",
        "looks like a Git LFS pointer, not an image (run git lfs pull)"},
-      {"truncated.png", png.substr(0, 40), "cannot decode the PNG or JPEG image (corrupt or truncated)"},
+      {"truncated.png", png.substr(0, 40), "cannot decode the PNG image (corrupt or truncated)"},
       {"truncated.exr", std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8), "cannot decode the OpenEXR image (corrupt or truncated)"},
       {"png-inside.jpg", png, ""},
   };
@@ -329,6 +525,39 @@ TEST(TextureRender, ObjQuadWithTexcoordsReflectsTheTextureTimesTheSky) {
   write_temp_file("square.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 1 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
                                 "f 1/2 2/3 3/1 4/4\n");
   expect_textured_square(R"({"type": "mesh", "file": "square.obj", "material": "m"})", false, "square-obj");
+}
+
+// An 8-bit texture renders exactly as the 32-bit float EXR of its decoded texels: bit for bit, since
+// the device decodes the bytes to those same floats and filters them by the same arithmetic. (Before
+// texels were kept at their file's precision, the host decoded them with powf in float arithmetic,
+// up to a few ulps from the nearest float that the shared table now holds: the images of that time
+// differ from these by that rounding, far below the noise.)
+TEST(TextureRender, EightBitTextureRendersExactlyAsTheFloatImageOfItsTexels) {
+  TextureImage png = load_texture_image(write_block_png());
+  Image exr;
+  exr.width = png.width;
+  exr.height = png.height;
+  for (size_t i = 0; i < size_t(png.width) * png.height; ++i) {
+    glm::vec3 t = texel_linear(png, i);
+    exr.rgb.insert(exr.rgb.end(), {t.x, t.y, t.z});
+  }
+  write_exr(temp_dir() + "/blocks.exr", exr);
+  std::vector<float> images[2];
+  for (int k = 0; k < 2; ++k) {
+    std::string json = R"({"camera": {"position": [0.3, 0.2, 2.5], "look_at": [0, 0, 0], "width": 16, "height": 16},
+      "materials": {"m": {"type": "diffuse", "reflectance": {"texture": ")" + std::string(k ? "blocks.exr" : "blocks.png") +
+                       R"(", "wrap": "mirror"}}},
+      "shapes": [)" + std::string(kQuad) + R"(], "lights": [{"type": "environment", "radiance": [1, 1, 1]}]})";
+    DeviceScene d = load_device_scene(write_temp_file("blocks-" + std::to_string(k) + ".json", json));
+    ASSERT_EQ(d.textures[0].format, k ? PC_TEXELS_FLOAT : PC_TEXELS_SRGB8);
+    RenderOptions opt;
+    opt.spp = 16;
+    opt.max_depth = 2;
+    opt.seed = 3;
+    images[k] = render(test_device(), d, opt).film.mean;
+  }
+  ASSERT_EQ(images[0].size(), images[1].size());
+  EXPECT_EQ(std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float)), 0);
 }
 
 TEST(TextureRender, MirroringTransformMirrorsTheTexture) {

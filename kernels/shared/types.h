@@ -158,13 +158,23 @@ typedef struct {
   pc_uint texture;     /* environment: lat-long map in textures, or PC_INVALID for a constant */
 } Light;
 
-/* An image in the texel array (linear RGB float4 texels, rows top to bottom).
- * width (4) + height (4) + offset (4) + wrap (4) = 16 bytes. */
+/* How a texture's texels are stored in the texel words (Texture.format), at the precision of the file:
+ *   SRGB8: 4 bytes a texel, R G B A in byte order, 8-bit sRGB (decoded by kernels/shared/srgb_table.h)
+ *   HALF:  6 bytes a texel, linear R G B as IEEE half floats (OpenEXR HALF channels)
+ *   FLOAT: 12 bytes a texel, linear R G B as floats (OpenEXR FLOAT channels, Radiance HDR) */
+#define PC_TEXELS_SRGB8 0u
+#define PC_TEXELS_HALF 1u
+#define PC_TEXELS_FLOAT 2u
+
+/* An image in the texel words, rows top to bottom; each image starts at a word.
+ * width (4) + height (4) + offset (4) + wrap (4) + format (4) + pad (12) = 32 bytes. */
 typedef struct {
   pc_uint width;
   pc_uint height;
-  pc_uint offset; /* index of the first texel */
+  pc_uint offset; /* index of the image's first word in texels */
   pc_uint wrap;   /* PC_WRAP_* */
+  pc_uint format; /* PC_TEXELS_* */
+  pc_uint pad[3];
 } Texture;
 
 /* Everything a render pass needs besides the arrays: 4 x 16 + 16 x 4 = 128 bytes. */
@@ -224,8 +234,9 @@ typedef struct {
  * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
-  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading) X(pc_float4, normals) X(pc_float4, uvs) \
-  X(Material, materials) X(Light, lights) X(float, light_cdf) X(Texture, textures) X(pc_float4, texels)  \
+  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading)  \
+  X(pc_float4, normals) X(pc_float4, uvs) X(Material, materials) X(Light, lights) X(float, light_cdf)          \
+  X(Texture, textures) X(pc_uint, texels)                                                                      \
   X(float, env_dist)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
@@ -241,7 +252,7 @@ typedef struct {
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
   X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
   X(Light, area) X(Light, select_pdf) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture)           \
-  X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
+  X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(Texture, format) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
   X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(SceneHeader, lens_radius) X(SceneHeader, focus_distance) X(SceneHeader, filter)  \
@@ -257,7 +268,7 @@ static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
 static_assert(sizeof(Material) == 80, "Material is 80 bytes");
 static_assert(sizeof(Light) == 80, "Light is 80 bytes");
-static_assert(sizeof(Texture) == 16, "Texture is 16 bytes");
+static_assert(sizeof(Texture) == 32, "Texture is 32 bytes");
 static_assert(sizeof(SceneHeader) == 128, "SceneHeader is 128 bytes");
 static_assert(sizeof(UnitStats) == 32, "UnitStats is 32 bytes");
 static_assert(sizeof(RayRecord) == 32, "RayRecord is 32 bytes");
