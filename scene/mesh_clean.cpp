@@ -241,6 +241,25 @@ void orient_parts_by_signed_volume(Mesh& mesh) {
   mesh.remove_property_map(part);
 }
 
+// Checks per-corner attributes laid out as PolygonSoup's uvs and normals: none, or per polygon one per
+// corner or nothing, all finite.
+template <class Vec>
+void check_corner_attributes(const PolygonSoup& soup, const std::vector<std::vector<Vec>>& values, const char* plural,
+                             const char* singular) {
+  if (values.empty()) return;
+  if (values.size() != soup.polygons.size())
+    throw SceneError(std::to_string(values.size()) + " polygons with " + plural + " for " +
+                     std::to_string(soup.polygons.size()) + " polygons");
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!values[i].empty() && values[i].size() != soup.polygons[i].size())
+      throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(values[i].size()) + " " + plural +
+                       " for " + std::to_string(soup.polygons[i].size()) + " corners");
+    for (const Vec& value : values[i])
+      for (int c = 0; c < Vec::length(); ++c)
+        if (!std::isfinite(value[c])) throw SceneError("polygon " + std::to_string(i) + ": " + singular + " is not finite");
+  }
+}
+
 TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
   report = CleanReport{};
   report.input_vertices = soup.positions.size();
@@ -265,32 +284,8 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
                          " out of range");
     polygons.emplace_back(soup.polygons[i].begin(), soup.polygons[i].end());
   }
-  if (!soup.uvs.empty()) {
-    if (soup.uvs.size() != soup.polygons.size())
-      throw SceneError(std::to_string(soup.uvs.size()) + " polygons with texture coordinates for " +
-                       std::to_string(soup.polygons.size()) + " polygons");
-    for (std::size_t i = 0; i < soup.uvs.size(); ++i) {
-      if (!soup.uvs[i].empty() && soup.uvs[i].size() != soup.polygons[i].size())
-        throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(soup.uvs[i].size()) +
-                         " texture coordinates for " + std::to_string(soup.polygons[i].size()) + " corners");
-      for (const glm::vec2& uv : soup.uvs[i])
-        if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
-          throw SceneError("polygon " + std::to_string(i) + ": texture coordinate is not finite");
-    }
-  }
-  if (!soup.normals.empty()) {
-    if (soup.normals.size() != soup.polygons.size())
-      throw SceneError(std::to_string(soup.normals.size()) + " polygons with normals for " +
-                       std::to_string(soup.polygons.size()) + " polygons");
-    for (std::size_t i = 0; i < soup.normals.size(); ++i) {
-      if (!soup.normals[i].empty() && soup.normals[i].size() != soup.polygons[i].size())
-        throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(soup.normals[i].size()) +
-                         " normals for " + std::to_string(soup.polygons[i].size()) + " corners");
-      for (const glm::vec3& n : soup.normals[i])
-        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
-          throw SceneError("polygon " + std::to_string(i) + ": normal is not finite");
-    }
-  }
+  check_corner_attributes(soup, soup.uvs, "texture coordinates", "texture coordinate");
+  check_corner_attributes(soup, soup.normals, "normals", "normal");
   if (!soup.materials.empty() && soup.materials.size() != soup.polygons.size())
     throw SceneError(std::to_string(soup.materials.size()) + " material ids for " +
                      std::to_string(soup.polygons.size()) + " polygons");

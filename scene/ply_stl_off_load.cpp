@@ -79,6 +79,18 @@ bool read_ply_item(std::istream& in, PlyElement& element) {
 
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
+// CGAL's points as the soup's positions; throws for one that is not finite.
+std::vector<glm::dvec3> finite_positions(const std::string& path, const std::vector<Point>& points) {
+  std::vector<glm::dvec3> positions;
+  positions.reserve(points.size());
+  for (const Point& p : points) {
+    positions.push_back({p.x(), p.y(), p.z()});
+    if (!finite(positions.back()))
+      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) + ": coordinate is not finite");
+  }
+  return positions;
+}
+
 PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
@@ -227,11 +239,7 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
   if (!CGAL::IO::read_STL(in, points, triangles, CGAL::parameters::verbose(false)))
     throw SceneError(path + ": truncated or garbled STL file (CGAL's reader cannot read it)");
   PolygonSoup soup;
-  for (const Point& p : points) {
-    soup.positions.push_back({p.x(), p.y(), p.z()});
-    if (!finite(soup.positions.back()))
-      throw SceneError(path + ": vertex " + std::to_string(soup.positions.size() - 1) + ": coordinate is not finite");
-  }
+  soup.positions = finite_positions(path, points);
   for (const auto& t : triangles) soup.polygons.push_back({uint32_t(t[0]), uint32_t(t[1]), uint32_t(t[2])});
   // CGAL's reader takes an ASCII file it cannot parse for an empty binary one.
   if (soup.polygons.empty() && head.find("facet") != std::string::npos)
@@ -268,11 +276,7 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
                               .verbose(false)))
     throw SceneError(path + ": truncated or garbled OFF file (CGAL's reader cannot read it)");
   PolygonSoup soup;
-  for (const Point& p : points) {
-    soup.positions.push_back({p.x(), p.y(), p.z()});
-    if (!finite(soup.positions.back()))
-      throw SceneError(path + ": vertex " + std::to_string(soup.positions.size() - 1) + ": coordinate is not finite");
-  }
+  soup.positions = finite_positions(path, points);
   for (const auto& polygon : polygons) {
     std::vector<uint32_t>& p = soup.polygons.emplace_back();
     for (std::size_t v : polygon) p.push_back(uint32_t(v));  // read_OFF checked the range
