@@ -389,7 +389,7 @@ int run_info(const std::string& path, const std::string& dump_obj) {
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,
                 c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped,
                 c.self_intersecting ? "closed, self-intersecting" : c.closed ? "closed" : "open",
-                shape.mesh.normals.empty() ? "" : ", smooth normals");
+                shape.mesh.normals.empty() ? "" : ", shading normals");
   }
   const DeviceScene& v = s.device;
   size_t by_type[5] = {};

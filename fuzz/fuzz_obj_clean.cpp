@@ -1,12 +1,15 @@
-// libFuzzer target: an OBJ file through load_obj (tinyobjloader plus our line checks) and clean_mesh
-// (CGAL repair, triangulation, orientation, normals). The first input byte selects the options
-// (bit 0: orient, bit 1: smooth normals; the seeds start with '0' to '3' for that), the rest is the
-// OBJ text. Bad input must end in SceneError; any other exception, crash, sanitizer report or broken
+// libFuzzer target: a mesh file through its reader and clean_mesh (CGAL repair, triangulation,
+// orientation, normals). The first input byte selects the options (bit 0: orient, bit 1: smooth normals;
+// the seeds start with '0' to '3' for that) and the format (bits 2 and 3: 0 OBJ through load_obj,
+// tinyobjloader plus our line checks; 1 PLY, 2 OFF, 3 STL through CGAL's readers, scene/ply_stl_off_load;
+// seeds '4' to '7' are PLY, '8' to ';' OFF), the rest is the file. Bad input must end in SceneError; any other exception, crash, sanitizer report or broken
 // invariant below is a bug. Run by scripts/fuzz.
+#include <cmath>
 #include <cstdint>
 
 #include "fuzz/fuzz_common.h"
 #include "scene/mesh_clean.h"
+#include "scene/ply_stl_off_load.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
 
@@ -21,9 +24,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   CleanOptions options;
   options.orient = (data[0] & 1) != 0;
   options.smooth_normals = (data[0] & 2) != 0;
-  const std::string path = fuzz::scratch().write("f.obj", data + 1, size - 1);
+  const char* names[] = {"f.obj", "f.ply", "f.off", "f.stl"};
+  const std::string path = fuzz::scratch().write(names[(data[0] >> 2) & 3], data + 1, size - 1);
   try {
-    const PolygonSoup soup = load_obj(path);
+    std::vector<std::string> warnings;
+    const PolygonSoup soup = (data[0] >> 2) & 3 ? load_ply_stl_off(path, warnings) : load_obj(path);
     if (soup.polygons.size() > kMaxPolygons) return 0;
     for (const auto& polygon : soup.polygons)
       if (polygon.size() > kMaxPolygonVertices) return 0;
@@ -34,9 +39,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (const auto& t : mesh.triangles)
       for (uint32_t v : t)
         if (v >= mesh.positions.size()) fuzz::invariant_failed("triangle index out of range");
-    if (options.smooth_normals && mesh.normals.size() != mesh.positions.size())
-      fuzz::invariant_failed("one normal per vertex");
-    if (!options.smooth_normals && !mesh.normals.empty()) fuzz::invariant_failed("normals without smooth_normals");
+    const bool normals = options.smooth_normals || !soup.normals.empty();
+    if (mesh.normals.size() != (normals ? mesh.triangles.size() : 0)) fuzz::invariant_failed("one normal triple per triangle");
+    for (const auto& corners : mesh.normals)
+      for (const glm::vec3& n : corners) {
+        const float length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        if (!(length == 0 || std::abs(length - 1) < 1e-5f)) fuzz::invariant_failed("normal neither unit nor zero");
+      }
     // Per-corner attributes follow the triangles: sources name a real corner at the vertex's position.
     if (mesh.source_polygon.size() != mesh.triangles.size() || mesh.source_corners.size() != mesh.triangles.size())
       fuzz::invariant_failed("one source per triangle");

@@ -139,8 +139,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       out.features |= kFeatureSpheres;
       continue;
     }
-    bool smooth = !s.mesh.normals.empty();
-    if (smooth) out.features |= kFeatureSmoothNormals;
+    const bool has_normals = !s.mesh.normals.empty();
     std::vector<glm::vec3> positions;
     positions.reserve(s.mesh.positions.size());
     for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(s, p));
@@ -156,6 +155,11 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       box.grow(b);
       box.grow(c);
       boxes.push_back(box);
+      // Flat unless some corner has a shading normal (from the file or generated).
+      bool smooth = false;
+      if (has_normals)
+        for (const glm::vec3& n : s.mesh.normals[ti]) smooth = smooth || glm::dot(n, n) > 0;
+      if (smooth) out.features |= kFeatureSmoothNormals;
       out.shading.push_back(
           {triangle_material(s, ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
       if (textures) {
@@ -166,14 +170,14 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
         out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
       }
       if (smooth) {
-        // A vertex without a normal (zero: CGAL found none, e.g. where the normals of its faces cancel)
-        // takes this face's geometric normal at this corner.
+        // A corner without a normal (zero: a zero normal in the file, or generated normals that cancel,
+        // as on a mesh folded flat) takes this face's geometric normal.
         const glm::dvec3 &wa = s.mesh.positions[t[0]], &wb = s.mesh.positions[t[1]], &wc = s.mesh.positions[t[2]];
         glm::dvec3 face = glm::cross(wb - wa, wc - wa);
         double face_length = glm::length(face);
         glm::vec3 fallback = face_length > 0 ? glm::vec3(face / face_length) : glm::vec3(0);
         for (int k = 0; k < 3; ++k) {
-          const glm::vec3& n = s.mesh.normals[t[k]];
+          const glm::vec3& n = s.mesh.normals[ti][k];
           out.normals.push_back(f4(glm::dot(n, n) > 0 ? n : fallback));
         }
       } else {

@@ -21,7 +21,7 @@ struct InputKind {
   const char* content;   // "looks like a Git LFS pointer, not a mesh"
 };
 inline constexpr InputKind kSceneInput{"scene file", "a JSON scene file", "a scene"};
-inline constexpr InputKind kMeshInput{"mesh file", "a Wavefront OBJ file", "a mesh"};
+inline constexpr InputKind kMeshInput{"mesh file", "an OBJ, PLY, STL or OFF mesh file", "a mesh"};
 inline constexpr InputKind kMaterialInput{"material file", "an MTL material file", "a material file"};
 inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR)",
                                          "an image"};

@@ -3,7 +3,7 @@
 // Pipeline (each step counted into CleanReport):
 //   soup -> merge duplicate points -> drop polygons with < 3 distinct vertices -> triangulate polygons
 //   -> drop collinear triangles -> drop duplicate faces -> drop isolated points
-//   -> [orient: orient_polygon_soup, outward if closed] -> [smooth normals: compute_vertex_normals]
+//   -> [orient: orient_polygon_soup, outward if closed] -> [smooth normals: scene/mesh_normals.cpp]
 //
 // CGAL's preconditions and assertions are off in release builds (NDEBUG), where a violated one is
 // undefined behaviour; where they are on (debug and fuzz builds, tests/mesh_clean_test) a violation
@@ -18,7 +18,7 @@
 //     the holes with points from the back, so we run it on a range of original vertex ids instead of
 //     the points themselves, and put the ids back in ascending order afterwards.
 //
-// Per-corner attributes (uvs) follow each triangle through a Source record: its polygon and, per
+// Per-corner attributes (uvs, normals) follow each triangle through a Source record: its polygon and, per
 // triangle vertex, the polygon corner. Removing repeated corners and triangulating carry the corner
 // ids along; the duplicate-face step uses the same order tags; orienting may reverse, rotate or
 // re-point a triangle at a duplicated vertex, so afterwards each vertex is matched to its corner by
@@ -35,7 +35,6 @@
 #include <vector>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/compute_normal.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -48,6 +47,7 @@
 #include <CGAL/assertions.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include "scene/mesh_normals.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -241,6 +241,25 @@ void orient_parts_by_signed_volume(Mesh& mesh) {
   mesh.remove_property_map(part);
 }
 
+// Checks per-corner attributes laid out as PolygonSoup's uvs and normals: none, or per polygon one per
+// corner or nothing, all finite.
+template <class Vec>
+void check_corner_attributes(const PolygonSoup& soup, const std::vector<std::vector<Vec>>& values, const char* plural,
+                             const char* singular) {
+  if (values.empty()) return;
+  if (values.size() != soup.polygons.size())
+    throw SceneError(std::to_string(values.size()) + " polygons with " + plural + " for " +
+                     std::to_string(soup.polygons.size()) + " polygons");
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!values[i].empty() && values[i].size() != soup.polygons[i].size())
+      throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(values[i].size()) + " " + plural +
+                       " for " + std::to_string(soup.polygons[i].size()) + " corners");
+    for (const Vec& value : values[i])
+      for (int c = 0; c < Vec::length(); ++c)
+        if (!std::isfinite(value[c])) throw SceneError("polygon " + std::to_string(i) + ": " + singular + " is not finite");
+  }
+}
+
 TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report) {
   report = CleanReport{};
   report.input_vertices = soup.positions.size();
@@ -265,19 +284,8 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
                          " out of range");
     polygons.emplace_back(soup.polygons[i].begin(), soup.polygons[i].end());
   }
-  if (!soup.uvs.empty()) {
-    if (soup.uvs.size() != soup.polygons.size())
-      throw SceneError(std::to_string(soup.uvs.size()) + " polygons with texture coordinates for " +
-                       std::to_string(soup.polygons.size()) + " polygons");
-    for (std::size_t i = 0; i < soup.uvs.size(); ++i) {
-      if (!soup.uvs[i].empty() && soup.uvs[i].size() != soup.polygons[i].size())
-        throw SceneError("polygon " + std::to_string(i) + ": " + std::to_string(soup.uvs[i].size()) +
-                         " texture coordinates for " + std::to_string(soup.polygons[i].size()) + " corners");
-      for (const glm::vec2& uv : soup.uvs[i])
-        if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
-          throw SceneError("polygon " + std::to_string(i) + ": texture coordinate is not finite");
-    }
-  }
+  check_corner_attributes(soup, soup.uvs, "texture coordinates", "texture coordinate");
+  check_corner_attributes(soup, soup.normals, "normals", "normal");
   if (!soup.materials.empty() && soup.materials.size() != soup.polygons.size())
     throw SceneError(std::to_string(soup.materials.size()) + " material ids for " +
                      std::to_string(soup.polygons.size()) + " polygons");
@@ -375,45 +383,23 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
     PMP::orient_polygon_soup(points, tris);
   }
 
-  std::vector<glm::vec3> normals;
-  if ((options.orient || options.smooth_normals) && !tris.empty()) {
-    const bool is_mesh = PMP::is_polygon_soup_a_polygon_mesh(tris);
-    if (!is_mesh && options.smooth_normals)
-      throw SceneError("smooth normals need a manifold, consistently oriented mesh (set \"orient\": true)");
-    if (is_mesh) {
-      // polygon_soup_to_polygon_mesh adds vertex i for point i and face j for polygon j, in order, so
-      // the Surface_mesh indices are the soup's indices.
-      Mesh mesh;
-      PMP::polygon_soup_to_polygon_mesh(points, tris, mesh);
-
-      if (options.orient && CGAL::is_closed(mesh)) {
-        // orient_to_bound_a_volume requires a mesh without self-intersections: on a folded one CGAL's
-        // is_outward_oriented trips an assertion (or, with assertions off, decides at random).
-        report.self_intersecting = PMP::does_self_intersect(mesh);
-        if (report.self_intersecting)
-          orient_parts_by_signed_volume(mesh);
-        else
-          PMP::orient_to_bound_a_volume(mesh);  // outward normals; reverses faces in place
-        for (Mesh::Face_index f : mesh.faces()) {
-          Polygon& t = tris[f.idx()];
-          t.clear();
-          for (Mesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) t.push_back(v.idx());
-        }
-      }
-
-      if (options.smooth_normals) {
-        auto vnormals = mesh.add_property_map<Mesh::Vertex_index, Vector>("v:normal", CGAL::NULL_VECTOR).first;
-        PMP::compute_vertex_normals(mesh, vnormals);
-        normals.resize(points.size());
-        for (Mesh::Vertex_index v : mesh.vertices()) {
-          const Vector& n = vnormals[v];
-          // CGAL already normalizes in double; normalize again in float so the output is unit there.
-          // CGAL returns a null vector where it finds no normal (incident face normals that cancel, as
-          // on a folded mesh): that stays zero, and build_device_scene uses the face normal there.
-          glm::vec3 g(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
-          const float len = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
-          normals[v.idx()] = len > 0 && std::isfinite(len) ? g / len : glm::vec3(0);
-        }
+  if (options.orient && !tris.empty() && PMP::is_polygon_soup_a_polygon_mesh(tris)) {
+    // polygon_soup_to_polygon_mesh adds vertex i for point i and face j for polygon j, in order, so
+    // the Surface_mesh indices are the soup's indices.
+    Mesh mesh;
+    PMP::polygon_soup_to_polygon_mesh(points, tris, mesh);
+    if (CGAL::is_closed(mesh)) {
+      // orient_to_bound_a_volume requires a mesh without self-intersections: on a folded one CGAL's
+      // is_outward_oriented trips an assertion (or, with assertions off, decides at random).
+      report.self_intersecting = PMP::does_self_intersect(mesh);
+      if (report.self_intersecting)
+        orient_parts_by_signed_volume(mesh);
+      else
+        PMP::orient_to_bound_a_volume(mesh);  // outward normals; reverses faces in place
+      for (Mesh::Face_index f : mesh.faces()) {
+        Polygon& t = tris[f.idx()];
+        t.clear();
+        for (Mesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) t.push_back(v.idx());
       }
     }
   }
@@ -437,10 +423,6 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
   result.triangles.reserve(tris.size());
   for (const Polygon& t : tris)
     result.triangles.push_back({static_cast<uint32_t>(t[0]), static_cast<uint32_t>(t[1]), static_cast<uint32_t>(t[2])});
-  if (options.smooth_normals) {
-    normals.resize(result.positions.size());  // empty mesh: no normals to compute
-    result.normals = std::move(normals);
-  }
   for (const Source& s : sources) {
     result.source_polygon.push_back(static_cast<uint32_t>(s.polygon));
     result.source_corners.push_back(
@@ -453,6 +435,27 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
       result.uvs.push_back(corner_uvs);
     }
     if (!soup.materials.empty()) result.materials.push_back(soup.materials[s.polygon]);
+  }
+
+  // 9. Shading normals: the soup's where its polygon has them (normalized; zero stays zero, the face
+  // normal), generated (with smooth normals) for the triangles of the other polygons.
+  if (!soup.normals.empty() || options.smooth_normals) {
+    result.normals.assign(result.triangles.size(), {});
+    std::vector<bool> generate(result.triangles.size(), options.smooth_normals);
+    for (std::size_t t = 0; t < sources.size(); ++t) {
+      const Source& s = sources[t];
+      if (soup.normals.empty() || soup.normals[s.polygon].empty()) continue;
+      generate[t] = false;
+      for (int k = 0; k < 3; ++k) {
+        // In double: the squared length of a float normal of 1e20 would overflow float.
+        const glm::dvec3 n(soup.normals[s.polygon][s.corners[k]]);
+        const double length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        result.normals[t][k] = length > 0 ? glm::vec3(n / length) : glm::vec3(0);
+      }
+    }
+    if (options.smooth_normals)
+      generate_smooth_normals(result.positions, result.triangles, options.smooth_angle_degrees, generate,
+                              result.normals);
   }
   return result;
 }

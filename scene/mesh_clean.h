@@ -21,13 +21,23 @@ struct PolygonSoup {
   // Texture coordinates: empty (none at all), or one entry per polygon holding either one uv per corner
   // of that polygon or nothing (that polygon has none).
   std::vector<std::vector<glm::vec2>> uvs;
+  // Shading normals from the file (OBJ vn, PLY/OFF vertex normals), laid out like uvs: empty, or per
+  // polygon one normal per corner or nothing. A zero normal is a corner without one (it takes the face
+  // normal); they need not be unit length (they are normalized after the transform).
+  std::vector<std::vector<glm::vec3>> normals;
   // Material ids in the caller's numbering: empty, or one per polygon.
   std::vector<uint32_t> materials;
 };
 
+// Faces whose normals differ by more than this are not smoothed across (the shape option
+// smooth_angle_degrees): a cube's 90-degree edges stay sharp, the 30 to 45 degrees between the faces of
+// coarse spheres and cylinders (12 or 8 segments) are smoothed. Unity's model importer uses 60 as well.
+constexpr float kDefaultSmoothAngleDegrees = 60.0f;
+
 struct CleanOptions {
   bool orient = false;          // make orientation consistent (outward if closed); otherwise kept as given
-  bool smooth_normals = false;  // compute per-vertex normals with CGAL
+  bool smooth_normals = false;  // generate shading normals (scene/mesh_normals.h) where the soup has none
+  float smooth_angle_degrees = kDefaultSmoothAngleDegrees;  // crease angle for smooth_normals, [0, 180]
 };
 
 // What cleaning changed, for `pathcl info`.
@@ -50,7 +60,11 @@ struct CleanReport {
 struct TriangleMesh {
   std::vector<glm::dvec3> positions;               // world coordinates, as in PolygonSoup
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front
-  std::vector<glm::vec3> normals;                  // per vertex, only when smooth_normals; unit or zero
+  // Shading normals per triangle corner (in the triangle's final vertex order): empty when the soup has
+  // none and smooth_normals is off; otherwise unit, or zero where a corner has none (the renderer then
+  // uses the face normal there: a face without file normals when smooth_normals is off, a zero file
+  // normal, or generated normals that cancel).
+  std::vector<std::array<glm::vec3, 3>> normals;
   // Where each triangle came from, whatever merging, triangulation and orienting did to it: the index
   // of its soup polygon, and for each of its three vertices (in the triangle's final order) the corner
   // of that polygon it is.
@@ -58,13 +72,12 @@ struct TriangleMesh {
   std::vector<std::array<uint32_t, 3>> source_corners;
   // The soup's attributes carried through by those sources: per triangle, the uvs of its three
   // vertices when the soup has uvs ((0, 0) for a polygon without), and the material id when the soup
-  // has material ids.
+  // has material ids. (The soup's normals go into `normals` above.)
   std::vector<std::array<glm::vec2, 3>> uvs;
   std::vector<uint32_t> materials;
 };
 
 // Throws SceneError (scene_error.h) with a message that the caller prefixes with the file/JSON place
-// when the input cannot be cleaned (e.g. smooth normals asked for a non-manifold mesh, or a failed CGAL
-// check where CGAL's checks are compiled in) or its attributes do not match its polygons; never CGAL's
-// own exceptions.
+// when the input cannot be cleaned (a failed CGAL check where CGAL's checks are compiled in) or its
+// attributes do not match its polygons; never CGAL's own exceptions.
 TriangleMesh clean_mesh(const PolygonSoup& soup, const CleanOptions& options, CleanReport& report);

@@ -22,18 +22,21 @@
 
 namespace {
 
-// Mesh formats pathcl does not read, by extension and by how their files begin. tinyobjloader takes any
-// file for OBJ: a PLY file became "igea.ply: no faces", a binary glTF "Failed parse 'l' line".
+// Mesh formats other than OBJ, by extension and by how their files begin. tinyobjloader takes any file
+// for OBJ: a PLY file became "igea.ply: no faces", a binary glTF "Failed parse 'l' line". PLY, STL and
+// OFF are read by scene/ply_stl_off_load.cpp, chosen by the extension (`readable`): named .obj, they are
+// told to be renamed; the others are not supported.
 struct MeshFormat {
   const char* name;
   std::vector<std::string> extensions, starts;
   const char* hint = "";
+  bool readable = false;
 };
 const MeshFormat kOtherMeshFormats[] = {
-    {"PLY", {".ply"}, {"ply\n", "ply\r"}},
+    {"PLY", {".ply"}, {"ply\n", "ply\r"}, "", true},
     {"glTF", {".gltf", ".glb"}, {"glTF"}},
-    {"STL", {".stl"}, {"solid "}},  // ASCII STL; binary STL is caught as binary
-    {"OFF", {".off"}, {"OFF\n", "OFF\r", "OFF ", "COFF", "NOFF"}},
+    {"STL", {".stl"}, {"solid "}, "", true},  // ASCII STL; binary STL is caught as binary
+    {"OFF", {".off"}, {"OFF\n", "OFF\r", "OFF ", "COFF", "NOFF"}, "", true},
     {"FBX", {".fbx"}, {"Kaydara FBX Binary", "; FBX"}},
     {"COLLADA", {".dae"}, {"<?xml", "<COLLADA"}},
     {"3DS", {".3ds"}, {}},
@@ -56,7 +59,10 @@ std::string lower_extension(const std::string& path) {
 }
 
 [[noreturn]] void refuse_format(const std::string& path, const MeshFormat& f) {
-  throw SceneError(path + ": " + f.name + " meshes are not supported (expected a Wavefront OBJ file" + f.hint + ")");
+  if (f.readable)
+    throw SceneError(path + (std::string(f.name) == "PLY" ? ": a " : ": an ") + f.name + " file named as OBJ (the reader is chosen by the extension: name it " +
+                     f.extensions[0] + ")");
+  throw SceneError(path + ": " + f.name + " meshes are not supported (expected " + kMeshInput.expected + f.hint + ")");
 }
 
 // Refuses, by extension, a mesh format that is not OBJ (before the file is opened: the format is the
@@ -65,7 +71,7 @@ void check_obj_extension(const std::string& path) {
   std::string ext = lower_extension(path);
   for (const MeshFormat& f : kOtherMeshFormats)
     for (const std::string& e : f.extensions)
-      if (ext == e) refuse_format(path, f);
+      if (ext == e && !f.readable) refuse_format(path, f);
 }
 
 // Refuses, by its first bytes, a file that is another mesh format, JSON or not text at all.
@@ -75,11 +81,11 @@ void check_obj_content(const std::string& path, const std::string& head) {
       if (head.rfind(start, 0) == 0) refuse_format(path, f);
   size_t first = head.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && head[first] == '{')
-    throw SceneError(path + ": looks like JSON (a glTF mesh or a scene file?), expected a Wavefront OBJ file");
+    throw SceneError(path + ": looks like JSON (a glTF mesh or a scene file?), expected " + kMeshInput.expected);
   // Control characters other than white space do not occur in text.
   for (unsigned char c : head)
     if (c < 0x20 && c != '\t' && c != '\n' && c != '\v' && c != '\f' && c != '\r')
-      throw SceneError(path + ": not a text OBJ file (it has binary content), expected a Wavefront OBJ file");
+      throw SceneError(path + ": not a text OBJ file (it has binary content), expected " + kMeshInput.expected);
 }
 
 struct LineIndex {
@@ -193,6 +199,8 @@ LineIndex scan_obj_lines(const std::string& path, std::istream& in) {
       index.face_material_line.push_back(material_line);
     } else if (keyword == "v") {
       check_coordinates(where, line, words, 3, 3, "3 finite vertex coordinates");
+    } else if (keyword == "vn") {
+      check_coordinates(where, line, words, 3, 3, "3 finite normal coordinates");
     } else if (keyword == "vt") {
       check_coordinates(where, line, words, 1, 3, "1 to 3 finite texture coordinates");
     } else if (keyword == "usemtl") {
@@ -283,9 +291,10 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
 
   PolygonSoup& soup = obj.soup;
   size_t vertex_count = attrib.vertices.size() / 3, uv_count = attrib.texcoords.size() / 2;
+  size_t normal_count = attrib.normals.size() / 3;
   for (size_t i = 0; i < vertex_count; ++i)
     soup.positions.push_back({attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]});
-  bool any_uvs = false;
+  bool any_uvs = false, any_normals = false;
   size_t face = 0;
   for (const tinyobj::shape_t& shape : shapes) {
     size_t offset = 0;
@@ -294,6 +303,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
       std::string where = path + ":" + (line ? std::to_string(line) : "?");
       std::vector<uint32_t> polygon;
       std::vector<glm::vec2> uvs;
+      std::vector<glm::vec3> normals;
       for (size_t k = 0; k < arity; ++k) {
         const tinyobj::index_t& corner = shape.mesh.indices[offset + k];
         int index = corner.vertex_index;
@@ -306,9 +316,16 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
           throw SceneError(where + ": texture coordinate index " + std::to_string(t + 1) + " out of range (" +
                            std::to_string(uv_count) + " texture coordinates)");
         if (t >= 0) uvs.push_back({attrib.texcoords[2 * t], attrib.texcoords[2 * t + 1]});
+        int n = corner.normal_index;
+        if (n >= 0 && size_t(n) >= normal_count)
+          throw SceneError(where + ": normal index " + std::to_string(n + 1) + " out of range (" +
+                           std::to_string(normal_count) + " normals)");
+        if (n >= 0) normals.push_back({attrib.normals[3 * n], attrib.normals[3 * n + 1], attrib.normals[3 * n + 2]});
       }
       if (!uvs.empty() && uvs.size() != arity)
         throw SceneError(where + ": a face needs texture coordinates at all of its corners or at none");
+      if (!normals.empty() && normals.size() != arity)
+        throw SceneError(where + ": a face needs normals at all of its corners or at none");
       if (with_materials) {
         const std::string& name = face < lines.face_material.size() ? lines.face_material[face] : "";
         if (name.empty()) throw SceneError(where + ": face without a material (no usemtl before it)");
@@ -321,14 +338,17 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
         soup.materials.push_back(it->second);
       }
       any_uvs = any_uvs || !uvs.empty();
+      any_normals = any_normals || !normals.empty();
       soup.polygons.push_back(std::move(polygon));
       soup.uvs.push_back(std::move(uvs));
+      soup.normals.push_back(std::move(normals));
       obj.face_lines.push_back(line);
       offset += arity;
       ++face;
     }
   }
   if (!any_uvs) soup.uvs.clear();
+  if (!any_normals) soup.normals.clear();
   if (with_materials) warn_about_used_materials(obj.materials, soup.materials, warnings);
   if (soup.polygons.empty()) throw SceneError(path + ": no faces");
   return obj;

@@ -20,6 +20,7 @@
 #include "kernels/shared/types.h"
 #include "scene/mtl_load.h"
 #include "scene/obj_load.h"
+#include "scene/ply_stl_off_load.h"
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_limits.h"
@@ -520,11 +521,12 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   std::string type = n.at("type").string();
   ShapeDesc s;
   if (type == "mesh")
-    n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth"},
+    n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth",
+                     "smooth_angle_degrees"},
                     {"file", "material"});
   else if (type == "triangles")
     n.expect_object({"type", "positions", "indices", "uvs", "material", "emission", "two_sided", "transform",
-                     "orient", "smooth"},
+                     "orient", "smooth", "smooth_angle_degrees"},
                     {"positions", "indices", "material"});
   else if (type == "sphere")
     n.expect_object({"type", "center", "radius", "material", "emission", "two_sided", "transform",
@@ -581,7 +583,12 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
   if (type == "mesh") {
     std::filesystem::path file = dir / n.at("file").string();
     s.label += " (" + n.at("file").string() + ")";
-    obj = load_obj_file(file.string(), from_mtl, scene.warnings);
+    if (is_ply_stl_off_file(file.string())) {
+      if (from_mtl) n.at("material").fail("\"from_mtl\" needs an OBJ file with mtllib (PLY, STL and OFF have no MTL files)");
+      soup = load_ply_stl_off(file.string(), scene.warnings);
+    } else {
+      obj = load_obj_file(file.string(), from_mtl, scene.warnings);
+    }
   } else {
     Node uvs = n.has("uvs") ? n.at("uvs") : n;
     check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
@@ -591,14 +598,31 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     if (!within_float_range(p))
       (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
   }
+  // Normals take the inverse transpose, so that they stay perpendicular to the surface under non-uniform
+  // scale; normalized in double (clean_mesh normalizes again), a zero normal stays zero.
+  const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
+  for (std::vector<glm::vec3>& corners : soup.normals)
+    for (glm::vec3& normal : corners) {
+      glm::dvec3 m = normal_matrix * glm::dvec3(normal);
+      double length = glm::length(m);
+      normal = length > 0 && std::isfinite(length) ? glm::vec3(m / length) : glm::vec3(0);
+    }
   // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
   if (glm::determinant(glm::dmat3(transform)) < 0) {
     for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
     for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
+    for (auto& normals : soup.normals) std::reverse(normals.begin(), normals.end());
   }
   CleanOptions options;
   if (n.has("orient")) options.orient = n.at("orient").boolean();
   if (n.has("smooth")) options.smooth_normals = n.at("smooth").boolean();
+  if (n.has("smooth_angle_degrees")) {
+    Node angle = n.at("smooth_angle_degrees");
+    if (!options.smooth_normals) angle.fail("has no effect without \"smooth\": true");
+    double degrees = angle.number();
+    if (!(degrees >= 0 && degrees <= 180)) angle.fail("expected an angle in [0, 180] degrees" + angle.got());
+    options.smooth_angle_degrees = float(degrees);
+  }
   try {
     s.mesh = clean_mesh(soup, options, s.clean);
   } catch (const SceneError& e) {
@@ -618,6 +642,9 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     const MaterialDesc& m = scene.materials[triangle_material(s, t)];
     uint32_t polygon = s.mesh.source_polygon[t];
     if (m.color_texture == PC_INVALID || (!soup.uvs.empty() && !soup.uvs[polygon].empty())) continue;
+    if (type == "mesh" && polygon >= obj.face_lines.size())
+      n.fail((dir / n.at("file").string()).string() + ": face " + std::to_string(polygon) +
+             " has no texture coordinates, but its material \"" + m.name + "\" has a texture");
     if (type == "mesh")
       n.fail((dir / n.at("file").string()).string() + ":" + std::to_string(obj.face_lines[polygon]) +
              ": face without texture coordinates (vt), but its material \"" + m.name + "\" has a texture");

@@ -201,3 +201,82 @@ TEST(AnalyticScenes, EnvironmentSeenDirectlyAndNoLightsAtAll) {
   RenderResult black = render_scene(dark, 2, 3);
   for (float v : black.film.mean) ASSERT_EQ(v, 0.0f);
 }
+
+namespace {
+
+// A UV sphere of radius 1 as OBJ text, 6 rings of 12 quads (30 degrees between neighbouring faces),
+// with per-corner `vn` normals of the exact sphere when `normals`.
+std::string low_poly_sphere_obj(bool normals) {
+  const int rings = 6, segments = 12;
+  std::ostringstream obj;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+      double s = i == 0 || i == rings ? 0 : std::sin(theta), c = i == 0 ? 1 : i == rings ? -1 : std::cos(theta);
+      obj << "v " << s * std::cos(phi) << " " << c << " " << -s * std::sin(phi) << "\n";
+      if (normals) obj << "vn " << s * std::cos(phi) << " " << c << " " << -s * std::sin(phi) << "\n";
+    }
+  auto at = [&](int i, int j) { return i * segments + (j % segments) + 1; };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      obj << "f";
+      for (int v : {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)})
+        obj << " " << v << (normals ? "//" + std::to_string(v) : "");
+      obj << "\n";
+    }
+  return obj.str();
+}
+
+}  // namespace
+
+// Direct light of a directional light on a diffuse sphere: the image is albedo / pi * E * cos(normal,
+// light) wherever the sphere is seen. A 30-degree low-poly sphere with the exact sphere's normals as `vn`
+// shades as the analytic sphere does (interpolated normals are within a degree or two of the exact
+// ones); without them its flat facets differ by four times as much, and by many standard errors.
+TEST(AnalyticScenes, ObjNormalsShadeALowPolySphereAsTheSmoothSphere) {
+  const std::string head = R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y_degrees": 26,
+      "width": 32, "height": 32}, "materials": {"m": {"type": "diffuse", "reflectance": [0.8, 0.8, 0.8]}},
+    "lights": [{"type": "directional", "direction": [-0.5, -0.3, -1], "irradiance": [1, 1, 1]}],
+    "render": {"sampler": "independent"}, "shapes": [)";
+  write_temp_file("meshes/sphere-vn.obj", low_poly_sphere_obj(true));
+  write_temp_file("meshes/sphere-flat.obj", low_poly_sphere_obj(false));
+  auto render_of = [&](const std::string& name, const std::string& shape) {
+    return red_channel(render_scene(scene_from(name, head + shape + "]}"), 64, 1).film);
+  };
+  PixelStats exact = render_of("sphere-exact.json", R"({"type": "sphere", "radius": 1, "material": "m"})");
+  PixelStats vn = render_of("sphere-vn.json", R"({"type": "mesh", "file": "meshes/sphere-vn.obj", "material": "m"})");
+  PixelStats flat = render_of("sphere-flat.json", R"({"type": "mesh", "file": "meshes/sphere-flat.obj", "material": "m"})");
+
+  // Pixels whose centres see the sphere well inside both outlines (the facets' outline is at most
+  // 1 - cos 15 degrees = 3.4 % inside the sphere's): within 80 % of its angular radius, asin(1/5).
+  const double tan_half = std::tan(13.0 * M_PI / 180);
+  double vn_error = 0, flat_error = 0, vn_z = 0, flat_z = 0, lit = 0;
+  size_t pixels = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      double px = (2 * (x + 0.5) / 32 - 1) * tan_half, py = (1 - 2 * (y + 0.5) / 32) * tan_half;
+      if (std::atan(std::sqrt(px * px + py * py)) > 0.8 * std::asin(0.2)) continue;
+      const size_t i = size_t(y) * 32 + x;
+      ++pixels;
+      lit += exact.mean[i];
+      vn_error += std::abs(vn.mean[i] - exact.mean[i]);
+      flat_error += std::abs(flat.mean[i] - exact.mean[i]);
+      auto z = [&](const PixelStats& p) {
+        double se = std::sqrt(p.error[i] * p.error[i] + exact.error[i] * exact.error[i]);
+        return std::abs(p.mean[i] - exact.mean[i]) / std::max(se, 1e-6);
+      };
+      vn_z += z(vn);
+      flat_z += z(flat);
+    }
+  ASSERT_GT(pixels, 100u);
+  ASSERT_GT(lit / pixels, 0.05);  // the light reaches the side the camera sees
+  vn_error /= lit, flat_error /= lit, vn_z /= pixels, flat_z /= pixels;
+  std::printf("relative mean |difference| to the analytic sphere: vn %.4f, flat %.4f; mean |z|: vn %.2f, flat %.2f\n",
+              vn_error, flat_error, vn_z, flat_z);
+  // Measured (PoCL, seed 1): vn 0.020 and mean |z| 5.7 (interpolating 30-degree normals leaves a small
+  // bias: the mesh is hit at other points than the sphere), flat 0.089 and 43.8. Ignored vn normals would
+  // give the flat image, a ratio of 1.
+  EXPECT_LT(vn_error, 0.03);
+  EXPECT_GT(flat_error, 3 * vn_error);
+  EXPECT_GT(flat_z, 4 * vn_z);
+}

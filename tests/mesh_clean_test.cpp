@@ -10,6 +10,7 @@
 #include <utility>
 
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 
 #include "scene/scene_error.h"
 
@@ -319,24 +320,40 @@ TEST(MeshClean, OrientOpenBoxIsConsistent) {
   EXPECT_TRUE(r.faces_flipped == 2u || r.faces_flipped == 8u) << r.faces_flipped;
 }
 
-// Checks unit, outward (for a shape around the origin) per-vertex normals.
+// Checks unit shading normals at every corner that point outward (for a shape around the origin).
 void expect_outward_unit_normals(const TriangleMesh& m) {
-  ASSERT_EQ(m.normals.size(), m.positions.size());
-  for (std::size_t i = 0; i < m.positions.size(); ++i) {
-    EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-5f) << i;
-    EXPECT_GT(glm::dot(m.normals[i], vec3(m.positions[i])), 0.0f) << i;
-  }
+  ASSERT_EQ(m.normals.size(), m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(glm::length(m.normals[t][k]), 1.0f, 1e-5f) << t << " " << k;
+      EXPECT_GT(glm::dot(m.normals[t][k], vec3(m.positions[m.triangles[t][k]])), 0.0f) << t << " " << k;
+    }
 }
 
-TEST(MeshClean, SmoothNormalsOfCubePointOutward) {
+vec3 unit_face_normal(const TriangleMesh& m, std::size_t t) { return vec3(glm::normalize(tri_normal(m, m.triangles[t]))); }
+
+TEST(MeshClean, SmoothNormalsKeepACubesEdgesSharpAtTheDefaultAngle) {
   PolygonSoup s = cube_quads();
   for (dvec3& p : s.positions) p -= dvec3(0.5);  // centre on the origin
   CleanReport r;
   TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
   expect_outward_unit_normals(m);
-  // A cube corner's normal is along the diagonal, whatever the triangulation weights.
-  for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_GT(glm::dot(m.normals[i], vec3(glm::normalize(m.positions[i]))), 0.9f);
+  // 90 degrees between the sides, more than the default 60: every corner has its own face's normal,
+  // also where the two triangles of one side meet (0 degrees, smoothed).
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 1.0f, 1e-6f) << t;
+}
+
+TEST(MeshClean, SmoothNormalsAtACreaseAngleOf180SmoothEverything) {
+  PolygonSoup s = cube_quads();
+  for (dvec3& p : s.positions) p -= dvec3(0.5);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true, .smooth_angle_degrees = 180}, r);
+  expect_outward_unit_normals(m);
+  // The angle weights make a cube corner's normal the diagonal, however the sides are triangulated.
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(glm::dot(m.normals[t][k], vec3(glm::normalize(m.positions[m.triangles[t][k]]))), 1.0f, 1e-6f);
 }
 
 TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
@@ -344,21 +361,63 @@ TEST(MeshClean, SmoothNormalsOfOctahedronPointOutward) {
   s.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   s.polygons = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
   CleanReport r;
-  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  // Neighbouring faces are 70.5 degrees apart.
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true, .smooth_angle_degrees = 75}, r);
   EXPECT_TRUE(r.closed);
   EXPECT_NEAR(signed_volume(m), 4.0 / 3.0, 1e-6);
   expect_outward_unit_normals(m);
-  for (std::size_t i = 0; i < m.positions.size(); ++i)
-    EXPECT_NEAR(glm::dot(m.normals[i], vec3(m.positions[i])), 1.0f, 1e-5f);  // exactly radial by symmetry
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)  // exactly radial by symmetry
+      EXPECT_NEAR(glm::dot(m.normals[t][k], vec3(m.positions[m.triangles[t][k]])), 1.0f, 1e-6f);
+  m = clean_mesh(s, {.smooth_normals = true, .smooth_angle_degrees = 70}, r);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 1.0f, 1e-6f);
 }
 
-TEST(MeshClean, SmoothNormalsAfterOrientingInsideOutCube) {
-  PolygonSoup s = cube_quads();
-  for (dvec3& p : s.positions) p -= dvec3(0.5);
-  for (auto& p : s.polygons) std::reverse(p.begin(), p.end());
+// A UV sphere of `rings` x 2 `rings` quads (triangles at the poles), radius 1, outward.
+PolygonSoup uv_sphere(int rings) {
+  PolygonSoup s;
+  const int segments = 2 * rings;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      // Exact poles, so that each pole row merges into one point.
+      double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+      double sin_theta = i == 0 || i == rings ? 0 : std::sin(theta), cos_theta = i == 0 ? 1 : i == rings ? -1 : std::cos(theta);
+      s.positions.push_back({sin_theta * std::cos(phi), cos_theta, -sin_theta * std::sin(phi)});
+    }
+  auto at = [&](int i, int j) { return uint32_t(i * segments + (j % segments)); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) s.polygons.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+  return s;  // the pole rows repeat one point: merged, and their quads become triangles
+}
+
+TEST(MeshClean, SmoothNormalsSmoothACoarseSphereAtTheDefaultAngle) {
+  // 8 rings: 22.5 degrees between neighbouring faces' normals around the equator, about 32 at the poles.
+  PolygonSoup s = uv_sphere(8);
   CleanReport r;
-  TriangleMesh m = clean_mesh(s, {.orient = true, .smooth_normals = true}, r);
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
+  EXPECT_TRUE(r.closed);
   expect_outward_unit_normals(m);
+  // One normal per vertex (every corner of a vertex has the same), close to the sphere's.
+  std::map<uint32_t, vec3> by_vertex;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, added] = by_vertex.emplace(m.triangles[t][k], m.normals[t][k]);
+      EXPECT_NEAR(glm::dot(it->second, m.normals[t][k]), 1.0f, 1e-6f) << "vertex " << it->first;
+      // Within 2 degrees: the rings above and below a vertex differ in size, and it leans towards the larger.
+      EXPECT_GT(glm::dot(m.normals[t][k], vec3(m.positions[m.triangles[t][k]])), std::cos(glm::radians(2.0f)));
+    }
+  // At 20 degrees the edges at the equator are creases (22.5 degrees between the faces on either side,
+  // up and down and around): every corner there has its face's normal.
+  m = clean_mesh(s, {.smooth_normals = true, .smooth_angle_degrees = 20}, r);
+  std::size_t equator_corners = 0;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(m.positions[m.triangles[t][k]].y) < 1e-12) {
+        ++equator_corners;
+        EXPECT_NEAR(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 1.0f, 1e-6f) << t;
+      }
+  EXPECT_GE(equator_corners, 16u * 4);
 }
 
 // Three triangles on the edge (0, 1): a non-manifold edge.
@@ -369,24 +428,44 @@ PolygonSoup three_fins() {
   return s;
 }
 
-TEST(MeshClean, SmoothNormalsOnNonManifoldSoupThrows) {
+TEST(MeshClean, SmoothNormalsWithoutOrientOnNonManifoldSoup) {
+  // The fins 0 and 1 lie in y = 0 and agree along the edge: smoothed, along y. Fin 2 (x = 0) meets them
+  // at 90 degrees: its own normal, along x.
   CleanReport r;
-  EXPECT_THROW(clean_mesh(three_fins(), {.smooth_normals = true}, r), SceneError);
-  // An inconsistently oriented (but manifold) mesh is refused too without orient.
+  TriangleMesh m = clean_mesh(three_fins(), {.smooth_normals = true}, r);
+  ASSERT_EQ(m.triangles.size(), 3u);
+  ASSERT_EQ(m.normals.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(std::abs(m.normals[0][k].y), 1.0f, 1e-6f);
+    EXPECT_NEAR(std::abs(m.normals[1][k].y), 1.0f, 1e-6f);
+    EXPECT_NEAR(std::abs(m.normals[2][k].x), 1.0f, 1e-6f);
+    for (int t = 0; t < 3; ++t) EXPECT_GT(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 0.99f);
+  }
+  // Inconsistently oriented (one side of the cube reversed) and not oriented: at 180 degrees every
+  // corner still gets the cube's diagonal, turned to its own face's side.
   PolygonSoup cube = cube_quads();
+  for (dvec3& p : cube.positions) p -= dvec3(0.5);
   std::reverse(cube.polygons[0].begin(), cube.polygons[0].end());
-  EXPECT_THROW(clean_mesh(cube, {.smooth_normals = true}, r), SceneError);
+  m = clean_mesh(cube, {.smooth_normals = true, .smooth_angle_degrees = 180}, r);
+  ASSERT_EQ(m.normals.size(), 12u);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const vec3 diagonal(glm::normalize(m.positions[m.triangles[t][k]]));
+      EXPECT_NEAR(std::abs(glm::dot(m.normals[t][k], diagonal)), 1.0f, 1e-6f) << t;
+      EXPECT_GT(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 0.0f) << t;
+    }
 }
 
 TEST(MeshClean, OrientSplitsNonManifoldEdge) {
-  // orient_polygon_soup duplicates vertices here; the result is a valid mesh, so smooth normals work.
+  // orient_polygon_soup duplicates vertices here; smooth normals work on the result as on the input.
   CleanReport r;
   TriangleMesh m = clean_mesh(three_fins(), {.orient = true, .smooth_normals = true}, r);
   ASSERT_EQ(m.triangles.size(), 3u);
   EXPECT_GT(m.positions.size(), 5u);
   EXPECT_FALSE(r.closed);
-  EXPECT_EQ(m.normals.size(), m.positions.size());
-  for (const vec3& n : m.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+  ASSERT_EQ(m.normals.size(), m.triangles.size());
+  for (const auto& corners : m.normals)
+    for (const vec3& n : corners) EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
 }
 
 // A closed surface folded flat into the plane y = 0: the square (0,0)-(2,2) in x, z covered on one side
@@ -398,18 +477,27 @@ PolygonSoup folded_square() {
   return s;
 }
 
-TEST(MeshClean, ZeroLengthVertexNormalsStayZeroNeverNaN) {
-  // The folded square lying in z = 0, consistently oriented as given. At its corners 0 and 2 the faces
-  // of the two sides subtend the same angles, so their angle-weighted normals cancel exactly and CGAL
-  // returns a null vector: the normal stays zero (build_device_scene then uses the face normal).
+TEST(MeshClean, ZeroLengthNormalsStayZeroNeverNaN) {
+  // The folded square lying in z = 0, consistently oriented as given. At each of its four corners the
+  // faces of the two sides subtend the same angle (90 degrees), so at a crease angle of 180 (the fold is
+  // not a crease) their angle-weighted normals cancel exactly: the normal stays zero (build_device_scene
+  // then uses the face normal). At the default angle the fold is a crease and each side keeps its normal.
   PolygonSoup s = folded_square();
   for (dvec3& p : s.positions) p = dvec3(p.x, p.z, 0);
   CleanReport r;
-  TriangleMesh m = clean_mesh(s, {.smooth_normals = true}, r);
-  ASSERT_EQ(m.normals.size(), 5u);
-  EXPECT_EQ(m.normals[0], vec3(0));
-  EXPECT_EQ(m.normals[2], vec3(0));
-  for (uint32_t i : {1u, 3u, 4u}) EXPECT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-6f) << i;
+  TriangleMesh m = clean_mesh(s, {.smooth_normals = true, .smooth_angle_degrees = 180}, r);
+  ASSERT_EQ(m.normals.size(), 6u);
+  for (std::size_t t = 0; t < 6; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.triangles[t][k];
+      if (v != 4)
+        EXPECT_EQ(m.normals[t][k], vec3(0)) << t << " " << k;
+      else
+        EXPECT_NEAR(glm::length(m.normals[t][k]), 1.0f, 1e-6f) << t << " " << k;
+    }
+  m = clean_mesh(s, {.smooth_normals = true}, r);
+  for (std::size_t t = 0; t < 6; ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(glm::dot(m.normals[t][k], unit_face_normal(m, t)), 1.0f, 1e-6f);
 }
 
 // Two closed unit cubes overlapping in [0.5, 1]^3, in one soup: a self-intersecting closed mesh.
@@ -458,11 +546,12 @@ TEST(MeshClean, OrientFoldedClosedMeshNeverTripsCgal) {
   EXPECT_TRUE(r.self_intersecting);
   EXPECT_TRUE(consistently_oriented_closed(m));
   EXPECT_EQ(r.faces_flipped, 0u);  // zero volume: no side is the outside, the winding stays
-  ASSERT_EQ(m.normals.size(), m.positions.size());
-  for (const vec3& n : m.normals) {
-    const float len = glm::length(n);
-    EXPECT_TRUE(len == 0 || std::abs(len - 1) < 1e-6f) << len;  // never NaN
-  }
+  ASSERT_EQ(m.normals.size(), m.triangles.size());
+  for (const auto& corners : m.normals)
+    for (const vec3& n : corners) {
+      const float len = glm::length(n);
+      EXPECT_TRUE(len == 0 || std::abs(len - 1) < 1e-6f) << len;  // never NaN
+    }
 }
 
 TEST(MeshClean, OutOfRangeIndexThrows) {
@@ -613,6 +702,85 @@ TEST(MeshCleanAttributes, UvsFollowVerticesThatOrientDuplicates) {
   ASSERT_EQ(m.triangles.size(), 3u);
   EXPECT_GT(m.positions.size(), 5u);
   expect_uvs_follow_vertices(s, m);
+}
+
+// Every corner gets a normal (not unit: clean_mesh normalizes) that names its position and its polygon.
+vec3 normal_of(const glm::dvec3& p, std::size_t polygon) {
+  return {float(1 + p.x + 2 * p.z), float(3 + polygon), float(p.y - 2)};
+}
+
+void add_position_normals(PolygonSoup& s) {
+  s.normals.clear();
+  for (std::size_t p = 0; p < s.polygons.size(); ++p) {
+    std::vector<vec3> normals;
+    for (uint32_t v : s.polygons[p]) normals.push_back(normal_of(s.positions[v], p));
+    s.normals.push_back(normals);
+  }
+}
+
+void expect_normals_follow_vertices(const TriangleMesh& m) {
+  ASSERT_EQ(m.normals.size(), m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int j = 0; j < 3; ++j) {
+      const vec3 expected = glm::normalize(normal_of(m.positions[m.triangles[t][j]], m.source_polygon[t]));
+      EXPECT_NEAR(glm::distance(m.normals[t][j], expected), 0.0f, 1e-6f) << "triangle " << t << " vertex " << j;
+    }
+}
+
+TEST(MeshCleanAttributes, NormalsFollowTheirCornersThroughEveryStep) {
+  // Triangulation, merging, orienting (flipping one side, and all sides of an inside-out cube), and
+  // duplicating vertices at a non-manifold edge; smooth normals do not replace the soup's.
+  PolygonSoup s = cube_quads();
+  std::reverse(s.polygons[3].begin(), s.polygons[3].end());
+  s.positions.push_back(s.positions[0]);  // a duplicate that merges
+  s.polygons[0][0] = uint32_t(s.positions.size() - 1);
+  add_position_normals(s);
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {.orient = true, .smooth_normals = true}, r);
+  EXPECT_EQ(r.faces_flipped, 2u);
+  EXPECT_EQ(r.merged_vertices, 1u);
+  expect_normals_follow_vertices(m);
+
+  PolygonSoup inside_out = cube_quads();
+  for (auto& p : inside_out.polygons) std::reverse(p.begin(), p.end());
+  add_position_normals(inside_out);
+  m = clean_mesh(inside_out, {.orient = true}, r);
+  EXPECT_EQ(r.faces_flipped, 12u);
+  expect_normals_follow_vertices(m);
+
+  PolygonSoup fins = three_fins();
+  add_position_normals(fins);
+  m = clean_mesh(fins, {.orient = true}, r);
+  EXPECT_GT(m.positions.size(), 5u);
+  expect_normals_follow_vertices(m);
+}
+
+TEST(MeshCleanAttributes, PolygonsWithoutNormalsAreFlatOrSmoothedAndMismatchesThrow) {
+  // Two triangles of a flat square: the first has file normals (one of them zero), the second none.
+  PolygonSoup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  s.polygons = {{0, 1, 2}, {0, 2, 3}};
+  s.normals = {{{0, 0, 2}, {0, 0, 0}, {1, 0, 1}}, {}};
+  CleanReport r;
+  TriangleMesh m = clean_mesh(s, {}, r);
+  ASSERT_EQ(m.normals.size(), 2u);
+  EXPECT_EQ(m.normals[0][0], vec3(0, 0, 1));
+  EXPECT_EQ(m.normals[0][1], vec3(0));  // the face normal, on the device
+  EXPECT_NEAR(m.normals[0][2].x, std::sqrt(0.5f), 1e-6f);
+  for (const vec3& n : m.normals[1]) EXPECT_EQ(n, vec3(0));  // flat
+  m = clean_mesh(s, {.smooth_normals = true}, r);
+  EXPECT_EQ(m.normals[0][1], vec3(0));  // the file's zero stays
+  for (const vec3& n : m.normals[1]) EXPECT_EQ(n, vec3(0, 0, 1));  // generated
+
+  PolygonSoup bad = s;
+  bad.normals[0].pop_back();
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
+  bad = s;
+  bad.normals.pop_back();
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
+  bad = s;
+  bad.normals[0][0].x = NAN;
+  EXPECT_THROW(clean_mesh(bad, {}, r), SceneError);
 }
 
 TEST(MeshCleanAttributes, MaterialsFollowSurvivingFaces) {

@@ -210,19 +210,21 @@ const char* kEnclosure = R"({"type": "sphere", "radius": 20, "flip_normals": tru
 
 TEST(Robustness, ZeroLengthSmoothNormalsFallBackToTheFaceNormal) {
   // A closed surface folded flat into the plane z = 0: the square (0,0)-(2,2) covered on its front by
-  // two triangles and on its back by a fan around its centre. CGAL's vertex normals at the corners 0
-  // and 2 cancel exactly (the faces on either side subtend the same angles there): zero-length normals.
+  // two triangles and on its back by a fan around its centre. At a crease angle of 180 degrees (so that
+  // the fold is smoothed over) the angle-weighted normals at the square's four corners cancel exactly (the
+  // two sides subtend 90 degrees at each): corners without a normal.
   std::vector<glm::dvec3> v = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {1, 1, 0}};
   std::string folded = triangles_json(v, {{0, 1, 2}, {0, 2, 3}, {4, 1, 0}, {4, 2, 1}, {4, 3, 2}, {4, 0, 3}},
-                                      R"("material": "m", "smooth": true)");
+                                      R"("material": "m", "smooth": true, "smooth_angle_degrees": 180)");
   std::string camera = R"({"position": [1, 0.5, 3], "look_at": [1, 1, 0], "width": 16, "height": 16})";
   std::string path = write_temp_file("folded.json", scene_json(folded + "," + kEnclosure, camera));
   SceneDescription description = load_scene(path);
   const TriangleMesh& mesh = description.shapes[0].mesh;
-  ASSERT_EQ(mesh.normals.size(), 5u);
+  ASSERT_EQ(mesh.normals.size(), 6u);
   size_t zero = 0;
-  for (const glm::vec3& n : mesh.normals) zero += n == glm::vec3(0);
-  ASSERT_EQ(zero, 2u) << "the case under test: two vertices without a normal";
+  for (const auto& corners : mesh.normals)
+    for (const glm::vec3& n : corners) zero += n == glm::vec3(0);
+  ASSERT_EQ(zero, 14u) << "the case under test: the 14 triangle corners at the vertices 0 to 3 have no normal";
 
   DeviceScene scene = build_device_scene(description);
   ASSERT_EQ(scene.normals.size(), 3 * (mesh.triangles.size() + 1));  // + the sphere's unused slots
@@ -230,12 +232,19 @@ TEST(Robustness, ZeroLengthSmoothNormalsFallBackToTheFaceNormal) {
     Primitive p = scene_primitive(scene, i);
     glm::vec3 face = glm::normalize(glm::cross(glm::vec3(p.b.x, p.b.y, p.b.z) - glm::vec3(p.a.x, p.a.y, p.a.z),
                                                glm::vec3(p.c.x, p.c.y, p.c.z) - glm::vec3(p.a.x, p.a.y, p.a.z)));
+    // A triangle without a normal at any corner (the front two) is flat: no smooth flag, no normals.
+    const bool none = mesh.normals[i] == std::array<glm::vec3, 3>{};
+    EXPECT_EQ((scene.shading[i].flags & PC_FLAG_SMOOTH) != 0, !none) << "triangle " << i;
     for (int k = 0; k < 3; ++k) {
       const pc_float4& n = scene.normals[3 * i + k];
       glm::vec3 corner(n.x, n.y, n.z);
+      if (none) {
+        EXPECT_EQ(corner, glm::vec3(0));
+        continue;
+      }
       EXPECT_NEAR(glm::length(corner), 1.0f, 1e-6f) << "triangle " << i << " corner " << k;
-      // Where the vertex had no normal, the corner has the face's.
-      if (mesh.normals[mesh.triangles[i][k]] == glm::vec3(0)) EXPECT_NEAR(glm::dot(corner, face), 1.0f, 1e-6f);
+      // Where the corner had no normal, it has the face's.
+      if (mesh.normals[i][k] == glm::vec3(0)) EXPECT_NEAR(glm::dot(corner, face), 1.0f, 1e-6f);
     }
   }
   RenderOptions opt;

@@ -1,6 +1,7 @@
 // Scene files: every error names the file and the place; transforms and flags do what they say.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 
 #include <glm/geometric.hpp>
@@ -70,7 +71,7 @@ TEST(SceneLoad, DirectoriesAndMissingFilesAreNamedAsSuch) {
       {dir + "/scene-dir.json", dir + "/scene-dir.json: is a directory, expected a JSON scene file"},
       {dir + "/missing.json", dir + "/missing.json: cannot open the scene file: no such file"},
       {scene("mesh-dir.json", diffuse, R"({"type": "mesh", "file": "meshes/dir.obj", "material": "m"})"),
-       dir + "/meshes/dir.obj: is a directory, expected a Wavefront OBJ file"},
+       dir + "/meshes/dir.obj: is a directory, expected an OBJ, PLY, STL or OFF mesh file"},
       {scene("mesh-missing.json", diffuse, R"({"type": "mesh", "file": "meshes/missing.obj", "material": "m"})"),
        dir + "/meshes/missing.obj: cannot open the mesh file: no such file"},
       {scene("mtl-dir.json", diffuse, R"({"type": "mesh", "file": "meshes/lib.obj", "material": "from_mtl"})"),
@@ -96,31 +97,40 @@ TEST(SceneLoad, DirectoriesAndMissingFilesAreNamedAsSuch) {
   }
 }
 
-// Mesh files that are not OBJ text are named for what they are, by extension or by content, instead of
-// what tinyobjloader made of them ("igea.ply: no faces", "Duck.glb: Failed parse 'l' line").
+// Mesh files of formats pathcl does not read are named for what they are, by extension or by content,
+// instead of what tinyobjloader made of them ("igea.ply: no faces", "Duck.glb: Failed parse 'l' line");
+// PLY, STL and OFF files go to their readers by extension, and named .obj are told to be renamed.
 TEST(SceneLoad, MeshFilesOfOtherFormatsAreNamed) {
   const std::string bin("\x00\x01\x02\x03\x4d\x4d\x10\x00", 8);
   const std::string lfs =
       "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 12345\n";
-  const std::string obj = " (expected a Wavefront OBJ file)";
+  const std::string obj = " (expected an OBJ, PLY, STL or OFF mesh file)";
   struct Case {
     std::string file, content, expected;
   } cases[] = {
-      {"igea.ply", "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n", "PLY meshes are not supported" + obj},
+      {"igea.ply", "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n",
+       "no faces (0 vertices: a point cloud? pathcl renders surfaces)"},
       {"Duck.glb", std::string("glTF\x02\x00\x00\x00", 8), "glTF meshes are not supported" + obj},
       {"Duck.gltf", "{\"asset\": {\"version\": \"2.0\"}}", "glTF meshes are not supported" + obj},
-      {"part.STL", "solid part\nendsolid part\n", "STL meshes are not supported" + obj},
-      {"box.off", "OFF\n0 0 0\n", "OFF meshes are not supported" + obj},
+      {"part.STL", "solid part\nendsolid part\n", "no faces"},
+      {"box.off", "OFF\n0 0 0\n", "no faces"},
       {"rig.fbx", "; FBX 7.4.0 project file\n", "FBX meshes are not supported" + obj},
       {"scene.dae", "<?xml version=\"1.0\"?>\n<COLLADA/>\n", "COLLADA meshes are not supported" + obj},
       {"old.3ds", bin, "3DS meshes are not supported" + obj},
       {"model.blend", "BLENDER-v300", "Blender meshes are not supported" + obj},
-      {"model.obj.gz", "\x1f\x8b\x08", "Compressed meshes are not supported (expected a Wavefront OBJ file; decompress it first)"},
+      {"model.obj.gz", "\x1f\x8b\x08", "Compressed meshes are not supported (expected an OBJ, PLY, STL or OFF mesh file; decompress it first)"},
       // Named .obj, told by content.
-      {"ply-inside.obj", "ply\r\nformat binary_little_endian 1.0\r\n", "PLY meshes are not supported" + obj},
-      {"gltf-inside.obj", "\n  {\"asset\": {}}", "looks like JSON (a glTF mesh or a scene file?), expected a Wavefront OBJ file"},
-      {"binary.obj", "v 0 0 0\n" + bin, "not a text OBJ file (it has binary content), expected a Wavefront OBJ file"},
+      {"ply-inside.obj", "ply\r\nformat binary_little_endian 1.0\r\n",
+       "a PLY file named as OBJ (the reader is chosen by the extension: name it .ply)"},
+      {"stl-inside.obj", "solid part\nendsolid part\n", "an STL file named as OBJ (the reader is chosen by the extension: name it .stl)"},
+      {"gltf-inside.obj", "\n  {\"asset\": {}}",
+       "looks like JSON (a glTF mesh or a scene file?), expected an OBJ, PLY, STL or OFF mesh file"},
+      {"binary.obj", "v 0 0 0\n" + bin,
+       "not a text OBJ file (it has binary content), expected an OBJ, PLY, STL or OFF mesh file"},
       {"lfs.obj", lfs, "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+      {"lfs.ply", lfs, "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+      {"lfs.stl", lfs, "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+      {"lfs.off", lfs, "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
   };
   for (const Case& c : cases) {
     std::string mesh = write_temp_file("formats/" + c.file, c.content);
@@ -1130,15 +1140,218 @@ TEST(SceneLoad, SmoothNormalsAreIndexedByPrimitiveAfterSpheres) {
   }
 }
 
-TEST(SceneLoad, ObjNormalsAreIgnoredEvenZeroLengthOnes) {
-  // `vn` lines (here of zero length) are not read: shading normals come only from "smooth".
-  write_temp_file("meshes/vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn nan 0 0\nf 1//1 2//1 3//2\n");
+TEST(SceneLoad, ObjNormalsAreShadingNormalsPerCorner) {
+  // Per corner, after the transform (inverse transpose: the scale by 2 in x halves a normal's x); a
+  // zero vn is a corner without a normal, a face without vn is flat unless "smooth" fills it in.
+  write_temp_file("meshes/vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 0\nvn 1 0 1\nvn 0 0 3\n"
+                                   "f 1//3 2//2 3//1\nf 1 4 2\n");
   for (bool smooth : {false, true}) {
     std::string path = write_temp_file("vn.json", scene_with_shape(R"({"type": "mesh", "file": "meshes/vn.obj", "material": "m",
-      "smooth": )" + std::string(smooth ? "true" : "false") + "}"));
-    SceneDescription s = load_scene(path);
-    ASSERT_EQ(s.shapes[0].mesh.triangles.size(), 1u);
-    EXPECT_EQ(s.shapes[0].mesh.normals.size(), smooth ? 3u : 0u);
-    for (const glm::vec3& n : s.shapes[0].mesh.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);
+      "transform": {"scale": [2, 1, 1]}, "smooth": )" + std::string(smooth ? "true" : "false") + "}"));
+    const SceneDescription scene = load_scene(path);
+    const TriangleMesh& mesh = scene.shapes[0].mesh;
+    ASSERT_EQ(mesh.triangles.size(), 2u);
+    ASSERT_EQ(mesh.normals.size(), 2u);
+    EXPECT_EQ(mesh.normals[0][0], glm::vec3(0, 0, 1));
+    EXPECT_NEAR(glm::distance(mesh.normals[0][1], glm::normalize(glm::vec3(0.5f, 0, 1))), 0.0f, 1e-6f);
+    EXPECT_EQ(mesh.normals[0][2], glm::vec3(0));
+    // The second face meets the first at 90 degrees, a crease: its own normal.
+    for (const glm::vec3& n : mesh.normals[1]) EXPECT_EQ(n, smooth ? glm::vec3(0, 1, 0) : glm::vec3(0));
   }
+  struct Case {
+    std::string obj, expected;
+  } cases[] = {
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan 0 0\nf 1//1 2//1 3//1\n", ":4: expected 3 finite normal coordinates, got \"vn nan 0 0\""},
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n", ":5: normal index 2 out of range (1 normals)"},
+      {"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2 3//1\n", ":5: a face needs normals at all of its corners or at none"},
+  };
+  for (const Case& c : cases) {
+    std::string mesh = write_temp_file("meshes/bad-vn.obj", c.obj);
+    std::string error = load_error(write_temp_file("bad-vn.json", scene_with_shape(
+        R"({"type": "mesh", "file": "meshes/bad-vn.obj", "material": "m"})")));
+    EXPECT_NE(error.find(mesh + c.expected), std::string::npos) << error;
+  }
+}
+
+namespace {
+
+// The bytes of a value in little- or big-endian order, for binary PLY and STL files written by the tests.
+template <class T>
+std::string bytes_of(T value, bool big_endian = false) {
+  std::string b(sizeof(T), '\0');
+  std::memcpy(b.data(), &value, sizeof(T));
+  if (big_endian) std::reverse(b.begin(), b.end());
+  return b;
+}
+
+// A unit square in z = 0 as one quad, with a normal tilted towards +x at vertex 1 and uvs = (x, y); and
+// a triangle. The PLY header as its format asks for.
+std::string square_ply_header(const std::string& format) {
+  return "ply\nformat " + format + " 1.0\ncomment made by scene_load_test\nelement vertex 5\n"
+         "property float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+         "property float nz\nproperty float u\nproperty float v\nproperty uchar red\nproperty uchar green\n"
+         "property uchar blue\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+}
+const float kSquare[5][8] = {{0, 0, 0, 0, 0, 1, 0, 0}, {1, 0, 0, 1, 0, 1, 1, 0}, {1, 1, 0, 0, 0, 1, 1, 1},
+                             {0, 1, 0, 0, 0, 1, 0, 1}, {0, 0, 1, 0, 0, 1, 0, 0}};
+
+std::string square_ply_binary(bool big_endian) {
+  std::string ply = square_ply_header(big_endian ? "binary_big_endian" : "binary_little_endian");
+  for (const auto& v : kSquare) {
+    for (float f : v) ply += bytes_of(f, big_endian);
+    ply += std::string("\x80\x80\x80", 3);
+  }
+  ply += bytes_of(uint8_t(4));
+  for (int32_t i : {0, 1, 2, 3}) ply += bytes_of(i, big_endian);
+  ply += bytes_of(uint8_t(3));
+  for (int32_t i : {0, 4, 1}) ply += bytes_of(i, big_endian);
+  return ply;
+}
+
+SceneDescription load_mesh(const std::string& file, const std::string& options = "") {
+  return load_scene(write_temp_file("mesh-format.json", scene_with_shape(
+      R"({"type": "mesh", "file": ")" + file + R"(", "material": "m")" + options + "}")));
+}
+
+void expect_square(const SceneDescription& scene, bool uvs) {
+  const ShapeDesc& s = scene.shapes[0];
+  EXPECT_EQ(s.clean.input_vertices, 5u);
+  EXPECT_EQ(s.clean.input_polygons, 2u);
+  ASSERT_EQ(s.mesh.triangles.size(), 3u);
+  ASSERT_EQ(s.mesh.normals.size(), 3u);
+  ASSERT_EQ(s.mesh.uvs.size(), uvs ? 3u : 0u);
+  for (size_t t = 0; t < 3; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = s.mesh.triangles[t][k];
+      const glm::vec3 expected = glm::normalize(glm::vec3(kSquare[v][3], kSquare[v][4], kSquare[v][5]));
+      EXPECT_NEAR(glm::distance(s.mesh.normals[t][k], expected), 0.0f, 1e-6f) << t << " " << k;
+      if (uvs) EXPECT_EQ(s.mesh.uvs[t][k], glm::vec2(kSquare[v][6], kSquare[v][7])) << t << " " << k;
+    }
+}
+
+}  // namespace
+
+TEST(SceneLoadMeshFormats, PlyInAsciiAndBothBinaryOrdersWithNormalsAndUvs) {
+  std::string ascii = square_ply_header("ascii");
+  for (const auto& v : kSquare) {
+    for (float f : v) ascii += std::to_string(f) + " ";
+    ascii += "128 128 128\n";
+  }
+  ascii += "4 0 1 2 3\n3 0 4 1\n";
+  for (const auto& [name, text] : {std::pair{"ascii.ply", ascii}, std::pair{"little.PLY", square_ply_binary(false)},
+                                   std::pair{"big.ply", square_ply_binary(true)}}) {
+    SCOPED_TRACE(name);
+    std::string path = write_temp_file(std::string("meshes/") + name, text);
+    SceneDescription scene = load_mesh(path);
+    expect_square(scene, true);
+    // The colours are named as ignored.
+    EXPECT_EQ(std::count(scene.warnings.begin(), scene.warnings.end(),
+                         path + ": vertex or face colours ignored (pathcl takes the shape's material)"), 1);
+  }
+}
+
+TEST(SceneLoadMeshFormats, PlyCornerTexcoordsAsMeshLabWritesThem) {
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                    "element face 1\nproperty list uchar uint vertex_indices\nproperty list uchar float texcoord\n"
+                    "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 6 0.1 0.2 0.3 0.4 0.5 0.6\n";
+  SceneDescription scene = load_mesh(write_temp_file("meshes/texcoord.ply", ply));
+  const TriangleMesh& m = scene.shapes[0].mesh;
+  ASSERT_EQ(m.triangles.size(), 1u);
+  EXPECT_TRUE(m.normals.empty());
+  ASSERT_EQ(m.uvs.size(), 1u);
+  EXPECT_EQ(m.uvs[0][2], glm::vec2(0.5f, 0.6f));
+}
+
+TEST(SceneLoadMeshFormats, StlAsciiAndBinary) {
+  // A tetrahedron; STL repeats the vertices per facet, CGAL's reader merges them. STL's facet normals
+  // are the faces' own: no shading normals.
+  const glm::vec3 v[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::string ascii = "solid tetra\n", binary = std::string(80, ' ') + bytes_of(uint32_t(4));
+  for (const auto& f : faces) {
+    ascii += "facet normal 0 0 0\nouter loop\n";
+    binary += std::string(12, '\0');
+    for (int k : f) {
+      ascii += "vertex " + std::to_string(v[k].x) + " " + std::to_string(v[k].y) + " " + std::to_string(v[k].z) + "\n";
+      for (int c = 0; c < 3; ++c) binary += bytes_of(v[k][c]);
+    }
+    ascii += "endloop\nendfacet\n";
+    binary += std::string(2, '\0');
+  }
+  ascii += "endsolid tetra\n";
+  for (const auto& [name, text] : {std::pair{"ascii.stl", ascii}, std::pair{"binary.STL", binary}}) {
+    SCOPED_TRACE(name);
+    SceneDescription scene = load_mesh(write_temp_file(std::string("meshes/") + name, text), R"(, "orient": true)");
+    const ShapeDesc& s = scene.shapes[0];
+    EXPECT_EQ(s.clean.input_vertices, 4u);
+    EXPECT_EQ(s.mesh.triangles.size(), 4u);
+    EXPECT_TRUE(s.clean.closed);
+    EXPECT_EQ(s.clean.faces_flipped, 0u);
+    EXPECT_TRUE(s.mesh.normals.empty());
+  }
+}
+
+TEST(SceneLoadMeshFormats, OffWithNormalsAndTextureCoordinates) {
+  std::string off = "STNOFF\n# the square of the PLY tests\n5 2 0\n";
+  for (const auto& v : kSquare)
+    for (int i : {0, 1, 2, 3, 4, 5, 6, 7}) off += std::to_string(v[i]) + (i == 7 ? "\n" : " ");
+  off += "4 0 1 2 3\n3 0 4 1\n";
+  expect_square(load_mesh(write_temp_file("meshes/square.off", off)), true);
+  // Plain OFF: no normals; with "smooth" they are generated.
+  SceneDescription plain = load_mesh(write_temp_file("meshes/plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                                     R"(, "smooth": true)");
+  ASSERT_EQ(plain.shapes[0].mesh.normals.size(), 1u);
+  EXPECT_EQ(plain.shapes[0].mesh.normals[0][0], glm::vec3(0, 0, 1));
+}
+
+TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
+  const std::string good = square_ply_binary(false);
+  const std::string stl = std::string(80, ' ') + bytes_of(uint32_t(2)) + std::string(60, '\0');
+  struct Case {
+    std::string file, content, expected;
+  } cases[] = {
+      {"points.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                     "end_header\n0 0 0\n1 1 1\n",
+       "no faces (2 vertices: a point cloud? pathcl renders surfaces)"},
+      {"zero-faces.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                         "element face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+       "no faces (1 vertices: a point cloud? pathcl renders surfaces)"},
+      {"truncated.ply", good.substr(0, good.size() - 7), "truncated or garbled PLY file: cannot read face 1 of 2"},
+      {"short.ply", good.substr(0, good.find("end_header") + 11 + 40), "truncated or garbled PLY file: cannot read vertex 1 of 5"},
+      {"garbled.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 zero\n0 1 0\n3 0 1 2\n",
+       "truncated or garbled PLY file: cannot read vertex 1 of 3"},
+      {"index.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+       "face 0: vertex index 7 out of range (3 vertices before the faces)"},
+      {"not.ply", "PLY?\n", "not a PLY file (its header cannot be read)"},
+      {"truncated.stl", stl,
+       "truncated or garbled binary STL file: its header says 2 triangles, 184 bytes, but the file has 144"},
+      {"tiny.stl", "abc", "truncated STL file (3 bytes, less than the 84 of a binary STL header)"},
+      {"garbled.stl", "solid x\nfacet normal 0 0 0\nouter loop\nvertex 0 0 zero\n", "truncated or garbled ASCII STL file: no facet could be read"},
+      {"counts.off", "OFF\n100000 1 0\n0 0 0\n", "truncated or garbled OFF file: its header says 100000 vertices and 1 faces, more than a file of 21 bytes holds"},
+      {"garbled.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n", "truncated or garbled OFF file (CGAL's reader cannot read it)"},
+  };
+  for (const Case& c : cases) {
+    std::string mesh = write_temp_file("bad-formats/" + c.file, c.content);
+    std::string error = load_error(write_temp_file("bad-formats.json", scene_with_shape(
+        R"({"type": "mesh", "file": "bad-formats/)" + c.file + R"(", "material": "m"})")));
+    EXPECT_EQ(error, mesh + ": " + c.expected) << c.file;
+  }
+  std::string ply = write_temp_file("bad-formats/good.ply", good);
+  EXPECT_NE(load_error(write_temp_file("from-mtl-ply.json", scene_with_shape(
+                R"({"type": "mesh", "file": "bad-formats/good.ply", "material": "from_mtl"})")))
+                .find("shapes[0].material: \"from_mtl\" needs an OBJ file with mtllib"),
+            std::string::npos);
+}
+
+TEST(SceneLoadMeshFormats, SmoothAngleNeedsSmoothAndARange) {
+  std::string tri = R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m")";
+  EXPECT_NE(load_error(write_temp_file("angle.json", scene_with_shape(tri + R"(, "smooth_angle_degrees": 30})")))
+                .find("shapes[0].smooth_angle_degrees: has no effect without \"smooth\": true"),
+            std::string::npos);
+  EXPECT_NE(load_error(write_temp_file("angle.json", scene_with_shape(tri + R"(, "smooth": true, "smooth_angle_degrees": 190})")))
+                .find("shapes[0].smooth_angle_degrees: expected an angle in [0, 180] degrees, got 190"),
+            std::string::npos);
+  EXPECT_EQ(load_error(write_temp_file("angle.json", scene_with_shape(tri + R"(, "smooth": true, "smooth_angle_degrees": 0})"))), "");
 }

@@ -1,0 +1,326 @@
+// PLY, STL and OFF files through CGAL's readers.
+//
+// CGAL 5.5's polygon-soup read_PLY keeps vertex and face colours and per-halfedge uvs but drops vertex
+// normals and vertex uvs, and its point-set reader (read_PLY_with_properties) reads the vertices but not
+// the faces. So PLY files are read here with the PLY_reader both of them are built on (CGAL/IO/PLY.h,
+// namespace CGAL::IO::internal): one pass over the file, element by element, every property of every item
+// read by CGAL and then taken by name. STL and OFF go through CGAL::IO::read_STL and read_OFF as they are.
+// CGAL's readers report failure as false or a failed stream, never where: messages say what was being
+// read (the vertices, the faces) when it failed.
+#include "scene/ply_stl_off_load.h"
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <stdexcept>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/OFF.h>
+#include <CGAL/IO/PLY.h>
+#include <CGAL/IO/STL.h>
+
+#include "scene/input_file.h"
+#include "scene/scene_error.h"
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using PlyElement = CGAL::IO::internal::PLY_element;
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// The value of the numeric property `tag` of the item just read, of whichever PLY type the file gives it.
+bool ply_number(PlyElement& element, const char* tag, double& value) {
+  if (element.has_property<double>(tag)) {  // float or double (CGAL's overload for double takes both)
+    element.assign(value, tag);
+    return true;
+  }
+  auto try_type = [&](auto zero) {
+    using T = decltype(zero);
+    if (!element.has_property<T>(tag)) return false;
+    T v;
+    element.assign(v, tag);
+    value = double(v);
+    return true;
+  };
+  return try_type(int8_t()) || try_type(uint8_t()) || try_type(int16_t()) || try_type(uint16_t()) ||
+         try_type(int32_t()) || try_type(uint32_t());
+}
+
+bool has_number(PlyElement& element, const char* tag) {
+  return element.has_property<double>(tag) || element.has_property<int8_t>(tag) || element.has_property<uint8_t>(tag) ||
+         element.has_property<int16_t>(tag) || element.has_property<uint16_t>(tag) ||
+         element.has_property<int32_t>(tag) || element.has_property<uint32_t>(tag);
+}
+
+// Reads every property of the next item of `element` (CGAL buffers them for assign); false when the
+// stream ends or a value cannot be read. A list whose length is garbled may ask for more memory than
+// there is.
+bool read_ply_item(std::istream& in, PlyElement& element) {
+  try {
+    for (std::size_t k = 0; k < element.number_of_properties(); ++k) {
+      element.property(k)->get(in);
+      if (in.fail()) return false;
+    }
+  } catch (const std::bad_alloc&) {
+    return false;
+  } catch (const std::length_error&) {
+    return false;
+  }
+  return true;
+}
+
+bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+// CGAL's points as the soup's positions; throws for one that is not finite.
+std::vector<glm::dvec3> finite_positions(const std::string& path, const std::vector<Point>& points) {
+  std::vector<glm::dvec3> positions;
+  positions.reserve(points.size());
+  for (const Point& p : points) {
+    positions.push_back({p.x(), p.y(), p.z()});
+    if (!finite(positions.back()))
+      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) + ": coordinate is not finite");
+  }
+  return positions;
+}
+
+PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot open the mesh file");
+  CGAL::IO::internal::PLY_reader reader(false);
+  if (!reader.init(in)) throw SceneError(path + ": not a PLY file (its header cannot be read)");
+
+  PolygonSoup soup;
+  std::vector<glm::vec3> vertex_normals;
+  std::vector<glm::vec2> vertex_uvs;
+  bool have_faces = false, colours = false;
+  for (std::size_t e = 0; e < reader.number_of_elements(); ++e) {
+    PlyElement& element = reader.element(e);
+    const std::string& name = element.name();
+    const std::string items = std::to_string(element.number_of_items());
+    if (name == "vertex" || name == "vertices") {
+      if (element.number_of_items() > 0 &&
+          (!has_number(element, "x") || !has_number(element, "y") || !has_number(element, "z")))
+        throw SceneError(path + ": the PLY vertices have no x, y and z properties");
+      const bool normals = has_number(element, "nx") && has_number(element, "ny") && has_number(element, "nz");
+      const char* uv_tags[][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+      const char** uv = nullptr;
+      for (auto& tags : uv_tags)
+        if (!uv && has_number(element, tags[0]) && has_number(element, tags[1])) uv = tags;
+      colours = colours || has_number(element, "red") || has_number(element, "r");
+      for (std::size_t j = 0; j < element.number_of_items(); ++j) {
+        if (!read_ply_item(in, element))
+          throw SceneError(path + ": truncated or garbled PLY file: cannot read vertex " + std::to_string(j) +
+                           " of " + items);
+        glm::dvec3 p;
+        ply_number(element, "x", p.x), ply_number(element, "y", p.y), ply_number(element, "z", p.z);
+        if (!finite(p)) throw SceneError(path + ": vertex " + std::to_string(j) + ": coordinate is not finite");
+        soup.positions.push_back(p);
+        if (normals) {
+          glm::dvec3 n;
+          ply_number(element, "nx", n.x), ply_number(element, "ny", n.y), ply_number(element, "nz", n.z);
+          if (!finite(n)) throw SceneError(path + ": vertex " + std::to_string(j) + ": normal is not finite");
+          vertex_normals.push_back(glm::vec3(n));
+        }
+        if (uv) {
+          double u, v;
+          ply_number(element, uv[0], u), ply_number(element, uv[1], v);
+          if (!std::isfinite(u) || !std::isfinite(v))
+            throw SceneError(path + ": vertex " + std::to_string(j) + ": texture coordinate is not finite");
+          vertex_uvs.push_back({float(u), float(v)});
+        }
+      }
+    } else if (name == "face" || name == "faces") {
+      have_faces = true;
+      const char* tag = element.has_property<std::vector<int32_t>>("vertex_indices") ||
+                                element.has_property<std::vector<uint32_t>>("vertex_indices")
+                            ? "vertex_indices" : "vertex_index";
+      const bool signed_indices = element.has_property<std::vector<int32_t>>(tag);
+      if (!signed_indices && !element.has_property<std::vector<uint32_t>>(tag))
+        throw SceneError(path + ": the PLY faces have no vertex_indices list of int or uint");
+      const bool corner_uvs = element.has_property<std::vector<float>>("texcoord");
+      colours = colours || has_number(element, "red") || has_number(element, "r");
+      for (std::size_t j = 0; j < element.number_of_items(); ++j) {
+        const std::string where = path + ": face " + std::to_string(j);
+        if (!read_ply_item(in, element))
+          throw SceneError(path + ": truncated or garbled PLY file: cannot read face " + std::to_string(j) + " of " + items);
+        std::vector<uint32_t> polygon;
+        auto take = [&](const auto& indices) {
+          for (auto i : indices) {
+            if (i < 0 || uint64_t(i) >= soup.positions.size())
+              throw SceneError(where + ": vertex index " + std::to_string(i) + " out of range (" +
+                               std::to_string(soup.positions.size()) + " vertices before the faces)");
+            polygon.push_back(uint32_t(i));
+          }
+        };
+        if (signed_indices) {
+          std::vector<int32_t> indices;
+          element.assign(indices, tag);
+          take(indices);
+        } else {
+          std::vector<uint32_t> indices;
+          element.assign(indices, tag);
+          take(indices);
+        }
+        if (corner_uvs) {
+          std::vector<float> uvs;
+          element.assign(uvs, "texcoord");
+          if (uvs.size() != 2 * polygon.size())
+            throw SceneError(where + ": " + std::to_string(uvs.size()) + " texcoord values for " +
+                             std::to_string(polygon.size()) + " corners (expected 2 per corner)");
+          std::vector<glm::vec2> corners;
+          for (std::size_t k = 0; k < polygon.size(); ++k) {
+            if (!std::isfinite(uvs[2 * k]) || !std::isfinite(uvs[2 * k + 1]))
+              throw SceneError(where + ": texture coordinate is not finite");
+            corners.push_back({uvs[2 * k], uvs[2 * k + 1]});
+          }
+          soup.uvs.resize(soup.polygons.size());
+          soup.uvs.push_back(std::move(corners));
+        }
+        soup.polygons.push_back(std::move(polygon));
+      }
+    } else {
+      // Other elements (edges, materials, a scanner's own) are read past.
+      for (std::size_t j = 0; j < element.number_of_items(); ++j)
+        if (!read_ply_item(in, element))
+          throw SceneError(path + ": truncated or garbled PLY file: cannot read " + name + " " + std::to_string(j) +
+                           " of " + items);
+    }
+  }
+  if (!soup.uvs.empty()) soup.uvs.resize(soup.polygons.size());  // faces before the first with texcoord
+  if (!have_faces || soup.polygons.empty())
+    throw SceneError(path + ": no faces (" + std::to_string(soup.positions.size()) +
+                     " vertices: a point cloud? pathcl renders surfaces)");
+  // Per-vertex attributes become the corners' of every face (texcoord of the faces wins over vertex uvs).
+  if (!vertex_normals.empty())
+    for (const std::vector<uint32_t>& polygon : soup.polygons) {
+      std::vector<glm::vec3>& corners = soup.normals.emplace_back();
+      for (uint32_t v : polygon) corners.push_back(vertex_normals[v]);
+    }
+  if (!vertex_uvs.empty() && soup.uvs.empty())
+    for (const std::vector<uint32_t>& polygon : soup.polygons) {
+      std::vector<glm::vec2>& corners = soup.uvs.emplace_back();
+      for (uint32_t v : polygon) corners.push_back(vertex_uvs[v]);
+    }
+  if (colours) warnings.push_back(path + ": vertex or face colours ignored (pathcl takes the shape's material)");
+  return soup;
+}
+
+// A binary STL file is an 80-byte header, a triangle count and 50 bytes per triangle: a file of another
+// length that does not begin as ASCII STL does ("solid ") is truncated (CGAL would try it as ASCII and
+// report only that it failed).
+void check_binary_stl_size(const std::string& path, const std::string& head) {
+  const std::uintmax_t size = std::filesystem::file_size(path);
+  if (head.rfind("solid", 0) == 0 && head.size() > 5 && (head[5] == ' ' || head[5] == '\n' || head[5] == '\r')) return;
+  if (size < 84)
+    throw SceneError(path + ": truncated STL file (" + std::to_string(size) +
+                     " bytes, less than the 84 of a binary STL header)");
+  uint32_t count = 0;
+  for (int i = 0; i < 4; ++i) count |= uint32_t(static_cast<unsigned char>(head[80 + i])) << (8 * i);
+  const std::uintmax_t expected = 84 + 50 * std::uintmax_t(count);
+  if (size != expected)
+    throw SceneError(path + ": truncated or garbled binary STL file: its header says " + std::to_string(count) +
+                     " triangles, " + std::to_string(expected) + " bytes, but the file has " + std::to_string(size));
+}
+
+PolygonSoup load_stl(const std::string& path, const std::string& head) {
+  check_binary_stl_size(path, head);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot open the mesh file");
+  std::vector<Point> points;
+  std::vector<std::vector<std::size_t>> triangles;
+  if (!CGAL::IO::read_STL(in, points, triangles, CGAL::parameters::verbose(false)))
+    throw SceneError(path + ": truncated or garbled STL file (CGAL's reader cannot read it)");
+  PolygonSoup soup;
+  soup.positions = finite_positions(path, points);
+  for (const auto& t : triangles) soup.polygons.push_back({uint32_t(t[0]), uint32_t(t[1]), uint32_t(t[2])});
+  // CGAL's reader takes an ASCII file it cannot parse for an empty binary one.
+  if (soup.polygons.empty() && head.find("facet") != std::string::npos)
+    throw SceneError(path + ": truncated or garbled ASCII STL file: no facet could be read");
+  if (soup.polygons.empty()) throw SceneError(path + ": no faces");
+  return soup;
+}
+
+PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings) {
+  const std::uintmax_t size = std::filesystem::file_size(path);
+  {
+    // CGAL sizes its arrays by the header's counts before reading them: a garbled count would ask for
+    // any amount of memory. Every vertex and face takes at least 2 bytes (ASCII "0\n"; binary, 4 or more).
+    std::ifstream in(path, std::ios::binary);
+    CGAL::File_scanner_OFF scanner(in, false);
+    if (in.fail()) throw SceneError(path + ": not an OFF file (its header cannot be read)");
+    if (scanner.size_of_vertices() > size / 2 || scanner.size_of_facets() > size / 2)
+      throw SceneError(path + ": truncated or garbled OFF file: its header says " +
+                       std::to_string(scanner.size_of_vertices()) + " vertices and " +
+                       std::to_string(scanner.size_of_facets()) + " faces, more than a file of " +
+                       std::to_string(size) + " bytes holds");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::vector<Point> points;
+  std::vector<std::vector<std::size_t>> polygons;
+  std::vector<Kernel::Vector_3> normals;
+  std::vector<Kernel::Point_2> uvs;
+  std::vector<CGAL::IO::Color> vertex_colours, face_colours;
+  if (!CGAL::IO::read_OFF(in, points, polygons,
+                          CGAL::parameters::vertex_normal_output_iterator(std::back_inserter(normals))
+                              .vertex_texture_output_iterator(std::back_inserter(uvs))
+                              .vertex_color_output_iterator(std::back_inserter(vertex_colours))
+                              .face_color_output_iterator(std::back_inserter(face_colours))
+                              .verbose(false)))
+    throw SceneError(path + ": truncated or garbled OFF file (CGAL's reader cannot read it)");
+  PolygonSoup soup;
+  soup.positions = finite_positions(path, points);
+  for (const auto& polygon : polygons) {
+    std::vector<uint32_t>& p = soup.polygons.emplace_back();
+    for (std::size_t v : polygon) p.push_back(uint32_t(v));  // read_OFF checked the range
+    if (normals.size() == points.size()) {
+      std::vector<glm::vec3>& corners = soup.normals.emplace_back();
+      for (std::size_t v : polygon) {
+        const Kernel::Vector_3& n = normals[v];
+        corners.push_back(glm::vec3(float(n.x()), float(n.y()), float(n.z())));
+        if (!finite(glm::dvec3(corners.back())))
+          throw SceneError(path + ": vertex " + std::to_string(v) + ": normal is not finite");
+      }
+    }
+    if (uvs.size() == points.size()) {
+      std::vector<glm::vec2>& corners = soup.uvs.emplace_back();
+      for (std::size_t v : polygon) {
+        corners.push_back({float(uvs[v].x()), float(uvs[v].y())});
+        if (!std::isfinite(corners.back().x) || !std::isfinite(corners.back().y))
+          throw SceneError(path + ": vertex " + std::to_string(v) + ": texture coordinate is not finite");
+      }
+    }
+  }
+  if (soup.polygons.empty()) throw SceneError(path + ": no faces");
+  if (!vertex_colours.empty() || !face_colours.empty())
+    warnings.push_back(path + ": vertex or face colours ignored (pathcl takes the shape's material)");
+  return soup;
+}
+
+}  // namespace
+
+bool is_ply_stl_off_file(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  return ext == ".ply" || ext == ".stl" || ext == ".off";
+}
+
+PolygonSoup load_ply_stl_off(const std::string& path, std::vector<std::string>& warnings) {
+  // The same checks as every input: a directory, a missing file, a Git LFS pointer.
+  const std::string head = read_input_file(path, kMeshInput, 512);
+  const std::string ext = lower_extension(path);
+  try {
+    if (ext == ".ply") return load_ply(path, warnings);
+    if (ext == ".stl") return load_stl(path, head);
+    return load_off(path, warnings);
+  } catch (const CGAL::Failure_exception& e) {
+    // Only where CGAL's checks are compiled in (debug and fuzz builds).
+    throw SceneError(path + ": CGAL cannot read this file: " + e.expression());
+  }
+}
