@@ -23,9 +23,9 @@
  * with y up, the image is not mirrored (u grows to the right). The environment map uses the mirror
  * image of this (phi = atan2(z, x)), as it is seen from inside. */
 inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) {
-  float4 a = sc->uvs[2 * s->prim], b = sc->uvs[2 * s->prim + 1];
 #ifdef PC_HAS_SPHERES
   if (sc->shading[s->prim].kind == PC_PRIM_SPHERE) {
+    float4 a = sc->uvs[2 * s->prim], b = sc->uvs[2 * s->prim + 1];
     float3 d = pc_normalize(s->p - sc->prims[hit->slot].a.xyz);
     float3 x = a.xyz, y = b.xyz, z = a.w * pc_cross(x, y);
     float dx = pc_dot(d, x), dy = pc_dot(d, y), dz = pc_dot(d, z);
@@ -34,7 +34,7 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
     return (float2)(u, 1.0f - pc_acos(clamp(dy, -1.0f, 1.0f)) * PC_INV_PI);
   }
 #endif
-  return (1.0f - hit->u - hit->v) * a.xy + hit->u * a.zw + hit->v * b.xy;
+  return triangle_uv(sc->uvs, s->prim, hit->u, hit->v);
 }
 #endif
 
@@ -74,6 +74,9 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = cutout_seed(key, 0u);
+#endif
   float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
   float eta_scale = 1.0f; /* product of the (n_t / n_i)^2 that refraction divided the throughput by */
   float prev_bsdf_pdf = 0.0f;
@@ -82,7 +85,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   for (uint depth = 0;; ++depth) {
     Hit hit;
     ++*rays;
-    if (!trace_bvh(PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
+    if (!trace_bvh(sc, PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
       radiance += throughput * escaped_radiance(sc, ray.d, prev_bsdf_pdf, prev_delta);
       break;
     }
@@ -127,7 +130,10 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
         }
         Hit blocker;
         ++*rays;
-        if (!trace_bvh(PC_SCENE_BVH(sc), sc->prims, &shadow, true, &blocker)) {
+#ifdef PC_HAS_CUTOUTS
+        shadow.cutout_seed = cutout_seed(key, 2u * depth + 1u);
+#endif
+        if (!trace_bvh(sc, PC_SCENE_BVH(sc), sc->prims, &shadow, true, &blocker)) {
           float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
           radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
         }
@@ -160,6 +166,9 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
     ray.tmin = 0.0f;
     ray.tmax = INFINITY;
     ray.skip_prim = s.prim;
+#ifdef PC_HAS_CUTOUTS
+    ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
+#endif
   }
   return radiance;
 }

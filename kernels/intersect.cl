@@ -7,6 +7,11 @@
 
 #define PC_BVH_STACK 64 /* = kBvhMaxDepth of scene/bvh_build.h */
 
+/* Unconditional includes: runtime/kernel_program.cpp expands each file once, where it is first named,
+ * whatever #if surrounds that place (cutout.cl's code is under PC_HAS_CUTOUTS itself). */
+#include "scene.cl"
+#include "cutout.cl"
+
 /* The BVH layout of this device (runtime/device.h, bvh_width): PC_BVH8 for the 8-wide tree. */
 #ifdef PC_BVH8
 typedef Bvh8Node WideNode;
@@ -18,6 +23,7 @@ typedef struct {
   float3 o, d;
   float tmin, tmax;
   uint skip_prim; /* scene-order primitive the ray leaves from, or PC_INVALID */
+  uint cutout_seed; /* with cut-outs: the ray's own random dimension (kernels/cutout.cl) */
 } Ray;
 
 typedef struct {
@@ -36,6 +42,7 @@ inline Ray ray_from_record(__global const RayRecord* record) {
   ray.d = vload3(0, r + 4);
   ray.tmax = r[7];
   ray.skip_prim = PC_INVALID;
+  ray.cutout_seed = 0u;
   return ray;
 }
 
@@ -165,8 +172,8 @@ inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
  * go to the lower primitive index, so the nearest hit is one total order's minimum and the same whatever
  * the order the traversal meets the primitives in: the 4- and 8-wide layouts (and with them a CPU and a
  * GPU in one render) give the same hit records. */
-__attribute__((always_inline)) inline bool intersect_prim(__global const Primitive* prims, uint slot, const Ray* ray, const RayPrecomp* rp,
-                           uint kz, float tmax, Hit* hit) {
+__attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, __global const Primitive* prims, uint slot,
+                                                          const Ray* ray, const RayPrecomp* rp, uint kz, float tmax, Hit* hit) {
   Primitive p = prims[slot];
   bool from_surface = prim_index_of(p) == ray->skip_prim;
   float t, u = 0.0f, v = 0.0f;
@@ -181,6 +188,9 @@ __attribute__((always_inline)) inline bool intersect_prim(__global const Primiti
   }
   uint prim = prim_index_of(p);
   if (t == tmax && prim >= hit->prim) return false;
+#ifdef PC_HAS_CUTOUTS
+  if (!cutout_stops(cut, prim, u, v, ray->cutout_seed)) return false;
+#endif
   hit->t = t;
   hit->slot = slot;
   hit->prim = prim;
@@ -190,11 +200,11 @@ __attribute__((always_inline)) inline bool intersect_prim(__global const Primiti
 }
 
 /* The leaf reference's primitives; with any_hit, true at the first hit. */
-__attribute__((always_inline)) inline bool intersect_leaf(__global const Primitive* prims, uint ref, const Ray* ray,
+__attribute__((always_inline)) inline bool intersect_leaf(const SceneData* cut, __global const Primitive* prims, uint ref, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
   for (uint i = 0; i < count; ++i) {
-    if (intersect_prim(prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
+    if (intersect_prim(cut, prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
   }
   return false;
 }
@@ -218,7 +228,7 @@ inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
 /* Traversal of the 4-wide BVH, nearest child first. With any_hit it returns at the first hit (shadow
  * rays). kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices.
  * The stack holds at most 3 entries per level of the tree, whose depth is at most kBvhMaxDepth. */
-__attribute__((always_inline)) inline bool trace_bvh4_axis(__global const Bvh4Node* nodes,
+__attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut, __global const Bvh4Node* nodes,
                                                           __global const Primitive* prims, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   hit->t = ray->tmax;
@@ -231,7 +241,7 @@ __attribute__((always_inline)) inline bool trace_bvh4_axis(__global const Bvh4No
   uint ref = 0; /* the root node */
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
-      if (intersect_leaf(prims, ref, ray, rp, any_hit, hit, kz)) return true;
+      if (intersect_leaf(cut, prims, ref, ray, rp, any_hit, hit, kz)) return true;
     } else {
       __global const Bvh4Node* n = nodes + ref;
       float4 entry = node_entries(n, ray->o, rp->inv_d, negative, ray->tmin, hit->t);
@@ -278,7 +288,7 @@ inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
 /* The watertight test of ray_triangle on a block's four triangles at once: per lane the same IEEE
  * operations in the same order, so the same t, u, v bits. Then the hits update *hit lane by lane by
  * intersect_prim's rule (nearest by t, then lower primitive index), spheres through intersect_prim. */
-__attribute__((always_inline)) inline bool intersect_block(__global const LeafBlock* b, __global const Primitive* prims,
+__attribute__((always_inline)) inline bool intersect_block(const SceneData* cut, __global const LeafBlock* b, __global const Primitive* prims,
                                                            const Ray* ray, const RayPrecomp* rp, bool any_hit, Hit* hit,
                                                            uint kz) {
   uint kx = kz == 2u ? 0u : kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
@@ -313,10 +323,13 @@ __attribute__((always_inline)) inline bool intersect_block(__global const LeafBl
   bool found = false;
   for (uint i = 0; i < b->count; ++i) {
     if (b->sphere_mask & (1u << i)) {
-      found |= intersect_prim(prims, b->first_slot + i, ray, rp, kz, hit->t, hit);
+      found |= intersect_prim(cut, prims, b->first_slot + i, ray, rp, kz, hit->t, hit);
       continue;
     }
     if (!ok[i] || ts[i] > hit->t || (ts[i] == hit->t && ps[i] >= hit->prim)) continue;
+#ifdef PC_HAS_CUTOUTS
+    if (!cutout_stops(cut, ps[i], us[i], vs[i], ray->cutout_seed)) continue;
+#endif
     hit->t = ts[i];
     hit->slot = b->first_slot + i;
     hit->prim = ps[i];
@@ -328,12 +341,12 @@ __attribute__((always_inline)) inline bool intersect_block(__global const LeafBl
 }
 
 /* The leaf reference's blocks (kernels/shared/types.h); with any_hit, true at the first hit. */
-__attribute__((always_inline)) inline bool intersect_blocks(__global const LeafBlock* blocks,
+__attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut, __global const LeafBlock* blocks,
                                                             __global const Primitive* prims, uint ref, const Ray* ray,
                                                             const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
   for (uint i = 0; i < (count + 3u) / 4u; ++i) {
-    if (intersect_block(blocks + first + i, prims, ray, rp, any_hit, hit, kz)) return true;
+    if (intersect_block(cut, blocks + first + i, prims, ray, rp, any_hit, hit, kz)) return true;
   }
   return false;
 }
@@ -342,7 +355,7 @@ __attribute__((always_inline)) inline bool intersect_blocks(__global const LeafB
  * is entered at once, of two the nearer is entered and the other pushed, more are insertion-sorted onto
  * the stack by entry distance, nearest on top, and the nearest is popped. The stack holds at most 7
  * entries per level. */
-__attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8Node* nodes,
+__attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut, __global const Bvh8Node* nodes,
                                                            __global const LeafBlock* blocks,
                                                            __global const Primitive* prims, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
@@ -356,7 +369,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8No
   uint ref = 0; /* the root node */
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
-      if (intersect_blocks(blocks, prims, ref, ray, rp, any_hit, hit, kz)) return true;
+      if (intersect_blocks(cut, blocks, prims, ref, ray, rp, any_hit, hit, kz)) return true;
     } else {
       __global const Bvh8Node* n = nodes + ref;
       float8 entry = ray_boxes8(ray->o, rp->inv_d, negative, ray->tmin, hit->t, vload8(0, n->lo_x), vload8(0, n->lo_y),
@@ -425,14 +438,15 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(__global const Bvh8No
   }
 }
 
-/* The device's layout; kz as a literal, so each copy's triangle test has constant axis indices. */
-inline bool trace_bvh(__global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
+/* The device's layout; kz as a literal, so each copy's triangle test has constant axis indices. cut: the
+ * scene whose cut-outs apply (kernels/cutout.cl), or 0 for none. */
+inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
                       const Ray* ray, bool any_hit, Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
 #ifdef PC_BVH8
-#define PC_TRACE_AXIS(kz) trace_bvh8_axis(nodes, blocks, prims, ray, &rp, any_hit, hit, kz)
+#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, ray, &rp, any_hit, hit, kz)
 #else
-#define PC_TRACE_AXIS(kz) trace_bvh4_axis(nodes, prims, ray, &rp, any_hit, hit, kz)
+#define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, ray, &rp, any_hit, hit, kz)
 #endif
   if (rp.kz == 0u) return PC_TRACE_AXIS(0u);
   if (rp.kz == 1u) return PC_TRACE_AXIS(1u);

@@ -77,7 +77,7 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
   hit.t = ray.tmax;
   hit.slot = PC_INVALID;
   hit.prim = PC_INVALID;
-  for (uint p = 0; p < prim_count; ++p) intersect_prim(prims, p, &ray, &rp, rp.kz, hit.t, &hit);
+  for (uint p = 0; p < prim_count; ++p) intersect_prim(0, prims, p, &ray, &rp, rp.kz, hit.t, &hit);
   HitRecord out;
   out.t = hit.slot == PC_INVALID ? INFINITY : hit.t;
   out.prim = hit.slot == PC_INVALID ? PC_INVALID : prim_index_of(prims[hit.slot]);
@@ -124,7 +124,7 @@ __kernel void spawn_test(__global const WideNode* nodes, __global const LeafBloc
     ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, target.p, target.p_err, target.ng);
   }
   Hit hit;
-  out[i] = trace_bvh(nodes, blocks, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
+  out[i] = trace_bvh(0, nodes, blocks, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;
 }
 
 #include "texture.cl"

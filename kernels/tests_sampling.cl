@@ -111,7 +111,7 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
   ray.skip_prim = PC_INVALID;
   Hit hit;
   *le = 0.0f;
-  if (trace_bvh(PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
+  if (trace_bvh(0, PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
     Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
     PrimShading sh = sc->shading[s.prim];
     if (sh.light == PC_INVALID) return 0.0f;
@@ -156,7 +156,7 @@ __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
   Hit hit;
-  o[11] = trace_bvh(PC_SCENE_BVH(&sc), prims, &ray, false, &hit) ? hit.t : INFINITY;
+  o[11] = trace_bvh(0, PC_SCENE_BVH(&sc), prims, &ray, false, &hit) ? hit.t : INFINITY;
 }
 
 /* Integral of direction_light_pdf(x, .) over each listed bin by order x order Gauss-Legendre; out as

@@ -30,6 +30,12 @@ inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
     return (float3)(pc_srgb_to_linear[b.x], pc_srgb_to_linear[b.y], pc_srgb_to_linear[b.z]);
   }
   if (t.format == PC_TEXELS_HALF) return vload_half3(i, (__global const half*)image);
+#ifdef PC_HAS_CUTOUTS
+  if (t.format == PC_TEXELS_OPACITY8_RED || t.format == PC_TEXELS_OPACITY8_ALPHA) {
+    uchar byte = ((__global const uchar*)image)[4u * i + (t.format == PC_TEXELS_OPACITY8_ALPHA ? 3u : 0u)];
+    return (float3)((float)byte / 255.0f);
+  }
+#endif
   return vload3(i, (__global const float*)image);
 }
 
@@ -47,6 +53,12 @@ inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, 
   int ya = wrap_texel(y0, h, wrap_y), yb = wrap_texel(y0 + 1, h, wrap_y);
   return (1.0f - ay) * ((1.0f - ax) * texel_at(texels, t, xa, ya) + ax * texel_at(texels, t, xb, ya)) +
          ay * ((1.0f - ax) * texel_at(texels, t, xa, yb) + ax * texel_at(texels, t, xb, yb));
+}
+
+/* uv at barycentrics (u, v) of triangle prim (uvs: 2 per primitive, kernels/scene.cl). */
+inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float v) {
+  float4 a = uvs[2 * prim], b = uvs[2 * prim + 1];
+  return (1.0f - u - v) * a.xy + u * a.zw + v * b.xy;
 }
 
 /* Bilinear lookup at (u, v) under the texture's wrap mode; texel centres at half-integer coordinates. */

@@ -10,7 +10,7 @@ __kernel void trace_rays(__global const WideNode* nodes, __global const LeafBloc
   Ray ray = ray_from_record(rays + i);
   Hit hit;
   HitRecord out;
-  if (trace_bvh(nodes, blocks, prims, &ray, false, &hit)) {
+  if (trace_bvh(0, nodes, blocks, prims, &ray, false, &hit)) {
     out.t = hit.t;
     out.prim = prim_index_of(prims[hit.slot]);
     out.u = hit.u;

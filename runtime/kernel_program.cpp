@@ -133,14 +133,16 @@ const char* const kFeatureFlags[] = {
     "PC_HAS_TRIANGLES",  "PC_HAS_SPHERES",         "PC_HAS_SMOOTH_NORMALS", "PC_HAS_AREA_LIGHTS",
     "PC_HAS_DIFFUSE",    "PC_HAS_OREN_NAYAR",      "PC_HAS_PHONG",          "PC_HAS_MIRROR",
     "PC_HAS_DIELECTRIC", "PC_HAS_ROUGH_CONDUCTOR", "PC_HAS_PLASTIC",        "PC_HAS_TEXTURES",
-    "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP"};
-static_assert(sizeof kFeatureFlags / sizeof kFeatureFlags[0] == 16 && kFeatureAll == (1u << 16) - 1, "one flag per feature bit");
+    "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP",
+    "PC_HAS_CUTOUTS"};
+constexpr uint32_t kFeatureCount = sizeof kFeatureFlags / sizeof kFeatureFlags[0];
+static_assert(kFeatureCount == 17 && kFeatureAll == (1u << kFeatureCount) - 1, "one flag per feature bit");
 }  // namespace
 
 std::string kernel_options(uint32_t features) {
   // No fast-math options: they break the slab test's infinities and the watertight triangle test.
   std::string options = "-cl-std=CL1.2";
-  for (uint32_t bit = 0; bit < 16; ++bit)
+  for (uint32_t bit = 0; bit < kFeatureCount; ++bit)
     if (features & (1u << bit)) options += std::string(" -D") + kFeatureFlags[bit];
   return options;
 }

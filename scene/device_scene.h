@@ -28,7 +28,8 @@ enum : uint32_t {
   kFeatureDirectionalLights = 1u << 13,
   kFeatureEnvironment = 1u << 14,
   kFeatureEnvironmentMap = 1u << 15,
-  kFeatureAll = (1u << 16) - 1,
+  kFeatureCutouts = 1u << 16,  // a material with opacity below 1 or an opacity texture
+  kFeatureAll = (1u << 17) - 1,
 };
 
 

@@ -40,7 +40,20 @@ Material device_material(const MaterialDesc& m) {
   mat.sigma = m.sigma;
   mat.exponent = m.exponent;
   mat.ior = m.ior;
+  mat.opacity = m.opacity;
+  mat.opacity_texture = PC_INVALID;  // set with the opacity maps' texture entries
   return mat;
+}
+
+bool is_cutout(const MaterialDesc& m) { return m.opacity < 1 || m.opacity_texture != PC_INVALID; }
+
+// The texel format an image is read in as an opacity map: an 8-bit image's alpha when it is not all
+// opaque, else its red channel (a grey map), both linear; half and float images as they are (red).
+uint32_t opacity_format(const TextureImage& t) {
+  if (t.format != PC_TEXELS_SRGB8) return t.format;
+  for (uint32_t w : t.words)
+    if ((w >> 24) != 255u) return PC_TEXELS_OPACITY8_ALPHA;
+  return PC_TEXELS_OPACITY8_RED;
 }
 
 SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
@@ -98,9 +111,21 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   // The texel words themselves are appended by the callers (build_device_scene copies them,
   // build_device_scene_taking_texels moves them).
   uint64_t texel_words = 0;
+  std::vector<uint32_t> offsets;
   for (const TextureImage& t : scene.textures) {
+    offsets.push_back(uint32_t(texel_words));
     out.textures.push_back({t.width, t.height, uint32_t(texel_words), t.wrap, t.format, {}});
     texel_words += t.words.size();
+  }
+  // Opacity maps: texture entries of their own over the same texel words, read as opacity.
+  for (size_t i = 0; i < scene.materials.size(); ++i) {
+    const MaterialDesc& m = scene.materials[i];
+    if (is_cutout(m)) out.features |= kFeatureCutouts;
+    if (m.opacity_texture == PC_INVALID) continue;
+    const TextureImage& t = scene.textures[m.opacity_texture];
+    out.materials[i].opacity_texture = uint32_t(out.textures.size());
+    out.textures.push_back({t.width, t.height, offsets[m.opacity_texture], t.wrap, opacity_format(t), {}});
+    out.features |= kFeatureTextures;  // the uvs
   }
 
   // Primitives in scene order, with their boxes and (for emitters) light candidates.
@@ -113,6 +138,13 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
       bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
+      const MaterialDesc& m = scene.materials[s.material];
+      if (m.opacity_texture != PC_INVALID)
+        throw SceneError(scene.path + ": " + s.label + ": material \"" + m.name +
+                         "\" has an opacity texture, which spheres do not take (a constant opacity they do)");
+      if (emits && is_cutout(m))
+        throw SceneError(scene.path + ": " + s.label + ": an emitter cannot be a cut-out (material \"" + m.name +
+                         "\" has an opacity)");
       uint32_t index = uint32_t(prims.size());
       glm::vec3 center = to_device(s, s.center, s.radius);
       float radius = float(s.radius);
@@ -147,6 +179,9 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       const auto& t = s.mesh.triangles[ti];
       glm::vec3 emission = triangle_emission(s, ti);
       bool emits = emission.x > 0 || emission.y > 0 || emission.z > 0;
+      if (emits && is_cutout(scene.materials[triangle_material(s, ti)]))
+        throw SceneError(scene.path + ": " + s.label + ": an emitter cannot be a cut-out (material \"" +
+                         scene.materials[triangle_material(s, ti)].name + "\" has an opacity)");
       uint32_t index = uint32_t(prims.size());
       glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
       prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});

@@ -24,8 +24,11 @@ struct RawMaterial {
   glm::vec3 kd{0}, ks{0}, ke{0}, tf{1};
   float ns = 0, ni = 1.5f, d = 1;
   int illum = -1;
+  bool has_d = false;
   std::string map_kd, map_kd_where;
   uint32_t map_kd_wrap = PC_WRAP_REPEAT;
+  std::string map_d, map_d_where;
+  uint32_t map_d_wrap = PC_WRAP_REPEAT;
   std::vector<std::string> warnings;
   std::set<std::string> ignored;
 };
@@ -68,8 +71,9 @@ float parse_scalar(std::istringstream& words, const std::string& where, const st
 
 // map_Kd [-clamp on|off] [-blendu on|off] [-blendv on|off] FILE. Other options change how the image is
 // placed or its values (-o, -s, -mm, ...): rather than ignore them and render something else, refuse.
-void parse_map_kd(const std::string& rest, const std::string& where, const std::filesystem::path& dir,
-                  RawMaterial& m) {
+// map_Kd or map_d (key): options, then a file name resolved against dir; sets file and wrap.
+void parse_map(const std::string& rest, const std::string& where, const std::filesystem::path& dir,
+               const std::string& key, std::string& file_out, uint32_t& wrap, std::vector<std::string>& warnings) {
   size_t pos = 0;
   // The next whitespace-separated word from pos on ("" at the end), advancing pos past it.
   auto next_word = [&](size_t& start) {
@@ -83,17 +87,16 @@ void parse_map_kd(const std::string& rest, const std::string& where, const std::
   std::string word = next_word(start);
   while (word.size() > 1 && word[0] == '-') {
     if (word != "-clamp" && word != "-blendu" && word != "-blendv")
-      throw SceneError(where + ": map_Kd option " + word + " is not supported (only -clamp, -blendu, -blendv)");
+      throw SceneError(where + ": " + key + " option " + word + " is not supported (only -clamp, -blendu, -blendv)");
     size_t unused = 0;
     std::string value = next_word(unused);
-    if (value != "on" && value != "off") throw SceneError(where + ": map_Kd " + word + ": expected on or off");
-    if (word == "-clamp") m.map_kd_wrap = value == "on" ? PC_WRAP_CLAMP : PC_WRAP_REPEAT;
+    if (value != "on" && value != "off") throw SceneError(where + ": " + key + " " + word + ": expected on or off");
+    if (word == "-clamp") wrap = value == "on" ? PC_WRAP_CLAMP : PC_WRAP_REPEAT;
     word = next_word(start);
   }
   std::string file = word.empty() ? "" : trim(rest.substr(start));
-  if (file.empty()) throw SceneError(where + ": map_Kd: expected a file name");
-  m.map_kd = resolve_written_path(dir, file, where + ": map_Kd", m.warnings);
-  m.map_kd_where = where;
+  if (file.empty()) throw SceneError(where + ": " + key + ": expected a file name");
+  file_out = resolve_written_path(dir, file, where + ": " + key, warnings);
 }
 
 std::vector<RawMaterial> read_raw(const std::string& path) {
@@ -147,6 +150,7 @@ std::vector<RawMaterial> read_raw(const std::string& path) {
       float v = parse_scalar(words, where, key);
       if (!(v >= 0 && v <= 1)) throw SceneError(where + ": " + key + ": expected a number in [0, 1]");
       m.d = key == "d" ? v : 1 - v;
+      m.has_d = true;
     } else if (key == "illum") {
       std::string word;
       words >> word;
@@ -158,7 +162,13 @@ std::vector<RawMaterial> read_raw(const std::string& path) {
     } else if (key == "map_Kd") {
       std::string rest;
       std::getline(words, rest);
-      parse_map_kd(rest, where, dir, m);
+      parse_map(rest, where, dir, key, m.map_kd, m.map_kd_wrap, m.warnings);
+      m.map_kd_where = where;
+    } else if (key == "map_d") {
+      std::string rest;
+      std::getline(words, rest);
+      parse_map(rest, where, dir, key, m.map_d, m.map_d_wrap, m.warnings);
+      m.map_d_where = where;
     } else {
       m.ignored.insert(key);
     }
@@ -182,14 +192,51 @@ std::vector<MtlMaterial> load_mtl(const std::string& path) {
     m.name = raw.name;
     // Without Kd, a texture stands alone (Kd 1) and a plain material gets our default reflectance.
     glm::vec3 kd = raw.has_kd ? raw.kd : glm::vec3(raw.map_kd.empty() ? 0.5f : 1.0f);
-    if (raw.illum == 7 || raw.d < 1) {
+    // Glass only from a transparency illum model that refracts (4, 6, 7) with an Ni; d is then not an
+    // opacity. Otherwise d (or 1 - Tr) is an opacity (a cut-out) only with a transparency model (4, 6, 7,
+    // 9) or, with a warning, without illum; other illum models have no transparency, and exporters write
+    // d 0 with them on opaque materials (Blender's Sponza: d 0 and illum 1 on 22 of 25 materials), so d is
+    // ignored there, with a warning. map_d is always an opacity map.
+    bool transparency_model = raw.illum == 4 || raw.illum == 6 || raw.illum == 7 || raw.illum == 9;
+    bool glass = (raw.illum == 4 || raw.illum == 6 || raw.illum == 7) && raw.has_ni;
+    if (glass) {
       m.type = "dielectric";
       m.type_id = PC_MAT_DIELECTRIC;
-      m.ior = raw.has_ni ? raw.ni : 1.5f;
+      m.ior = raw.ni;
       m.color = raw.has_tf ? raw.tf : glm::vec3(1);
+      out.warnings.push_back(raw.where + ": material \"" + raw.name + "\" rendered as glass of ior " +
+                             std::to_string(raw.ni) + " (illum " + std::to_string(raw.illum) +
+                             " with Ni); give a dielectric material in the scene file to be sure");
       if (!raw.map_kd.empty())
         out.warnings.push_back(raw.map_kd_where + ": map_Kd ignored: material \"" + raw.name +
                                "\" is a dielectric, which has no diffuse colour");
+    } else if (raw.has_d && raw.d < 1) {
+      if (transparency_model || raw.illum < 0) {
+        m.opacity = raw.d;
+        if (raw.illum < 0)
+          out.warnings.push_back(raw.where + ": material \"" + raw.name + "\": d " + std::to_string(raw.d) +
+                                 " without illum taken as an opacity (a cut-out letting " +
+                                 std::to_string(1 - raw.d) + " of the light through)");
+      } else {
+        out.warnings.push_back(raw.where + ": material \"" + raw.name + "\": d " + std::to_string(raw.d) +
+                               " ignored: illum " + std::to_string(raw.illum) +
+                               " has no transparency (the material is opaque)");
+      }
+    }
+    if (!glass && !raw.map_d.empty()) {
+      out.opacity_texture = raw.map_d;
+      out.opacity_texture_where = raw.map_d_where;
+      out.opacity_texture_wrap = raw.map_d_wrap;
+    }
+    bool emits = raw.ke.x > 0 || raw.ke.y > 0 || raw.ke.z > 0;
+    if (emits && (m.opacity < 1 || !out.opacity_texture.empty())) {
+      out.warnings.push_back(raw.where + ": material \"" + raw.name +
+                             "\": its opacity (d, map_d) is ignored: an emitter cannot be a cut-out");
+      m.opacity = 1;
+      out.opacity_texture.clear();
+    }
+    if (glass) {
+      // the dielectric above
     } else if (raw.ks.x > 0 || raw.ks.y > 0 || raw.ks.z > 0) {
       m.type = "phong";
       m.type_id = PC_MAT_PHONG;

@@ -18,6 +18,9 @@ struct MtlMaterial {
   std::string texture;          // map_Kd resolved against the MTL file's directory, or ""
   std::string texture_where;    // "FILE:LINE" of map_Kd
   uint32_t texture_wrap = PC_WRAP_REPEAT;  // PC_WRAP_CLAMP with "-clamp on"
+  std::string opacity_texture;  // map_d resolved likewise, or "" (material.opacity holds a constant d)
+  std::string opacity_texture_where;
+  uint32_t opacity_texture_wrap = PC_WRAP_REPEAT;
   // What to say if the material is rendered (and only then: a library's other materials are not):
   // warnings naming their line, and the statements it has that pathcl does not use (Ka, map_Bump, ...).
   std::vector<std::string> warnings;

@@ -35,6 +35,11 @@ struct MaterialDesc {
                                          // is the colour (color is 1 for a texture from JSON)
   glm::vec3 specular{0}, k{0};    // phong specular; rough_conductor eta (in specular) and k
   float alpha = 0, sigma = 0, exponent = 1, ior = 1.5f;
+  // Cut-outs: the fraction of rays the surface stops (kernels/cutout.cl), times the opacity texture's
+  // value where there is one (index into SceneDescription::textures; its alpha channel when the 8-bit
+  // image has one that is not all opaque, else its red channel, read linearly).
+  float opacity = 1;
+  uint32_t opacity_texture = 0xffffffffu;
 };
 
 // An image texture, rows from the top, its texels stored as the device reads them, at the precision of

@@ -273,6 +273,16 @@ glm::vec3 texture_max(const TextureImage& t) {
   return m;
 }
 
+// The "wrap" of a texture object: repeat (the default), clamp or mirror.
+uint32_t read_wrap(const Node& n) {
+  if (!n.has("wrap")) return PC_WRAP_REPEAT;
+  std::string w = n.at("wrap").string();
+  if (w == "clamp") return PC_WRAP_CLAMP;
+  if (w == "mirror") return PC_WRAP_MIRROR;
+  if (w != "repeat") n.at("wrap").fail("unknown wrap mode \"" + w + "\" (expected repeat, clamp or mirror)");
+  return PC_WRAP_REPEAT;
+}
+
 // A material colour: [r, g, b] in [0, 1], or {"texture": FILE, "wrap": "repeat" | "clamp" | "mirror"}.
 // Sets m.color (1 for a texture, which the colour then is) and m.color_texture.
 void read_albedo_or_texture(const Node& n, SceneDescription& scene, const std::filesystem::path& dir,
@@ -283,18 +293,21 @@ void read_albedo_or_texture(const Node& n, SceneDescription& scene, const std::f
   }
   if (!n.value.is_object()) n.fail("expected an array of 3 numbers or {\"texture\": FILE}");
   n.expect_object({"texture", "wrap"}, {"texture"});
-  uint32_t wrap = PC_WRAP_REPEAT;
-  if (n.has("wrap")) {
-    std::string w = n.at("wrap").string();
-    if (w == "clamp")
-      wrap = PC_WRAP_CLAMP;
-    else if (w == "mirror")
-      wrap = PC_WRAP_MIRROR;
-    else if (w != "repeat")
-      n.at("wrap").fail("unknown wrap mode \"" + w + "\" (expected repeat, clamp or mirror)");
-  }
   m.color = glm::vec3(1);
-  m.color_texture = add_texture(scene, n.at("texture"), dir, wrap, true);
+  m.color_texture = add_texture(scene, n.at("texture"), dir, read_wrap(n), true);
+}
+
+// A material's opacity (cut-outs): a number in [0, 1], or {"texture": FILE, "wrap": ...} (an opacity map).
+void read_opacity(const Node& n, SceneDescription& scene, const std::filesystem::path& dir, MaterialDesc& m) {
+  if (n.value.is_number()) {
+    double o = n.number();
+    if (!(o >= 0 && o <= 1)) n.fail("expected a number in [0, 1]" + n.got());
+    m.opacity = float(o);
+    return;
+  }
+  if (!n.value.is_object()) n.fail("expected a number in [0, 1] or {\"texture\": FILE}");
+  n.expect_object({"texture", "wrap"}, {"texture"});
+  m.opacity_texture = add_texture(scene, n.at("texture"), dir, read_wrap(n), true);
 }
 
 MaterialDesc read_material(const Node& n, const std::string& name, SceneDescription& scene,
@@ -303,19 +316,20 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
   MaterialDesc m;
   m.name = name;
   m.type = n.at("type").string();
+  if (n.has("opacity")) read_opacity(n.at("opacity"), scene, dir, m);
   if (m.type == "diffuse") {
-    n.expect_object({"type", "reflectance"});
+    n.expect_object({"type", "opacity", "reflectance"});
     m.type_id = PC_MAT_DIFFUSE;
     if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
   } else if (m.type == "oren_nayar") {
-    n.expect_object({"type", "reflectance", "sigma_degrees"}, {"sigma_degrees"});
+    n.expect_object({"type", "opacity", "reflectance", "sigma_degrees"}, {"sigma_degrees"});
     m.type_id = PC_MAT_OREN_NAYAR;
     if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
     double sigma = n.at("sigma_degrees").number();
     if (!(sigma >= 0 && sigma <= 90)) n.at("sigma_degrees").fail("expected an angle in [0, 90] degrees");
     m.sigma = float(sigma * M_PI / 180);
   } else if (m.type == "phong") {
-    n.expect_object({"type", "diffuse", "specular", "exponent"}, {"exponent"});
+    n.expect_object({"type", "opacity", "diffuse", "specular", "exponent"}, {"exponent"});
     m.type_id = PC_MAT_PHONG;
     m.color = glm::vec3(0);
     if (n.has("diffuse")) read_albedo_or_texture(n.at("diffuse"), scene, dir, m);
@@ -329,18 +343,18 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
       n.fail(std::string(textured ? "the diffuse texture's largest value" : "diffuse") +
              " + specular exceeds 1 (the surface would create energy)");
   } else if (m.type == "mirror") {
-    n.expect_object({"type", "reflectance"});
+    n.expect_object({"type", "opacity", "reflectance"});
     m.type_id = PC_MAT_MIRROR;
     m.color = glm::vec3(1);
     if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
   } else if (m.type == "dielectric") {
-    n.expect_object({"type", "ior", "transmittance"}, {"ior"});
+    n.expect_object({"type", "opacity", "ior", "transmittance"}, {"ior"});
     m.type_id = PC_MAT_DIELECTRIC;
     m.ior = read_ior(n.at("ior"));
     m.color = glm::vec3(1);
     if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
   } else if (m.type == "rough_conductor") {
-    n.expect_object({"type", "roughness", "eta", "k", "specular"}, {"roughness"});
+    n.expect_object({"type", "opacity", "roughness", "eta", "k", "specular"}, {"roughness"});
     m.type_id = PC_MAT_ROUGH_CONDUCTOR;
     m.alpha = read_roughness(n.at("roughness"), false);
     if (n.has("specular")) {
@@ -356,7 +370,7 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
       if (m.specular.x <= 0 || m.specular.y <= 0 || m.specular.z <= 0) n.at("eta").fail("expected values > 0");
     }
   } else if (m.type == "plastic") {
-    n.expect_object({"type", "diffuse", "ior", "roughness"});
+    n.expect_object({"type", "opacity", "diffuse", "ior", "roughness"});
     m.type_id = PC_MAT_PLASTIC;
     if (n.has("diffuse")) read_albedo_or_texture(n.at("diffuse"), scene, dir, m);
     if (n.has("ior")) m.ior = read_ior(n.at("ior"));
@@ -504,6 +518,9 @@ void add_mtl_materials(const ObjFile& obj, const std::vector<uint32_t>& used, Sc
     const MtlMaterial& mtl = obj.materials[id];
     MaterialDesc m = mtl.material;
     glm::vec3 diffuse_max = m.color;
+    if (!mtl.opacity_texture.empty())
+      m.opacity_texture =
+          add_texture_file(scene, mtl.opacity_texture, mtl.opacity_texture_where + ": map_d", mtl.opacity_texture_wrap, true);
     if (!mtl.texture.empty()) {
       m.color_texture = add_texture_file(scene, mtl.texture, mtl.texture_where + ": map_Kd", mtl.texture_wrap, true);
       diffuse_max *= texture_max(scene.textures[m.color_texture]);

@@ -670,6 +670,7 @@ Kd 1 1 1
 Ni 1.33
 d 0.5
 Tf 0.9 0.95 1
+illum 7
 
 newmtl lamp
 Kd 0 0 0
@@ -1002,7 +1003,7 @@ TEST(SceneLoadMtl, WarningsOnlyForMaterialsFacesUse) {
   write_temp_png("mtl-used/tex/wood.png", 1, 1, {200, 100, 50});
   write_temp_file("mtl-used/lib.mtl", joined({"newmtl used", "Kd 0.5 0.5 0.5", "Ka 0.1 0.1 0.1",
                                               "newmtl unused", "Kd 0.9 0.9 0.9", "Ks 0.5 0.5 0.5", "map_Bump bump.png",
-                                              "illum 2", "newmtl unused_glass", "d 0.5", "map_Kd tex\\wood.png"}));
+                                              "illum 2", "newmtl unused_glass", "d 0.5", "map_Kd tex\\wood.png", "Ni 1.5", "illum 4"}));
   write_temp_file("mtl-used/model.obj", "mtllib lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl used\nf 1 2 3\n");
   const std::string lamp = R"(, {"type": "sphere", "radius": 0.1, "center": [0, 0, 3], "material": "m", "emission": [1, 1, 1]})";
   SceneDescription s = load_scene(write_temp_file("mtl-used.json", scene_with_shape(
@@ -1354,4 +1355,67 @@ TEST(SceneLoadMeshFormats, SmoothAngleNeedsSmoothAndARange) {
                 .find("shapes[0].smooth_angle_degrees: expected an angle in [0, 180] degrees, got 190"),
             std::string::npos);
   EXPECT_EQ(load_error(write_temp_file("angle.json", scene_with_shape(tri + R"(, "smooth": true, "smooth_angle_degrees": 0})"))), "");
+}
+
+// MTL transparency (scene/mtl_load.cpp): glass only from illum 4, 6 or 7 with Ni; d (or 1 - Tr) is an
+// opacity with a transparency illum model, or without illum (with a warning), and ignored with the
+// others (Blender writes d 0 with illum 1 on opaque materials); map_d is always an opacity map; an
+// emitter's opacity is dropped.
+TEST(SceneLoadMtl, TransparencyFollowsTheIllumModel) {
+  write_temp_png("mtl-d/mask.png", 1, 1, {128, 128, 128});
+  write_temp_file("mtl-d/lib.mtl",
+                  joined({"newmtl blender_opaque", "Kd 0.5 0.5 0.5", "d 0", "illum 1",
+                          "newmtl sheer", "Kd 0.5 0.5 0.5", "d 0.25", "illum 9",
+                          "newmtl no_illum", "Kd 0.5 0.5 0.5", "Tr 0.75",
+                          "newmtl leaves", "Kd 0.5 0.5 0.5", "map_d mask.png", "illum 2",
+                          "newmtl glass", "Ni 1.4", "d 0.1", "illum 4",
+                          "newmtl lamp", "Ke 1 1 1", "d 0.5", "illum 9"}));
+  std::string faces = "mtllib lib.mtl\n";
+  int first = 1;  // a triangle of its own per material (clean-up removes duplicate faces)
+  for (const char* m : {"blender_opaque", "sheer", "no_illum", "leaves", "glass", "lamp"}) {
+    faces += "v " + std::to_string(first) + " 0 0\nv " + std::to_string(first + 1) + " 0 0\nv " + std::to_string(first) +
+             " 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n";
+    faces += std::string("usemtl ") + m + "\nf " + std::to_string(first) + "/" + std::to_string(first) + " " +
+             std::to_string(first + 1) + "/" + std::to_string(first + 1) + " " + std::to_string(first + 2) + "/" +
+             std::to_string(first + 2) + "\n";
+    first += 3;
+  }
+  write_temp_file("mtl-d/model.obj", faces);
+  SceneDescription s = load_scene(write_temp_file("mtl-d.json", scene_with_shape(
+      R"({"type": "mesh", "file": "mtl-d/model.obj", "material": "from_mtl"})")));
+  auto material = [&](const std::string& name) {
+    for (const MaterialDesc& m : s.materials)
+      if (m.name == name) return m;
+    ADD_FAILURE() << "no material " << name;
+    return MaterialDesc{};
+  };
+  EXPECT_EQ(material("blender_opaque").opacity, 1.0f);
+  EXPECT_EQ(material("blender_opaque").type_id, PC_MAT_DIFFUSE);
+  EXPECT_EQ(material("sheer").opacity, 0.25f);
+  EXPECT_EQ(material("no_illum").opacity, 0.25f);
+  EXPECT_EQ(material("leaves").opacity, 1.0f);
+  ASSERT_NE(material("leaves").opacity_texture, PC_INVALID);
+  EXPECT_EQ(s.textures[material("leaves").opacity_texture].file, temp_dir() + "/mtl-d/mask.png");
+  EXPECT_EQ(material("glass").type_id, PC_MAT_DIELECTRIC);
+  EXPECT_EQ(material("glass").ior, 1.4f);
+  EXPECT_EQ(material("glass").opacity, 1.0f);
+  EXPECT_EQ(material("lamp").opacity, 1.0f);
+  std::string warnings = joined(s.warnings);
+  const std::string lib = temp_dir() + "/mtl-d/lib.mtl";
+  EXPECT_NE(warnings.find(lib + ":1: material \"blender_opaque\": d 0.000000 ignored: illum 1 has no transparency"),
+            std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":9: material \"no_illum\": d 0.250000 without illum taken as an opacity"),
+            std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":16: material \"glass\" rendered as glass of ior 1.4"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find(lib + ":20: material \"lamp\": its opacity (d, map_d) is ignored"), std::string::npos) << warnings;
+  DeviceScene d = build_device_scene(s);
+  EXPECT_TRUE(d.features & kFeatureCutouts);
+  // The opacity map is an entry of its own over the same texels, read as a grey map.
+  uint32_t leaves = 0;
+  while (leaves < s.materials.size() && s.materials[leaves].name != "leaves") ++leaves;
+  ASSERT_LT(leaves, s.materials.size());
+  uint32_t map = d.materials[leaves].opacity_texture;
+  ASSERT_LT(map, d.textures.size());
+  EXPECT_EQ(d.textures[map].format, PC_TEXELS_OPACITY8_RED);
+  EXPECT_EQ(d.textures[map].offset, d.textures[material("leaves").opacity_texture].offset);
 }

@@ -62,7 +62,9 @@ std::string write_temp_file(const std::string& name, const std::string& text) {
 std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb) {
   std::string path = temp_dir() + "/" + name;
   fs::create_directories(fs::path(path).parent_path());
-  if (rgb.size() != size_t(width) * height * 3 || !stbi_write_png(path.c_str(), width, height, 3, rgb.data(), width * 3))
+  int channels = width * height > 0 && rgb.size() == size_t(width) * height * 4 ? 4 : 3;  // RGBA or RGB
+  if (rgb.size() != size_t(width) * height * channels ||
+      !stbi_write_png(path.c_str(), width, height, channels, rgb.data(), width * channels))
     throw std::runtime_error("cannot write the test image " + path);
   return path;
 }

@@ -45,6 +45,7 @@ std::string temp_dir();
 std::string write_temp_file(const std::string& name, const std::string& text);
 
 // Writes an 8-bit RGB PNG (rows from the top, 3 bytes per pixel) in temp_dir() and returns its path.
+// rgb: 3 bytes a pixel, or 4 (RGBA).
 std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb);
 
 // Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).

@@ -125,7 +125,9 @@ typedef struct {
  *   exponent: phong: cosine lobe exponent
  *   ior:      dielectric, plastic: index of refraction inside over outside
  * color (16) + specular (16) + k (16) + type (4) + color_texture (4) + alpha (4) + sigma (4) + exponent (4)
- * + ior (4) + pad (8) = 80 bytes. */
+ *   opacity:  cut-outs (PC_HAS_CUTOUTS): the fraction of rays the surface stops, 1 = opaque; with
+ *             opacity_texture, times that texture's opacity (kernels/cutout.cl)
+ * + ior (4) + opacity (4) + opacity_texture (4) = 80 bytes. */
 typedef struct {
   pc_float4 color;
   pc_float4 specular;
@@ -136,7 +138,8 @@ typedef struct {
   float sigma;
   float exponent;
   float ior;
-  pc_uint pad[2];
+  float opacity;
+  pc_uint opacity_texture; /* index into textures, or PC_INVALID */
 } Material;
 
 /* A light. emission is the radiance of an area light, the intensity of a point or spot light, the
@@ -165,6 +168,11 @@ typedef struct {
 #define PC_TEXELS_SRGB8 0u
 #define PC_TEXELS_HALF 1u
 #define PC_TEXELS_FLOAT 2u
+/* Opacity maps (Material.opacity_texture) of 8-bit images: the linear value of byte 0 (red: a grey map)
+ * or byte 3 (alpha) of an SRGB8 image's texels, in every channel. Half and float images are read as they
+ * are, red for opacity. */
+#define PC_TEXELS_OPACITY8_RED 3u
+#define PC_TEXELS_OPACITY8_ALPHA 4u
 
 /* An image in the texel words, rows top to bottom; each image starts at a word.
  * width (4) + height (4) + offset (4) + wrap (4) + format (4) + pad (12) = 32 bytes. */
@@ -249,7 +257,7 @@ typedef struct {
   X(LeafBlock, cz) X(LeafBlock, prim) X(LeafBlock, first_slot) X(LeafBlock, count) X(LeafBlock, sphere_mask) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
-  X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior)  \
+  X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior) X(Material, opacity) X(Material, opacity_texture)  \
   X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
   X(Light, area) X(Light, select_pdf) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture)           \
   X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(Texture, format) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
