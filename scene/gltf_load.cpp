@@ -100,14 +100,13 @@ std::string percent_decoded(const std::string& uri) {
 
 // An accessor's elements, checked to lie inside its buffer view and buffer.
 struct AccessorData {
-  const unsigned char* data = nullptr;  // nullptr: no buffer view, all zeros (glTF 2.0, 3.6.2.3)
+  const unsigned char* data = nullptr;
   size_t stride = 0, count = 0;
   int components = 1, component_type = TINYGLTF_COMPONENT_TYPE_FLOAT;
   bool normalized = false;
 
   // Component c of element i, normalized integers mapped to [0, 1] or [-1, 1] as glTF says (3.11).
   double get(size_t i, int c) const {
-    if (!data) return 0;
     const unsigned char* p = data + i * stride;
     switch (component_type) {
       case TINYGLTF_COMPONENT_TYPE_BYTE: {
@@ -173,7 +172,9 @@ AccessorData read_accessor(const Reader& r, int index, const std::string& use, i
   d.components = components;
   d.component_type = a.componentType;
   d.normalized = a.normalized;
-  if (a.bufferView < 0) return d;
+  // glTF allows an accessor without a buffer view, all zeros, as the base of a sparse one (refused above):
+  // alone it is no geometry, and its count would allocate without bound.
+  if (a.bufferView < 0) r.fail(where + ": no bufferView (its elements would all be zero)");
   if (size_t(a.bufferView) >= m.bufferViews.size())
     r.fail(where + ": buffer view " + std::to_string(a.bufferView) + " out of range (" +
            std::to_string(m.bufferViews.size()) + " buffer views)");
