@@ -107,14 +107,7 @@ bool has_position(const TriangleMesh& mesh, glm::dvec3 p) {
   return false;
 }
 
-std::string load_error(const std::string& path) {
-  try {
-    load_scene(path);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string load_error(const std::string& path) { return scene_load_error(path); }
 
 // The hierarchy of HierarchyAndTransforms: a TRS parent (translate, 90 degrees about y, scale 2) with a
 // matrix child (translate z by 1) placing the quad, and a second root placing the same mesh untouched.

@@ -16,15 +16,7 @@ namespace {
 
 std::string scenes() { return PATHCL_TEST_SCENES; }
 
-// The message of the SceneError that loading `path` throws, or "" if it loads.
-std::string load_error(const std::string& path) {
-  try {
-    load_scene(path);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string load_error(const std::string& path) { return scene_load_error(path); }
 
 std::string scene_with_shape(const std::string& shape) {
   return R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
