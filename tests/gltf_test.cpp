@@ -393,3 +393,22 @@ TEST(Gltf, BadFilesAreNamedAndExitWithStatus2) {
                 .find("good.glb: a glTF file is placed by a shape of its own"),
             std::string::npos);
 }
+
+// An emissive texture is taken per triangle at its uv centroid: the quad's first triangle has its centroid
+// at u = 2/3 (the blue texel of a red | blue image), the second at u = 1/3 (red).
+TEST(Gltf, EmissiveTexturePerTriangle) {
+  write_temp_png("glow.png", 2, 1, {255, 0, 0, 0, 0, 255});
+  json doc = gltf_document(quad_buffer());
+  doc["materials"] = json::array({{{"emissiveFactor", {2, 2, 2}}, {"emissiveTexture", {{"index", 0}}}, {"pbrMetallicRoughness", {{"metallicFactor", 0}}}}});
+  doc["textures"] = json::array({{{"source", 0}}});
+  doc["images"] = json::array({{{"uri", "glow.png"}}});
+  doc["meshes"] = json::array({{{"primitives", json::array({quad_primitive(0)})}}});
+  doc["nodes"] = json::array({{{"mesh", 0}}});
+  doc["scenes"] = json::array({{{"nodes", {0}}}});
+  write_temp_file("glow.gltf", doc.dump());
+  SceneDescription scene = load_scene(write_temp_file("glow.json", scene_json(R"({"type": "gltf", "file": "glow.gltf"})")));
+  ASSERT_EQ(scene.shapes.size(), 1u);
+  ASSERT_EQ(scene.shapes[0].triangle_emission.size(), 2u);
+  EXPECT_EQ(scene.shapes[0].triangle_emission[0], glm::vec3(0, 0, 2));
+  EXPECT_EQ(scene.shapes[0].triangle_emission[1], glm::vec3(2, 0, 0));
+}
