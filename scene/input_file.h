@@ -5,6 +5,7 @@
 #pragma once
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +24,7 @@ struct InputKind {
 inline constexpr InputKind kSceneInput{"scene file", "a JSON scene file", "a scene"};
 inline constexpr InputKind kMeshInput{"mesh file", "an OBJ, PLY, STL or OFF mesh file", "a mesh"};
 inline constexpr InputKind kMaterialInput{"material file", "an MTL material file", "a material file"};
+inline constexpr InputKind kBufferInput{"buffer file", "a glTF buffer file", "a glTF buffer"};
 inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR)",
                                          "an image"};
 
@@ -50,6 +52,16 @@ inline std::string read_input_file(const std::string& path, const InputKind& kin
   if (text.rfind("version https://git-lfs.github.com/spec/", 0) == 0)
     throw SceneError(path + ": looks like a Git LFS pointer, not " + kind.content + " (run git lfs pull)");
   return text;
+}
+
+// nlohmann's "[json.exception.parse_error.101] parse error at line 5, column 1: syntax error ..." in our
+// form, "FILE:5:1: malformed JSON: syntax error ...", keeping nlohmann's description of what is wrong.
+inline std::string malformed_json_message(const std::string& path, const std::string& what) {
+  size_t line = 0, column = 0, at = what.find("at line ");
+  if (at != std::string::npos) std::sscanf(what.c_str() + at, "at line %zu, column %zu", &line, &column);
+  size_t colon = what.find(": ", at == std::string::npos ? 0 : at);
+  return path + (line > 0 ? ":" + std::to_string(line) + ":" + std::to_string(column) : "") +
+         ": malformed JSON: " + (colon == std::string::npos ? "syntax error" : what.substr(colon + 2));
 }
 
 // Reads one line, ended by \n, \r\n or a lone \r (without it); false at the end of the input. This is

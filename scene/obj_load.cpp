@@ -25,7 +25,8 @@ namespace {
 // Mesh formats other than OBJ, by extension and by how their files begin. tinyobjloader takes any file
 // for OBJ: a PLY file became "igea.ply: no faces", a binary glTF "Failed parse 'l' line". PLY, STL and
 // OFF are read by scene/ply_stl_off_load.cpp, chosen by the extension (`readable`): named .obj, they are
-// told to be renamed; the others are not supported.
+// told to be renamed; glTF files are a shape type of their own (scene/gltf_load.cpp); the others are not
+// supported.
 struct MeshFormat {
   const char* name;
   std::vector<std::string> extensions, starts;
@@ -59,6 +60,9 @@ std::string lower_extension(const std::string& path) {
 }
 
 [[noreturn]] void refuse_format(const std::string& path, const MeshFormat& f) {
+  if (std::string(f.name) == "glTF")
+    throw SceneError(path + ": a glTF file is placed by a shape of its own ({\"type\": \"gltf\", \"file\": ...}), "
+                            "not as a mesh");
   if (f.readable)
     throw SceneError(path + (std::string(f.name) == "PLY" ? ": a " : ": an ") + f.name + " file named as OBJ (the reader is chosen by the extension: name it " +
                      f.extensions[0] + ")");

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/common.hpp>
+#include <glm/exponential.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -41,6 +43,14 @@ struct MaterialDesc {
   float opacity = 1;
   uint32_t opacity_texture = 0xffffffffu;
 };
+
+// rough_conductor from a reflectance r at normal incidence: eta = 1 and k = 2 sqrt(r / (1 - r)) reflect
+// exactly r there (r is capped just below 1, where k is infinite).
+inline void set_conductor_reflectance(MaterialDesc& m, glm::vec3 reflectance) {
+  glm::vec3 r = glm::min(reflectance, glm::vec3(0.9999f));
+  m.specular = glm::vec3(1);
+  m.k = 2.0f * glm::sqrt(r / (1.0f - r));
+}
 
 // An image texture, rows from the top, its texels stored as the device reads them, at the precision of
 // the file (PC_TEXELS_* of kernels/shared/types.h): 8-bit sRGB, or linear half or float RGB.

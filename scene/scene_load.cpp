@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <glm/geometric.hpp>
@@ -18,6 +20,7 @@
 
 #include "scene/scene_description.h"
 #include "kernels/shared/types.h"
+#include "scene/gltf_load.h"
 #include "scene/mtl_load.h"
 #include "scene/obj_load.h"
 #include "scene/ply_stl_off_load.h"
@@ -230,15 +233,17 @@ float read_ior(const Node& n) {
 // Loads an image file once per file, wrap mode and use; returns its index in scene.textures. A
 // reflectance texture (a material colour) has its texels clamped to [0, 1], with a warning when that
 // changes any: a surface reflecting more than it receives would create energy. `where` starts messages.
-uint32_t add_texture_file(SceneDescription& scene, const std::string& file, const std::string& where, uint32_t wrap,
-                          bool reflectance) {
+// `load` decodes the image named `file` (a file, or an image embedded in a glTF file) when no texture of
+// that name, wrap and use is loaded yet.
+uint32_t add_texture_image(SceneDescription& scene, const std::string& file, const std::function<TextureImage()>& load,
+                           const std::string& where, uint32_t wrap, bool reflectance) {
   for (uint32_t i = 0; i < scene.textures.size(); ++i) {
     const TextureImage& t = scene.textures[i];
     if (t.file == file && t.wrap == wrap && t.reflectance == reflectance) return i;
   }
   TextureImage image;
   try {
-    image = load_texture_image(file);
+    image = load();
   } catch (const SceneError& e) {
     throw SceneError(where + ": " + e.what());
   }
@@ -258,6 +263,11 @@ uint32_t add_texture_file(SceneDescription& scene, const std::string& file, cons
   }
   scene.textures.push_back(std::move(image));
   return uint32_t(scene.textures.size() - 1);
+}
+
+uint32_t add_texture_file(SceneDescription& scene, const std::string& file, const std::string& where, uint32_t wrap,
+                          bool reflectance) {
+  return add_texture_image(scene, file, [&] { return load_texture_image(file); }, where, wrap, reflectance);
 }
 
 // Loads the image file named by n (relative to the scene's directory).
@@ -359,10 +369,7 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
     m.alpha = read_roughness(n.at("roughness"), false);
     if (n.has("specular")) {
       if (n.has("eta") || n.has("k")) n.fail("give either specular or eta and k");
-      // eta = 1 and k = 2 sqrt(r / (1 - r)) reflect exactly r at normal incidence.
-      glm::vec3 r = glm::min(read_albedo(n.at("specular")), glm::vec3(0.9999f));
-      m.specular = glm::vec3(1);
-      m.k = 2.0f * glm::sqrt(r / (1.0f - r));
+      set_conductor_reflectance(m, read_albedo(n.at("specular")));
     } else {
       if (!n.has("eta") || !n.has("k")) n.fail("a rough_conductor needs specular, or eta and k");
       m.specular = n.at("eta").vec3();
@@ -476,6 +483,44 @@ glm::dmat4 read_transform(const Node& n) {
   return t;
 }
 
+// The first camera of a glTF file: "camera": {"from_gltf": FILE, "transform": ..., "width", "height",
+// "filter"}. The transform places it as a gltf shape's places the file's geometry.
+CameraDesc read_gltf_camera(const Node& n, const std::filesystem::path& dir, std::vector<std::string>& warnings) {
+  n.expect_object({"from_gltf", "transform", "width", "height", "filter"}, {"from_gltf", "width", "height"});
+  const std::string file = (dir / n.at("from_gltf").string()).string();
+  GltfScene gltf;
+  try {
+    gltf = load_gltf(file, warnings);
+  } catch (const SceneError& e) {
+    n.at("from_gltf").fail(e.what());
+  }
+  if (!gltf.camera.present) n.at("from_gltf").fail(file + ": no node of its scene has a camera");
+  if (!gltf.camera.perspective) n.at("from_gltf").fail(gltf.camera.where + ": orthographic cameras are not supported");
+  const glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
+  CameraDesc c;
+  c.width = n.at("width").count(1, kMaxFilmSide);
+  c.height = n.at("height").count(1, kMaxFilmSide);
+  c.position = glm::dvec3(transform * glm::dvec4(gltf.camera.position, 1.0));
+  glm::dvec3 forward = glm::dmat3(transform) * gltf.camera.forward;
+  c.up = glm::dmat3(transform) * gltf.camera.up;
+  if (!(glm::length(forward) > 0) || !(glm::length(glm::cross(forward, c.up)) > 0) || !within_float_range(c.position))
+    n.at("from_gltf").fail(gltf.camera.where + ": its transform leaves the camera no position or view direction");
+  c.look_at = c.position + glm::normalize(forward);
+  const double degrees = gltf.camera.yfov_radians * 180 / M_PI;
+  if (!(degrees >= kSmallestPositive && degrees < 180))
+    n.at("from_gltf").fail(gltf.camera.where + ": yfov " + std::to_string(gltf.camera.yfov_radians) +
+                           " radians, expected a field of view in (0, pi)");
+  c.fov_y_degrees = float(degrees);
+  // The vertical field of view is kept; the horizontal one follows from the film, as for pathcl's camera.
+  const double aspect = double(c.width) / c.height;
+  if (gltf.camera.aspect_ratio > 0 && std::abs(gltf.camera.aspect_ratio - aspect) > 1e-3 * aspect)
+    warnings.push_back(n.place() + ": the film's aspect ratio " + std::to_string(aspect) + " differs from the camera's " +
+                       std::to_string(gltf.camera.aspect_ratio) + " (" + gltf.camera.where +
+                       "): its vertical field of view is kept");
+  if (n.has("filter")) c.filter = read_filter(n.at("filter"), c);
+  return c;
+}
+
 // Validates the soup's indices and coordinates (OBJ files are checked line by line in load_obj). `uvs`
 // (optional): one [u, v] per position, which every corner at that position gets.
 void check_inline_triangles(const Node& positions, const Node& indices, const Node* uvs, PolygonSoup& soup) {
@@ -504,6 +549,31 @@ void check_inline_triangles(const Node& positions, const Node& indices, const No
     }
     if (uvs) soup.uvs.push_back({vertex_uvs[poly[0]], vertex_uvs[poly[1]], vertex_uvs[poly[2]]});
     soup.polygons.push_back(poly);
+  }
+}
+
+// Applies a shape's transform to its soup, in double: positions, normals (by the inverse transpose) and,
+// for a mirroring transform, the winding.
+void place_soup(PolygonSoup& soup, const glm::dmat4& transform, const Node& n) {
+  for (glm::dvec3& p : soup.positions) {
+    p = glm::dvec3(transform * glm::dvec4(p, 1.0));
+    if (!within_float_range(p))
+      (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
+  }
+  // Normals take the inverse transpose, so that they stay perpendicular to the surface under non-uniform
+  // scale; normalized in double (clean_mesh normalizes again), a zero normal stays zero.
+  const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
+  for (std::vector<glm::vec3>& corners : soup.normals)
+    for (glm::vec3& normal : corners) {
+      glm::dvec3 m = normal_matrix * glm::dvec3(normal);
+      double length = glm::length(m);
+      normal = length > 0 && std::isfinite(length) ? glm::vec3(m / length) : glm::vec3(0);
+    }
+  // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
+  if (glm::determinant(glm::dmat3(transform)) < 0) {
+    for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
+    for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
+    for (auto& normals : soup.normals) std::reverse(normals.begin(), normals.end());
   }
 }
 
@@ -550,7 +620,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
                      "flip_normals"},
                     {"radius", "material"});
   else
-    n.at("type").fail("unknown shape type \"" + type + "\" (expected mesh, triangles or sphere)");
+    n.at("type").fail("unknown shape type \"" + type + "\" (expected mesh, triangles, sphere or gltf)");
 
   std::string material = n.at("material").string();
   const bool from_mtl = material == "from_mtl";
@@ -610,26 +680,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     Node uvs = n.has("uvs") ? n.at("uvs") : n;
     check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
   }
-  for (glm::dvec3& p : soup.positions) {
-    p = glm::dvec3(transform * glm::dvec4(p, 1.0));
-    if (!within_float_range(p))
-      (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
-  }
-  // Normals take the inverse transpose, so that they stay perpendicular to the surface under non-uniform
-  // scale; normalized in double (clean_mesh normalizes again), a zero normal stays zero.
-  const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
-  for (std::vector<glm::vec3>& corners : soup.normals)
-    for (glm::vec3& normal : corners) {
-      glm::dvec3 m = normal_matrix * glm::dvec3(normal);
-      double length = glm::length(m);
-      normal = length > 0 && std::isfinite(length) ? glm::vec3(m / length) : glm::vec3(0);
-    }
-  // A mirroring transform turns counter-clockwise into clockwise: swap winding so the front stays the front.
-  if (glm::determinant(glm::dmat3(transform)) < 0) {
-    for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
-    for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
-    for (auto& normals : soup.normals) std::reverse(normals.begin(), normals.end());
-  }
+  place_soup(soup, transform, n);
   CleanOptions options;
   if (n.has("orient")) options.orient = n.at("orient").boolean();
   if (n.has("smooth")) options.smooth_normals = n.at("smooth").boolean();
@@ -668,6 +719,102 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     n.fail("material \"" + m.name + "\" has a texture, but the shape has no \"uvs\"");
   }
   return s;
+}
+
+// A point or spot light within kMaxSceneExtent of the camera: farther, squared distances to it would
+// overflow float on the device.
+void check_light_reach(const SceneDescription& scene, const LightDesc& light, const Node& where) {
+  glm::dvec3 d = glm::abs(light.position - scene.camera.position);
+  bool positioned = light.type == PC_LIGHT_POINT || light.type == PC_LIGHT_SPOT;
+  if (positioned && !(std::max({d.x, d.y, d.z}) <= kMaxSceneExtent)) {
+    char what[160];
+    std::snprintf(what, sizeof what, "the light is %g from the camera, beyond the largest distance of %g",
+                  std::max({d.x, d.y, d.z}), kMaxSceneExtent);
+    where.fail(what);
+  }
+}
+
+// "type": "gltf": the default scene of a glTF file placed by the shape's transform, one ShapeDesc per
+// primitive that a node places (nodes sharing a mesh give copies), its materials and textures added to
+// the scene's, its KHR_lights_punctual lights to the scene's lights.
+void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescription& scene) {
+  n.expect_object({"type", "file", "transform"}, {"file"});
+  const std::string file = (dir / n.at("file").string()).string();
+  GltfScene gltf;
+  try {
+    gltf = load_gltf(file, scene.warnings);
+  } catch (const SceneError& e) {
+    n.at("file").fail(e.what());
+  }
+  const glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
+  // Materials are added when a primitive uses them, so that unused ones load no textures.
+  std::vector<uint32_t> scene_material(gltf.materials.size(), PC_INVALID);
+  std::vector<std::optional<TextureImage>> emission_images(gltf.images.size());
+  auto image_loader = [&](uint32_t i) {
+    const GltfImage& image = gltf.images[i];
+    return [&image] { return image.file.empty() ? decode_texture_image(image.name, image.bytes) : load_texture_image(image.file); };
+  };
+  for (GltfPrimitive& p : gltf.primitives) {
+    const GltfMaterial& gm = gltf.materials[p.material];
+    if (scene_material[p.material] == PC_INVALID) {
+      MaterialDesc m = gm.material;
+      if (gm.color_image != PC_INVALID)
+        m.color_texture = add_texture_image(scene, gltf.images[gm.color_image].name, image_loader(gm.color_image),
+                                            gm.where + ".baseColorTexture", gm.color_wrap, true);
+      if (gm.opacity_image != PC_INVALID) {
+        std::string key = gltf.images[gm.opacity_image].name + " (alpha" +
+                          (gm.alpha_cutoff >= 0 ? " at or above " + std::to_string(gm.alpha_cutoff) : "") + ")";
+        auto load = [&] {
+          TextureImage t = alpha_as_opacity(image_loader(gm.opacity_image)(), gm.alpha_factor, gm.alpha_cutoff);
+          t.file = key;
+          return t;
+        };
+        m.opacity_texture = add_texture_image(scene, key, load, gm.where + ".baseColorTexture", gm.color_wrap, true);
+      }
+      scene_material[p.material] = uint32_t(scene.materials.size());
+      scene.materials.push_back(m);
+    }
+    ShapeDesc s;
+    s.label = n.path + " (" + n.at("file").string() + ": " + p.where.substr(file.size() + 2) + ")";
+    s.material = scene_material[p.material];
+    s.emission = gm.emission;
+    s.two_sided = gm.two_sided;
+    if ((gm.color_image != PC_INVALID || gm.emission_image != PC_INVALID) && p.soup.uvs.empty())
+      n.fail(p.where + ": no TEXCOORD_0, but its material (" + gm.where + ") has a texture");
+    place_soup(p.soup, transform, n);
+    try {
+      s.mesh = clean_mesh(p.soup, CleanOptions{}, s.clean);
+    } catch (const SceneError& e) {
+      n.fail(p.where + ": " + e.what());
+    }
+    if (gm.emission_image != PC_INVALID) {
+      // Emission is constant per triangle on the device: each triangle takes the emissive texel at
+      // its uv centroid.
+      std::optional<TextureImage>& image = emission_images[gm.emission_image];
+      if (!image) {
+        try {
+          image = image_loader(gm.emission_image)();
+        } catch (const SceneError& e) {
+          throw SceneError(gm.where + ".emissiveTexture: " + e.what());
+        }
+        image->wrap = gm.emission_wrap;
+        scene.warnings.push_back(gm.where + ": emissiveTexture taken per triangle at its uv centroid (emission is constant per triangle)");
+      }
+      for (const auto& uv : s.mesh.uvs)
+        s.triangle_emission.push_back(gm.emission * texel_nearest(*image, (uv[0] + uv[1] + uv[2]) / 3.0f));
+    }
+    scene.shapes.push_back(std::move(s));
+  }
+  const glm::dmat3 linear(transform);
+  for (LightDesc l : gltf.lights) {
+    l.position = glm::dvec3(transform * glm::dvec4(l.position, 1.0));
+    glm::dvec3 d = linear * glm::dvec3(l.direction);
+    if (!(glm::length(d) > 0) || !within_float_range(l.position))
+      (n.has("transform") ? n.at("transform") : n).fail(l.label + ": the transform leaves the light no position or direction");
+    l.direction = glm::vec3(glm::normalize(d));
+    check_light_reach(scene, l, n);
+    scene.lights.push_back(l);
+  }
 }
 
 // Whether anything emits: an emitting sphere, an emitting triangle left after clean-up (emission or an
@@ -784,14 +931,7 @@ SceneDescription load_scene(const std::string& path) {
   try {
     root = json::parse(text);  // skips a UTF-8 byte order mark
   } catch (const json::parse_error& e) {
-    // "[json.exception.parse_error.101] parse error at line 5, column 1: syntax error ...": our form, with
-    // nlohmann's description of what is wrong.
-    std::string what = e.what();
-    size_t line = 0, column = 0, at = what.find("at line ");
-    if (at != std::string::npos) std::sscanf(what.c_str() + at, "at line %zu, column %zu", &line, &column);
-    size_t colon = what.find(": ", at == std::string::npos ? 0 : at);
-    throw SceneError(path + (line > 0 ? ":" + std::to_string(line) + ":" + std::to_string(column) : "") +
-                     ": malformed JSON: " + (colon == std::string::npos ? "syntax error" : what.substr(colon + 2)));
+    throw SceneError(malformed_json_message(path, e.what()));
   } catch (const json::exception&) {
     // A number beyond double range (out_of_range), reported without a position: the scan finds it.
     check_json_text(path, text);
@@ -805,32 +945,30 @@ SceneDescription load_scene(const std::string& path) {
     top.fail(std::string("expected an object with camera, materials and shapes, got ") + (root.is_array() ? "an " : "a ") +
              root.type_name());
   top.expect_object({"camera", "materials", "shapes", "lights", "render"}, {"camera", "materials", "shapes"});
-  scene.camera = read_camera(top.at("camera"));
+  std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  scene.camera = top.at("camera").value.is_object() && top.at("camera").has("from_gltf")
+                     ? read_gltf_camera(top.at("camera"), dir, scene.warnings)
+                     : read_camera(top.at("camera"));
 
   Node mats = top.at("materials");
   if (!mats.value.is_object()) mats.fail("expected an object of named materials");
   std::map<std::string, uint32_t> by_name;
-  std::filesystem::path dir = std::filesystem::path(path).parent_path();
   for (auto& [name, _] : mats.value.items()) {
     if (name == "from_mtl") mats.at(name).fail("the name \"from_mtl\" is reserved (a mesh's materials from its MTL files)");
     by_name[name] = uint32_t(scene.materials.size());
     scene.materials.push_back(read_material(mats.at(name), name, scene, dir));
   }
-  for (const Node& s : top.at("shapes").array()) scene.shapes.push_back(read_shape(s, dir, by_name, scene));
+  for (const Node& s : top.at("shapes").array()) {
+    if (s.value.is_object() && s.has("type") && s.at("type").value == "gltf")
+      read_gltf_shape(s, dir, scene);
+    else
+      scene.shapes.push_back(read_shape(s, dir, by_name, scene));
+  }
   if (top.has("lights")) {
     bool environment = false;
     for (const Node& l : top.at("lights").array()) {
       LightDesc light = read_light(l);
-      // As for geometry (kMaxSceneExtent): farther from the camera, squared distances to the light would
-      // overflow float on the device.
-      glm::dvec3 d = glm::abs(light.position - scene.camera.position);
-      bool positioned = light.type == PC_LIGHT_POINT || light.type == PC_LIGHT_SPOT;
-      if (positioned && std::max({d.x, d.y, d.z}) > kMaxSceneExtent) {
-        char what[160];
-        std::snprintf(what, sizeof what, "the light is %g from the camera, beyond the largest distance of %g",
-                      std::max({d.x, d.y, d.z}), kMaxSceneExtent);
-        l.at("position").fail(what);
-      }
+      check_light_reach(scene, light, l.has("position") ? l.at("position") : l);
       if (light.type == PC_LIGHT_ENVIRONMENT) {
         if (environment) l.fail("a scene has at most one environment light");
         environment = true;

@@ -1,5 +1,6 @@
 #include "scene/texture_load.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -102,16 +103,19 @@ TextureImage load_exr(const std::string& path) {
   }
 }
 
-// Through stb_image: 8-bit formats as sRGB bytes (RGBA), Radiance HDR (`hdr`) as floats.
-TextureImage load_stb(const std::string& path, const char* format_name, bool hdr) {
+// Through stb_image from the file's bytes: 8-bit formats as sRGB bytes (RGBA), Radiance HDR (`hdr`) as floats.
+TextureImage decode_stb(const std::string& name, const std::string& bytes, const char* format_name, bool hdr) {
   int width = 0, height = 0, channels = 0;
+  const auto* data_bytes = reinterpret_cast<const stbi_uc*>(bytes.data());
+  const int size = bytes.size() > size_t(INT32_MAX) ? INT32_MAX : int(bytes.size());
   // The header alone first: stb_image would decode anything it can allocate.
-  if (stbi_info(path.c_str(), &width, &height, &channels)) check_size(path, width, height);
-  std::unique_ptr<void, void (*)(void*)> data(hdr ? static_cast<void*>(stbi_loadf(path.c_str(), &width, &height, &channels, 3))
-                                                  : static_cast<void*>(stbi_load(path.c_str(), &width, &height, &channels, 4)),
-                                              stbi_image_free);
+  if (stbi_info_from_memory(data_bytes, size, &width, &height, &channels)) check_size(name, width, height);
+  std::unique_ptr<void, void (*)(void*)> data(
+      hdr ? static_cast<void*>(stbi_loadf_from_memory(data_bytes, size, &width, &height, &channels, 3))
+          : static_cast<void*>(stbi_load_from_memory(data_bytes, size, &width, &height, &channels, 4)),
+      stbi_image_free);
   // stb_image's reasons are terse internals ("bad zlib header"), not for users.
-  if (!data) throw SceneError(path + ": cannot decode the " + format_name + " image (corrupt or truncated)");
+  if (!data) throw SceneError(name + ": cannot decode the " + format_name + " image (corrupt or truncated)");
   TextureImage image = empty_image(uint32_t(width), uint32_t(height), hdr ? PC_TEXELS_FLOAT : PC_TEXELS_SRGB8);
   std::memcpy(image.words.data(), data.get(), image.words.size() * sizeof(uint32_t));
   return image;
@@ -166,33 +170,57 @@ bool is_other_image_format(const std::string& head) {
 
 }  // namespace
 
+namespace {
+
+bool starts_with(const std::string& bytes, const char* magic) { return bytes.rfind(magic, 0) == 0; }
+
+// Every format but OpenEXR (which OpenEXR reads from the file), told by the content, which is what the
+// readers go by, not by the name; TGA files have no signature, so a .tga `name` that is no other format
+// is read as TGA. Checks the texels of linear formats.
+TextureImage decode_not_exr(const std::string& name, const std::string& bytes) {
+  TextureImage image;
+  if (starts_with(bytes, "\x89PNG\r\n\x1a\n"))
+    image = decode_stb(name, bytes, "PNG", false);
+  else if (starts_with(bytes, "\xff\xd8\xff"))
+    image = decode_stb(name, bytes, "JPEG", false);
+  else if (starts_with(bytes, "BM"))
+    image = decode_stb(name, bytes, "BMP", false);
+  else if (starts_with(bytes, "#?RADIANCE") || starts_with(bytes, "#?RGBE"))
+    image = decode_stb(name, bytes, "Radiance HDR", true);
+  else if (lower_extension(name) == ".tga" && !is_other_image_format(bytes.substr(0, 64)))
+    image = decode_stb(name, bytes, "TGA", false);
+  else
+    refuse_image_format(name, bytes.substr(0, 64));
+  return image;
+}
+
+// Linear texels (OpenEXR, Radiance HDR) must be finite and non-negative.
+void check_texels(const std::string& name, const TextureImage& image) {
+  if (image.format == PC_TEXELS_SRGB8) return;
+  for (size_t i = 0, n = size_t(image.width) * image.height; i < n; ++i) {
+    glm::vec3 t = texel_linear(image, i);
+    if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z)) || t.x < 0 || t.y < 0 || t.z < 0)
+      throw SceneError(name + ": texels must be finite and non-negative");
+  }
+}
+
+}  // namespace
+
 TextureImage load_texture_image(const std::string& path) {
   const std::string head = read_input_file(path, kImageInput, 64);
-  auto starts = [&](const char* magic) { return head.rfind(magic, 0) == 0; };
-  TextureImage image;
-  // The format is told by the content, which is what the readers go by, not by the name; TGA files have
-  // no signature, so a .tga file that is no other format is read as TGA.
-  if (starts("\x76\x2f\x31\x01"))
-    image = load_exr(path);
-  else if (starts("\x89PNG\r\n\x1a\n"))
-    image = load_stb(path, "PNG", false);
-  else if (starts("\xff\xd8\xff"))
-    image = load_stb(path, "JPEG", false);
-  else if (starts("BM"))
-    image = load_stb(path, "BMP", false);
-  else if (starts("#?RADIANCE") || starts("#?RGBE"))
-    image = load_stb(path, "Radiance HDR", true);
-  else if (lower_extension(path) == ".tga" && !is_other_image_format(head))
-    image = load_stb(path, "TGA", false);
-  else
-    refuse_image_format(path, head);
-  if (image.format != PC_TEXELS_SRGB8)
-    for (size_t i = 0, n = size_t(image.width) * image.height; i < n; ++i) {
-      glm::vec3 t = texel_linear(image, i);
-      if (!(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z)) || t.x < 0 || t.y < 0 || t.z < 0)
-        throw SceneError(path + ": texels must be finite and non-negative");
-    }
+  TextureImage image = starts_with(head, "\x76\x2f\x31\x01") ? load_exr(path)
+                                                             : decode_not_exr(path, read_input_file(path, kImageInput));
+  check_texels(path, image);
   image.file = path;
+  return image;
+}
+
+TextureImage decode_texture_image(const std::string& name, const std::string& bytes) {
+  if (starts_with(bytes, "\x76\x2f\x31\x01"))
+    throw SceneError(name + ": an embedded OpenEXR image is not supported (OpenEXR images are read from files)");
+  TextureImage image = decode_not_exr(name, bytes);
+  check_texels(name, image);
+  image.file = name;
   return image;
 }
 
@@ -214,6 +242,20 @@ glm::vec3 texel_linear(const TextureImage& image, size_t i) {
   float f[3];
   std::memcpy(f, bytes + 12 * i, 12);
   return {f[0], f[1], f[2]};
+}
+
+glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv) {
+  // Texel coordinates with the texel centres at half-integers, as kernels/texture.cl places them.
+  auto index = [&](float t, uint32_t n) {
+    double x = std::floor(double(t) * n);
+    if (image.wrap == PC_WRAP_CLAMP) return uint32_t(std::clamp(x, 0.0, double(n - 1)));
+    double period = image.wrap == PC_WRAP_MIRROR ? 2.0 * n : n;
+    double m = x - period * std::floor(x / period);
+    if (!(m >= 0 && m < period)) m = 0;  // not finite
+    return uint32_t(m >= n ? period - 1 - m : m);
+  };
+  uint32_t x = index(uv.x, image.width), y = image.height - 1 - index(uv.y, image.height);
+  return texel_linear(image, size_t(y) * image.width + x);
 }
 
 size_t clamp_texels_to_one(TextureImage& image) {

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <string>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "scene/scene_description.h"
@@ -15,8 +16,15 @@
 // texels that are not finite and non-negative.
 TextureImage load_texture_image(const std::string& path);
 
+// The same for an image in memory (embedded in a glTF file), `bytes` being its encoded file; `name` is
+// for messages (and tells TGA by its extension). OpenEXR is read from files only: refused here.
+TextureImage decode_texture_image(const std::string& name, const std::string& bytes);
+
 // Linear RGB of texel i (rows from the top), as the device decodes it (kernels/texture.cl).
 glm::vec3 texel_linear(const TextureImage& image, size_t i);
+
+// Linear RGB of the texel nearest to (u, v) (v = 0 the bottom row), wrapped by image.wrap.
+glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv);
 
 // Clamps every channel above 1 to 1 (an 8-bit texel never is above 1); returns the number of texels
 // that changed.

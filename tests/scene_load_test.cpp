@@ -16,15 +16,7 @@ namespace {
 
 std::string scenes() { return PATHCL_TEST_SCENES; }
 
-// The message of the SceneError that loading `path` throws, or "" if it loads.
-std::string load_error(const std::string& path) {
-  try {
-    load_scene(path);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string load_error(const std::string& path) { return scene_load_error(path); }
 
 std::string scene_with_shape(const std::string& shape) {
   return R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
@@ -105,13 +97,15 @@ TEST(SceneLoad, MeshFilesOfOtherFormatsAreNamed) {
   const std::string lfs =
       "version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 12345\n";
   const std::string obj = " (expected an OBJ, PLY, STL or OFF mesh file)";
+  const std::string gltf_shape = "a glTF file is placed by a shape of its own ({\"type\": \"gltf\", \"file\": ...}), not as a mesh";
   struct Case {
     std::string file, content, expected;
   } cases[] = {
       {"igea.ply", "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n",
        "no faces (0 vertices: a point cloud? pathcl renders surfaces)"},
-      {"Duck.glb", std::string("glTF\x02\x00\x00\x00", 8), "glTF meshes are not supported" + obj},
-      {"Duck.gltf", "{\"asset\": {\"version\": \"2.0\"}}", "glTF meshes are not supported" + obj},
+      // glTF files are a shape of their own (tests/gltf_test.cpp).
+      {"Duck.glb", std::string("glTF\x02\x00\x00\x00", 8), gltf_shape},
+      {"Duck.gltf", "{\"asset\": {\"version\": \"2.0\"}}", gltf_shape},
       {"part.STL", "solid part\nendsolid part\n", "no faces"},
       {"box.off", "OFF\n0 0 0\n", "no faces"},
       {"rig.fbx", "; FBX 7.4.0 project file\n", "FBX meshes are not supported" + obj},

@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 #include <stb_image_write.h>
 
+#include "scene/scene_error.h"
+
 namespace fs = std::filesystem;
 
 ClContext& test_device() {
@@ -71,6 +73,15 @@ std::string write_temp_png(const std::string& name, int width, int height, const
 
 DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin) {
   return build_device_scene(load_scene(path), origin);
+}
+
+std::string scene_load_error(const std::string& path) {
+  try {
+    load_scene(path);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 std::string read_text_file(const std::string& path) {

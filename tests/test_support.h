@@ -51,6 +51,9 @@ std::string write_temp_png(const std::string& name, int width, int height, const
 // Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).
 DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera);
 
+// The message of the SceneError that loading the scene file `path` throws, or "" if it loads.
+std::string scene_load_error(const std::string& path);
+
 // The whole file ("" if it cannot be read).
 std::string read_text_file(const std::string& path);
 
