@@ -116,12 +116,11 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
     PrimShading sh = sc->shading[s.prim];
     if (sh.light == PC_INVALID) return 0.0f;
     *le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, x).x;
-    return light_pdf(sc->lights, sc->prims, sh.light, x, s.p, s.ng);
+    return light_pdf(sc, sh.light, x, s.p, s.ng);
   }
   if (sc->h->env_light == PC_INVALID) return 0.0f;
-  Light env = sc->lights[sc->h->env_light];
-  *le = env_radiance(env, sc->textures, sc->texels, d).x;
-  return env.select_pdf * env_pdf(env, sc->textures, sc->env_dist, d);
+  *le = env_radiance(sc->lights[sc->h->env_light], sc->textures, sc->texels, d).x;
+  return environment_light_pdf(sc, x, d);
 }
 
 /* One sample_light from x per item. out: 12 floats per item: wi (3), status (0 failed, 1 sampled,
