@@ -218,3 +218,16 @@ __kernel void camera_ray_test(__constant const SceneHeader* h, uint px, uint py,
   vstore3(o, 0, out + 6 * i);
   vstore3(d, 0, out + 6 * i + 3);
 }
+
+/* The light choice from x (kernels/light_tree.cl): item i chooses with u = its first random number and
+ * writes the light's index and the probability it reports; items below light_count also write
+ * light_choice_pdf(x, i), so that the host can check the counts against it. */
+__kernel void light_choice_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global uint* chosen, __global float* p,
+                                __global float* pdf_of_light) {
+  uint i = get_global_id(0);
+  SceneData sc = PC_SCENE_DATA;
+  uint index = PC_INVALID;
+  p[i] = light_choice(&sc, x4.xyz, PC_INVALID, test_random4(i, seed).x, &index);
+  chosen[i] = index;
+  if (i < h->light_count) pdf_of_light[i] = light_choice_pdf(&sc, x4.xyz, i);
+}
