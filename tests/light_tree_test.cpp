@@ -119,3 +119,115 @@ TEST(LightTree, ChoiceProbabilitiesAreThePdfsTheKernelReports) {
   }
   family.print_summary();
 }
+
+namespace {
+
+RenderResult render_scene(const DeviceScene& scene, uint32_t spp, uint32_t max_depth, uint32_t seed) {
+  RenderOptions opt;
+  opt.spp = spp;
+  opt.max_depth = max_depth;
+  opt.seed = seed;
+  RenderResult r = render(test_device(), scene, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+  return r;
+}
+
+// The issue's scene: a diffuse floor of width x depth, a point and a spot light and a constant
+// environment, seen from straight above so that the image shows the middle 5.6 x 5.6 of any floor.
+DeviceScene floor_scene(double width, double depth) {
+  char buf[1600];
+  std::snprintf(buf, sizeof buf, R"({"camera": {"position": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
+      "fov_y_degrees": 60, "width": 32, "height": 32},
+    "materials": {"floor": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
+    "shapes": [{"type": "triangles", "positions": [[%g, 0, %g], [%g, 0, %g], [%g, 0, %g], [%g, 0, %g]],
+                "indices": [[0, 2, 1], [0, 3, 2]], "material": "floor"}],
+    "lights": [{"type": "point", "position": [-1, 1.5, 0.5], "intensity": [4, 4, 4]},
+               {"type": "spot", "position": [1.5, 2.5, -1], "direction": [0, -1, 0], "intensity": [20, 20, 20],
+                "outer_angle_degrees": 35, "inner_angle_degrees": 25},
+               {"type": "environment", "radiance": [0.3, 0.3, 0.3]}]})",
+                -width / 2, -depth / 2, width / 2, -depth / 2, width / 2, depth / 2, -width / 2, depth / 2);
+  return load_device_scene(write_temp_file("floor.json", buf));
+}
+
+}  // namespace
+
+// Choice by power weighed the environment by the scene's bounding radius squared: a 60 x 60 floor
+// starved the point and the spot light of samples (the issue: relMSE 0.063 against 0.020 for a 16 x 8
+// floor). The light choice now depends on the shading point only, so the floor's size leaves the
+// error of the same view unchanged: the two estimated relMSEs (from the half images, each known to a few
+// per cent over 1024 pixels) agree within 15 %.
+TEST(LightTree, BigFloorReachesTheSmallFloorsError) {
+  const uint32_t spp = 32;
+  double small = estimated_rel_mse(render_scene(floor_scene(16, 8), spp, 3, 5).film);
+  double big = estimated_rel_mse(render_scene(floor_scene(60, 60), spp, 3, 5).film);
+  std::printf("estimated relMSE at %u spp: 16 x 8 floor %.4f, 60 x 60 floor %.4f\n", spp, small, big);
+  EXPECT_GT(small, 0.0);
+  EXPECT_LT(big, 1.15 * small);
+}
+
+namespace {
+
+// A thousand small one-sided emitters of random strengths facing down from a ceiling over a diffuse
+// floor: from any floor point a few nearby emitters give most of the light.
+DeviceScene many_emitters_scene() {
+  std::mt19937 rng(1000);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::string shapes = R"({"type": "triangles", "positions": [[-20, 0, -20], [20, 0, -20], [20, 0, 20], [-20, 0, 20]],
+                           "indices": [[0, 2, 1], [0, 3, 2]], "material": "floor"})";
+  for (int i = 0; i < 1000; ++i) {
+    double x = 40 * u(rng) - 20, z = 40 * u(rng) - 20, y = 1 + 2 * u(rng), s = 0.05;
+    // Wound so that the normal points down (-y).
+    double v[9] = {x - s, y, z - s, x + s, y, z - s, x, y, z + s};
+    char extra[120];
+    std::snprintf(extra, sizeof extra, R"("emission": [%.6g, %.6g, %.6g])", 50 * u(rng), 40.0, 30.0);
+    shapes += ", " + triangle(v, extra);
+  }
+  std::string json = R"({"camera": {"position": [0, 6, 12], "look_at": [0, 0, 0], "fov_y_degrees": 60, "width": 32, "height": 24},
+    "materials": {"floor": {"type": "diffuse", "reflectance": [0.6, 0.6, 0.6]}, "m": {"type": "diffuse", "reflectance": [0, 0, 0]}},
+    "shapes": [)" + shapes + "]}";
+  return load_device_scene(write_temp_file("many-emitters.json", json));
+}
+
+// Power-proportional choice made of the same tree: every node given the root's box and the whole sphere of
+// directions weighs its children by their intensities alone, whatever the shading point.
+DeviceScene with_power_proportional_choice(DeviceScene scene) {
+  const LightBvhNode root = scene.light_bvh[0];
+  for (LightBvhNode& n : scene.light_bvh) {
+    n.lo = {root.lo.x, root.lo.y, root.lo.z, n.lo.w};
+    n.hi = {root.hi.x, root.hi.y, root.hi.z, -1.0f};
+    n.axis.w = 0;
+    n.two_sided = 0;
+  }
+  return scene;
+}
+
+double image_mean(const Film& f) {
+  double sum = 0;
+  for (float v : f.mean) sum += v;
+  return sum / double(f.mean.size());
+}
+
+double image_mean_error(const Film& f) {
+  double var = 0;
+  for (float v : f.variance) var += v;
+  return std::sqrt(var) / double(f.variance.size());
+}
+
+}  // namespace
+
+// With a thousand emitters the tree finds the near ones: at equal samples its error is well below that of
+// choice by power (measured: 0.006 against 0.10), and both estimate the same image (means within 4 standard
+// errors: the tree's probabilities are exact, so it changes the noise only).
+TEST(LightTree, ThousandEmittersBeatChoiceByPower) {
+  DeviceScene tree = many_emitters_scene();
+  ASSERT_EQ(tree.header.tree_light_count, 1000u);
+  DeviceScene power = with_power_proportional_choice(tree);
+  const uint32_t spp = 16;
+  RenderResult a = render_scene(tree, spp, 2, 3), b = render_scene(power, spp, 2, 3);
+  double tree_error = estimated_rel_mse(a.film), power_error = estimated_rel_mse(b.film);
+  std::printf("estimated relMSE at %u spp: light BVH %.4f, by power %.4f\n", spp, tree_error, power_error);
+  EXPECT_LT(tree_error, 0.25 * power_error);
+  double ma = image_mean(a.film), mb = image_mean(b.film);
+  double se = std::hypot(image_mean_error(a.film), image_mean_error(b.film));
+  EXPECT_LT(std::abs(ma - mb), 4 * se) << ma << " vs " << mb << ", standard error " << se;
+}
