@@ -30,11 +30,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     if (!device.normals.empty() && device.normals.size() != 3 * prims)
       fuzz::invariant_failed("smooth normals are not 3 per primitive");
-    if (device.light_cdf.size() != device.lights.size() + 1) fuzz::invariant_failed("light CDF size");
+    uint32_t tree_lights = device.header.tree_light_count;
+    if (device.light_cdf.size() != device.lights.size() - tree_lights + 1) fuzz::invariant_failed("light CDF size");
+    if (device.light_bvh.size() != (tree_lights ? 2 * tree_lights - 1 : 0)) fuzz::invariant_failed("light BVH size");
+    for (uint32_t i = 0; i < tree_lights; ++i) {
+      uint32_t leaf = device.lights[i].tree_leaf;
+      if (leaf >= device.light_bvh.size() || device.light_bvh[leaf].light != i)
+        fuzz::invariant_failed("a light's leaf is not its own");
+    }
+    for (const LightBvhNode& n : device.light_bvh)
+      if (!(n.lo.w >= 0 && n.lo.w <= 3.4e38f)) fuzz::invariant_failed("light BVH intensity negative or not finite");
     for (const Light& light : device.lights) {
       if (light.prim >= prims || light.slot >= prims) fuzz::invariant_failed("light primitive out of range");
       if (!(light.area > 0 && light.area <= 3.4e38f)) fuzz::invariant_failed("light area zero or not finite");
-      if (!(light.select_pdf >= 0 && light.select_pdf <= 1)) fuzz::invariant_failed("light select_pdf not in [0, 1]");
+      if (!(light.infinite_share >= 0 && light.infinite_share <= 1)) fuzz::invariant_failed("light infinite_share not in [0, 1]");
     }
     for (size_t i = 0; i < device.light_cdf.size(); ++i)
       if (!(device.light_cdf[i] >= (i ? device.light_cdf[i - 1] : 0.0f) && device.light_cdf[i] <= 1))

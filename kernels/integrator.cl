@@ -50,13 +50,13 @@ inline Material material_at(const SceneData* sc, uint material, const Surface* s
 }
 
 /* Light along a ray that escaped: the environment, weighted against light sampling by MIS. */
-inline float3 escaped_radiance(const SceneData* sc, float3 d, float prev_bsdf_pdf, bool prev_delta) {
+inline float3 escaped_radiance(const SceneData* sc, float3 x, float3 d, float prev_bsdf_pdf, bool prev_delta) {
 #ifdef PC_HAS_ENVIRONMENT
   if (sc->h->env_light != PC_INVALID) {
     Light env = sc->lights[sc->h->env_light];
     float3 le = env_radiance(env, sc->textures, sc->texels, d);
     if (prev_delta) return le;
-    return le * power_heuristic(prev_bsdf_pdf, env.select_pdf * env_pdf(env, sc->textures, sc->env_dist, d));
+    return le * power_heuristic(prev_bsdf_pdf, environment_light_pdf(sc, x, d));
   }
 #endif
   return (float3)(0.0f);
@@ -86,7 +86,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
     Hit hit;
     ++*rays;
     if (!trace_bvh(sc, PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
-      radiance += throughput * escaped_radiance(sc, ray.d, prev_bsdf_pdf, prev_delta);
+      radiance += throughput * escaped_radiance(sc, prev_p, ray.d, prev_bsdf_pdf, prev_delta);
       break;
     }
     Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
@@ -95,7 +95,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
 #ifdef PC_HAS_AREA_LIGHTS
     if (sh.light != PC_INVALID) {
       float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
-      float w = prev_delta ? 1.0f : power_heuristic(prev_bsdf_pdf, light_pdf(sc->lights, sc->prims, sh.light, prev_p, s.p, s.ng));
+      float w = prev_delta ? 1.0f : power_heuristic(prev_bsdf_pdf, light_pdf(sc, sh.light, prev_p, s.p, s.ng));
       radiance += throughput * le * w;
     }
 #endif

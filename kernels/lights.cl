@@ -1,10 +1,12 @@
-/* Lights: choosing one in proportion to power (one distribution over every type), sampling it from a
- * shading point, and the matching pdf for multiple importance sampling.
+/* Lights: choosing one from a shading point (light_tree.cl), sampling it, and the matching pdf for
+ * multiple importance sampling.
  * Area lights: triangles sampled uniformly by area, spheres by the cone of directions they subtend (by
  * area from inside). Point, spot and directional lights are deltas: sampled deterministically, never
  * hit. The environment is sampled by environment.cl. */
 #ifndef PATHCL_LIGHTS_CL
 #define PATHCL_LIGHTS_CL
+
+#include "light_tree.cl"
 
 typedef struct {
   float3 p;      /* point on the light (positional lights) */
@@ -55,16 +57,24 @@ inline float sphere_light_pdf(Primitive sp, float3 x, float3 y, float3 ny) {
   return 1.0f / (2.0f * PC_PI * sphere_cone_one_minus_cos(sin2_max));
 }
 
-/* Solid-angle pdf of reaching light point y (normal ny) from x, light choice included. */
-inline float light_pdf(__global const Light* lights, __global const Primitive* prims, uint light_index, float3 x,
-                       float3 y, float3 ny) {
-  Light light = lights[light_index];
+/* Solid-angle pdf of reaching point y (normal ny) of area light light_index from x, light choice included. */
+inline float light_pdf(const SceneData* sc, uint light_index, float3 x, float3 y, float3 ny) {
+  Light light = sc->lights[light_index];
+  float choice = light_choice_pdf(sc, x, light_index);
 #ifdef PC_HAS_SPHERES
-  Primitive p = prims[light.slot];
-  if (prim_kind_of(p) == PC_PRIM_SPHERE) return light.select_pdf * sphere_light_pdf(p, x, y, ny);
+  Primitive p = sc->prims[light.slot];
+  if (prim_kind_of(p) == PC_PRIM_SPHERE) return choice * sphere_light_pdf(p, x, y, ny);
 #endif
-  return light.select_pdf * triangle_light_pdf(light, x, y, ny);
+  return choice * triangle_light_pdf(light, x, y, ny);
 }
+
+#ifdef PC_HAS_ENVIRONMENT
+/* Solid-angle pdf of light sampling from x producing direction d towards the environment. */
+inline float environment_light_pdf(const SceneData* sc, float3 x, float3 d) {
+  Light env = sc->lights[sc->h->env_light];
+  return light_choice_pdf(sc, x, sc->h->env_light) * env_pdf(env, sc->textures, sc->env_dist, d);
+}
+#endif
 
 /* A point on the sphere seen from x inside the cone it subtends (pbrt-v4's construction). */
 inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
@@ -91,8 +101,8 @@ inline float3 sample_sphere_cone(Primitive sp, float3 x, float2 u, float* pdf) {
   return c + r * (cos_alpha * w + sin_alpha * (cos_phi * t + sin_phi * b));
 }
 
-inline void sample_area_light(Light light, __global const Primitive* prims, __global const PrimShading* shading,
-                              float3 x, float2 u, LightSample* out) {
+inline void sample_area_light(Light light, float choice, __global const Primitive* prims,
+                              __global const PrimShading* shading, float3 x, float2 u, LightSample* out) {
   Primitive p = prims[light.slot];
   uint flags = shading[light.prim].flags;
   float pdf;
@@ -122,7 +132,7 @@ inline void sample_area_light(Light light, __global const Primitive* prims, __gl
   }
   out->n = ny;
   out->wi = pc_normalize(out->p - x);
-  out->pdf = light.select_pdf * pdf;
+  out->pdf = choice * pdf;
   out->Le = emitted_towards(light.emission.xyz, flags, ny, out->p, x);
 }
 
@@ -137,7 +147,9 @@ inline float spot_falloff(Light light, float3 from_light) {
 
 /* u: x chooses the light, yz the point on it. */
 inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* out) {
-  Light light = sc->lights[find_interval(sc->light_cdf, sc->h->light_count, u.x)];
+  uint index;
+  float choice = light_choice(sc, x, PC_INVALID, u.x, &index);
+  Light light = sc->lights[index];
   /* Every field is set: lights at infinity have no point, and a field left undefined is undefined
      behaviour that a vectorising compiler may exploit (Intel's CPU runtime did). */
   out->delta = false;
@@ -148,7 +160,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
   switch (light.type) {
 #ifdef PC_HAS_AREA_LIGHTS
     case PC_LIGHT_AREA:
-      sample_area_light(light, sc->prims, sc->shading, x, u.yz, out);
+      sample_area_light(light, choice, sc->prims, sc->shading, x, u.yz, out);
       break;
 #endif
 #ifdef PC_HAS_POINT_LIGHTS
@@ -162,7 +174,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
       out->n = -out->wi;
       out->Le = light.emission.xyz / dist2;
       if (light.type == PC_LIGHT_SPOT) out->Le *= spot_falloff(light, -out->wi);
-      out->pdf = light.select_pdf;
+      out->pdf = choice;
       out->delta = true;
       break;
     }
@@ -171,7 +183,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
     case PC_LIGHT_DIRECTIONAL:
       out->wi = -light.direction.xyz;
       out->Le = light.emission.xyz;
-      out->pdf = light.select_pdf;
+      out->pdf = choice;
       out->delta = true;
       out->infinite = true;
       break;
@@ -180,7 +192,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
     case PC_LIGHT_ENVIRONMENT: {
       float pdf;
       out->wi = env_sample(light, sc->textures, sc->texels, sc->env_dist, u.yz, &pdf, &out->Le);
-      out->pdf = light.select_pdf * pdf;
+      out->pdf = choice * pdf;
       out->infinite = true;
       break;
     }

@@ -116,12 +116,11 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
     PrimShading sh = sc->shading[s.prim];
     if (sh.light == PC_INVALID) return 0.0f;
     *le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, x).x;
-    return light_pdf(sc->lights, sc->prims, sh.light, x, s.p, s.ng);
+    return light_pdf(sc, sh.light, x, s.p, s.ng);
   }
   if (sc->h->env_light == PC_INVALID) return 0.0f;
-  Light env = sc->lights[sc->h->env_light];
-  *le = env_radiance(env, sc->textures, sc->texels, d).x;
-  return env.select_pdf * env_pdf(env, sc->textures, sc->env_dist, d);
+  *le = env_radiance(sc->lights[sc->h->env_light], sc->textures, sc->texels, d).x;
+  return environment_light_pdf(sc, x, d);
 }
 
 /* One sample_light from x per item. out: 12 floats per item: wi (3), status (0 failed, 1 sampled,
@@ -218,4 +217,17 @@ __kernel void camera_ray_test(__constant const SceneHeader* h, uint px, uint py,
   camera_ray(h, px, py, u, &o, &d);
   vstore3(o, 0, out + 6 * i);
   vstore3(d, 0, out + 6 * i + 3);
+}
+
+/* The light choice from x (kernels/light_tree.cl): item i chooses with u = its first random number and
+ * writes the light's index and the probability it reports; items below light_count also write
+ * light_choice_pdf(x, i), so that the host can check the counts against it. */
+__kernel void light_choice_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global uint* chosen, __global float* p,
+                                __global float* pdf_of_light) {
+  uint i = get_global_id(0);
+  SceneData sc = PC_SCENE_DATA;
+  uint index = PC_INVALID;
+  p[i] = light_choice(&sc, x4.xyz, PC_INVALID, test_random4(i, seed).x, &index);
+  chosen[i] = index;
+  if (i < h->light_count) pdf_of_light[i] = light_choice_pdf(&sc, x4.xyz, i);
 }

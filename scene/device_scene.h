@@ -57,8 +57,10 @@ struct BvhStats {
 //   normals    3 per primitive in scene order, only for smooth shapes
 //   uvs        2 per primitive in scene order (kernels/scene.cl), only with textures
 //   materials
-//   lights     area lights first (in primitive order), then the others
-//   light_cdf  light_count + 1 entries, light_cdf[0] = 0, last = 1
+//   lights     area lights first (in primitive order), then point and spot lights (these are the light
+//              BVH's, [0, header.tree_light_count)), then directional and environment lights
+//   light_cdf  over the lights at infinity: their count + 1 entries, light_cdf[0] = 0, last = 1
+//   light_bvh  the light BVH over the finite lights (scene/light_bvh_build.h), depth-first
 //   textures, texels
 //   env_dist   the environment map's sampling distribution (kernels/environment.cl)
 struct DeviceScene {

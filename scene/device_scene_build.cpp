@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +14,7 @@
 
 #include "scene/bvh_build.h"
 #include "scene/environment_distribution.h"
+#include "scene/light_bvh_build.h"
 #include "scene/scene_error.h"
 
 namespace {
@@ -254,13 +256,9 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     out.leaf_slot[bvh.prim_order[slot]] = slot;
   }
   out.leaf_blocks = make_leaf_blocks(out.nodes8, out.prims);
-  // The scene's bounding sphere sizes the power of lights at infinity.
-  Aabb bounds;
-  for (const Aabb& box : boxes) bounds.grow(box);
-  double radius = boxes.empty() ? 1.0 : std::max(0.5 * glm::length(glm::dvec3(bounds.hi - bounds.lo)), 1e-6);
-
-  // Every light with its emitted power: area lights first, in primitive order, then the scene's lights.
-  std::vector<double> power;
+  // Every light: area lights first, in primitive order, then point and spot lights, then the lights at
+  // infinity (directional, environment). The first two kinds go into the light BVH with their bounds.
+  std::vector<LightBounds> bounds;
   for (const Emitter& e : emitters) {
     Light light{};
     light.type = PC_LIGHT_AREA;
@@ -269,53 +267,95 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     light.area = float(e.area);
     out.shading[e.prim].light = uint32_t(out.lights.size());
     out.lights.push_back(light);
-    power.push_back(double(luminance(e.emission)) * e.area * M_PI * (e.two_sided ? 2 : 1));
-  }
-  for (const LightDesc& l : scene.lights) {
-    Light light{};
-    light.type = l.type;
-    light.emission = f4(l.emission);
-    light.position = f4(glm::vec3(l.position - out.origin));  // camera-relative, like the geometry
-    light.direction = f4(l.direction);
-    light.prim = light.slot = PC_INVALID;
-    light.cos_inner = l.cos_inner;
-    light.cos_outer = l.cos_outer;
-    light.texture = l.texture;
-    double lum = luminance(l.emission), p = 0;
-    uint32_t features = 0;
-    if (l.type == PC_LIGHT_POINT) {
-      p = 4 * M_PI * lum;
-      features = kFeaturePointLights;
-    } else if (l.type == PC_LIGHT_SPOT) {
-      p = 2 * M_PI * lum * (1 - 0.5 * (double(l.cos_inner) + l.cos_outer));  // pbrt-v4's estimate
-      features = kFeaturePointLights;
-    } else if (l.type == PC_LIGHT_DIRECTIONAL) {
-      p = M_PI * radius * radius * lum;
-      features = kFeatureDirectionalLights;
-    } else if (l.type == PC_LIGHT_ENVIRONMENT) {
-      double integral = 4 * M_PI;  // of the radiance (times emission) over the sphere
-      features = kFeatureEnvironment;
-      if (l.texture != PC_INVALID) {
-        integral = build_env_distribution(scene.textures[l.texture], out.env_dist);
-        features |= kFeatureEnvironmentMap;
-      }
-      p = M_PI * radius * radius * lum * integral;
-      if (p > 0) out.header.env_light = uint32_t(out.lights.size());
+    const Primitive& p = prims[e.prim];
+    LightBounds b;
+    b.lo = boxes[e.prim].lo;
+    b.hi = boxes[e.prim].hi;
+    b.two_sided = e.two_sided;
+    if (out.shading[e.prim].kind == PC_PRIM_SPHERE) {
+      b.intensity = luminance(e.emission) * e.area / 4;  // L x pi r^2, the projected area in every direction
+      b.theta_o = M_PI;
+      b.theta_e = M_PI / 2;
+    } else {
+      // The normal the device computes (kernels/surface.cl: triangle_normal); emission on its side.
+      glm::dvec3 pa(p.a.x, p.a.y, p.a.z), pb(p.b.x, p.b.y, p.b.z), pc(p.c.x, p.c.y, p.c.z);
+      b.axis = glm::vec3(glm::normalize(glm::cross(pb - pa, pc - pa)));
+      b.intensity = luminance(e.emission) * e.area;  // L x area, along the normal
+      b.theta_o = 0;
+      b.theta_e = M_PI / 2;
     }
-    if (!(p > 0)) continue;  // emits nothing: never chosen, never seen, no code for it
-    out.features |= features;
-    out.lights.push_back(light);
-    power.push_back(p);
+    bounds.push_back(b);
   }
-  // One distribution over all lights, proportional to power.
+  // Point and spot lights, then the lights at infinity with their irradiance estimates: a directional
+  // light's irradiance on a surface facing it, and a quarter of the environment's radiance integrated over
+  // the sphere (its irradiance averaged over the orientations of a surface: pi L for a constant L).
+  std::vector<double> infinite_irradiance;
+  for (int pass = 0; pass < 2; ++pass)
+    for (const LightDesc& l : scene.lights) {
+      bool infinite = l.type == PC_LIGHT_DIRECTIONAL || l.type == PC_LIGHT_ENVIRONMENT;
+      if (infinite != (pass == 1)) continue;
+      Light light{};
+      light.type = l.type;
+      light.emission = f4(l.emission);
+      light.position = f4(glm::vec3(l.position - out.origin));  // camera-relative, like the geometry
+      light.direction = f4(l.direction);
+      light.prim = light.slot = PC_INVALID;
+      light.cos_inner = l.cos_inner;
+      light.cos_outer = l.cos_outer;
+      light.texture = l.texture;
+      double lum = luminance(l.emission), e = 0;
+      uint32_t features = 0;
+      LightBounds b;
+      b.lo = b.hi = glm::vec3(light.position.x, light.position.y, light.position.z);
+      b.intensity = lum;
+      b.theta_e = M_PI / 2;
+      if (l.type == PC_LIGHT_POINT) {
+        b.theta_o = M_PI;
+        features = kFeaturePointLights;
+      } else if (l.type == PC_LIGHT_SPOT) {
+        // Nothing outside the outer cone; widened a little so that rounding never cuts off its edge.
+        b.axis = l.direction;
+        b.theta_o = std::min(M_PI, std::acos(std::clamp(double(l.cos_outer), -1.0, 1.0)) + 1e-3);
+        b.theta_e = 0;
+        features = kFeaturePointLights;
+      } else if (l.type == PC_LIGHT_DIRECTIONAL) {
+        e = lum;
+        features = kFeatureDirectionalLights;
+      } else if (l.type == PC_LIGHT_ENVIRONMENT) {
+        double integral = 4 * M_PI;  // of the radiance (times emission) over the sphere
+        features = kFeatureEnvironment;
+        if (l.texture != PC_INVALID) {
+          integral = build_env_distribution(scene.textures[l.texture], out.env_dist);
+          features |= kFeatureEnvironmentMap;
+        }
+        e = 0.25 * lum * integral;
+        if (e > 0) out.header.env_light = uint32_t(out.lights.size());
+      }
+      if (!((infinite ? e : b.intensity) > 0)) continue;  // emits nothing: never chosen, never seen, no code for it
+      out.features |= features;
+      out.lights.push_back(light);
+      if (infinite)
+        infinite_irradiance.push_back(e);
+      else
+        bounds.push_back(b);
+    }
+  out.header.tree_light_count = uint32_t(bounds.size());
+  LightBvh tree = build_light_bvh(bounds);
+  out.light_bvh = std::move(tree.nodes);
+  for (size_t i = 0; i < bounds.size(); ++i) out.lights[i].tree_leaf = tree.leaf_of[i];
+  // The lights at infinity among themselves in proportion to irradiance: a choice that no scene size
+  // enters (kernels/light_tree.cl weighs them against the tree from each shading point).
   double total = 0;
-  for (double p : power) total += p;
+  for (double e : infinite_irradiance) total += e;
+  out.header.infinite_irradiance = float(std::min(total, double(FLT_MAX)));
   out.light_cdf.push_back(0);
   double running = 0;
-  for (size_t i = 0; i < out.lights.size(); ++i) {
-    out.lights[i].select_pdf = float(power[i] / total);
-    running += power[i];
-    out.light_cdf.push_back(i + 1 == out.lights.size() ? 1.0f : float(running / total));
+  for (size_t i = 0; i < infinite_irradiance.size(); ++i) {
+    Light& light = out.lights[bounds.size() + i];
+    light.infinite_share = float(infinite_irradiance[i] / total);
+    light.tree_leaf = PC_INVALID;
+    running += infinite_irradiance[i];
+    out.light_cdf.push_back(i + 1 == infinite_irradiance.size() ? 1.0f : float(running / total));
   }
   if (!emitters.empty()) out.features |= kFeatureAreaLights;
 

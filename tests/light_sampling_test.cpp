@@ -186,9 +186,9 @@ TEST(LightChi2, AreaLights) {
   add("two-sided sphere by area, off centre",
       sphere_json({0.1, 0.2, -0.3}, 1.5, R"("emission": [2.5, 2.5, 2.5], "two_sided": true)"), {1.0, 0.8, -0.5},
       SphereBinning());
-  // Two lights, apart as seen from x: one is chosen in proportion to power, and the density of a
-  // direction is that light's select_pdf times its own.
-  add("triangle and sphere, chosen by power",
+  // Two lights, apart as seen from x: one is chosen through the light BVH, and the density of a
+  // direction is the probability of choosing that light from x times its own.
+  add("triangle and sphere, chosen through the light BVH",
       triangle_json(a, b, c, R"("emission": [2.5, 2.5, 2.5])") + ", " +
           sphere_json({-2, -1.5, -1}, 0.6, R"("emission": [2.5, 2.5, 2.5])"),
       {0.1, 0.2, 0}, SphereBinning());

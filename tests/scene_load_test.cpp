@@ -197,20 +197,45 @@ TEST(SceneLoad, ZeroAreaEmittersNeverReachLightSampling) {
   EXPECT_EQ(d.triangle_count, 1u);  // the collinear triangle is removed by clean-up
   ASSERT_EQ(d.lights.size(), 1u);
   EXPECT_FLOAT_EQ(d.lights[0].area, 0.5f);
-  EXPECT_FLOAT_EQ(d.lights[0].select_pdf, 1.0f);
+  ASSERT_EQ(d.light_bvh.size(), 1u);
+  EXPECT_EQ(d.light_bvh[0].light, 0u);
 }
 
-TEST(SceneLoad, LightsAreChosenInProportionToPower) {
+TEST(SceneLoad, LightBvhBoundsItsLightsIntensityAndDirections) {
   std::string scene = R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8, "height": 8},
     "materials": {"m": {"type": "diffuse"}}, "shapes": [
       {"type": "sphere", "radius": 1, "material": "m", "emission": [1, 1, 1]},
-      {"type": "sphere", "radius": 2, "center": [5, 0, 0], "material": "m", "emission": [1, 1, 1], "two_sided": true}]})";
+      {"type": "sphere", "radius": 2, "center": [5, 0, 0], "material": "m", "emission": [1, 1, 1], "two_sided": true},
+      {"type": "triangles", "positions": [[0,3,0],[1,3,0],[0,3,1]], "indices": [[0,2,1]], "material": "m", "emission": [2, 2, 2]}]})";
   DeviceScene d = load_device_scene(write_temp_file("power.json", scene));
-  ASSERT_EQ(d.lights.size(), 2u);
-  // Power ~ area x sides: 4 pi vs 16 pi x 2.
-  EXPECT_NEAR(d.lights[0].select_pdf, 1.0 / 9.0, 1e-6);
-  EXPECT_NEAR(d.lights[1].select_pdf, 8.0 / 9.0, 1e-6);
-  EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
+  ASSERT_EQ(d.lights.size(), 3u);
+  ASSERT_EQ(d.header.tree_light_count, 3u);
+  ASSERT_EQ(d.light_bvh.size(), 5u);
+  // Peak intensities: L pi r^2 for spheres, L x area along a triangle's normal; the root holds their sum.
+  double expected[] = {M_PI, 4 * M_PI, 2 * 0.5};
+  for (uint32_t i = 0; i < 3; ++i) {
+    const LightBvhNode& leaf = d.light_bvh[d.lights[i].tree_leaf];
+    EXPECT_EQ(leaf.light, i);
+    EXPECT_EQ(leaf.second, PC_INVALID);
+    EXPECT_NEAR(leaf.lo.w, expected[i], 1e-5 * expected[i]);
+  }
+  const LightBvhNode& root = d.light_bvh[0];
+  EXPECT_NEAR(root.lo.w, M_PI + 4 * M_PI + 1, 1e-5);
+  EXPECT_FLOAT_EQ(root.hi.w, -1.0f);  // the spheres emit in every direction
+  // The triangle's leaf: a cone of one normal (+y, from the winding 0 2 1), emitting within 90 degrees of it.
+  const LightBvhNode& tri = d.light_bvh[d.lights[2].tree_leaf];
+  EXPECT_FLOAT_EQ(tri.axis.y, 1.0f);
+  EXPECT_FLOAT_EQ(tri.hi.w, 1.0f);
+  EXPECT_NEAR(tri.axis.w, 0.0f, 1e-7);
+  // Every node's box holds its children's.
+  for (size_t i = 0; i < d.light_bvh.size(); ++i) {
+    const LightBvhNode& n = d.light_bvh[i];
+    if (n.second == PC_INVALID) continue;
+    for (const LightBvhNode* c : {&d.light_bvh[i + 1], &d.light_bvh[n.second]}) {
+      EXPECT_LE(n.lo.x, c->lo.x); EXPECT_LE(n.lo.y, c->lo.y); EXPECT_LE(n.lo.z, c->lo.z);
+      EXPECT_GE(n.hi.x, c->hi.x); EXPECT_GE(n.hi.y, c->hi.y); EXPECT_GE(n.hi.z, c->hi.z);
+    }
+  }
 }
 
 namespace {
@@ -504,15 +529,28 @@ TEST(SceneLoad, KernelFeaturesFollowTheSceneNotTheSettings) {
   EXPECT_FALSE(dark.features & kFeatureDirectionalLights);
 }
 
-// Lights are chosen in proportion to power, over every type at once.
-TEST(SceneLoad, LightSelectionIsProportionalToPowerAcrossTypes) {
+// Point and spot lights join the light BVH with their intensity; lights at infinity stay beside it, in
+// proportion to their irradiance, whatever the scene's size.
+TEST(SceneLoad, LightsAtInfinityAreChosenBesideTheTreeByIrradiance) {
   DeviceScene d = load_device_scene(write_temp_file("powers.json", scene_with(R"("m": {"type": "diffuse"})",
-      R"({"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]},
+      R"({"type": "directional", "direction": [0, -1, 0], "irradiance": [3, 3, 3]},
+         {"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]},
+         {"type": "environment", "radiance": [0.5, 0.5, 0.5]},
          {"type": "spot", "position": [0, 2, 0], "direction": [0, -1, 0], "intensity": [2, 2, 2], "outer_angle_degrees": 60, "inner_angle_degrees": 60})")));
-  ASSERT_EQ(d.lights.size(), 2u);
-  double point = 4 * M_PI, spot = 2 * M_PI * 2 * (1 - std::cos(M_PI / 3));
-  EXPECT_NEAR(d.lights[0].select_pdf, point / (point + spot), 1e-6);
-  EXPECT_NEAR(d.lights[1].select_pdf, spot / (point + spot), 1e-6);
+  ASSERT_EQ(d.lights.size(), 4u);
+  ASSERT_EQ(d.header.tree_light_count, 2u);
+  EXPECT_EQ(d.lights[0].type, PC_LIGHT_POINT);
+  EXPECT_EQ(d.lights[1].type, PC_LIGHT_SPOT);
+  EXPECT_NEAR(d.light_bvh[0].lo.w, 3.0, 1e-6);  // 1 + 2
+  EXPECT_EQ(d.lights[2].type, PC_LIGHT_DIRECTIONAL);
+  EXPECT_EQ(d.lights[3].type, PC_LIGHT_ENVIRONMENT);
+  EXPECT_EQ(d.header.env_light, 3u);
+  // Irradiance on a surface facing the light: 3 for the directional light, pi x 0.5 for the environment.
+  double sun = 3, sky = M_PI * 0.5;
+  EXPECT_NEAR(d.header.infinite_irradiance, sun + sky, 1e-5);
+  EXPECT_NEAR(d.lights[2].infinite_share, sun / (sun + sky), 1e-6);
+  EXPECT_NEAR(d.lights[3].infinite_share, sky / (sun + sky), 1e-6);
+  ASSERT_EQ(d.light_cdf.size(), 3u);
   EXPECT_FLOAT_EQ(d.light_cdf.back(), 1.0f);
 }
 
@@ -1112,12 +1150,10 @@ TEST(SceneLoad, LightDistributionStaysFiniteForExtremeEmitters) {
   ASSERT_EQ(d.lights.size(), 3u);
   for (const Light& l : d.lights) {
     EXPECT_TRUE(l.area > 0 && std::isfinite(l.area)) << l.area;
-    EXPECT_TRUE(l.select_pdf >= 0 && l.select_pdf <= 1) << l.select_pdf;
   }
-  EXPECT_EQ(d.lights[0].select_pdf, 1.0f);  // the others' share is below float's smallest numbers
-  ASSERT_EQ(d.light_cdf.size(), 4u);
-  for (size_t i = 1; i < d.light_cdf.size(); ++i) EXPECT_GE(d.light_cdf[i], d.light_cdf[i - 1]);
-  EXPECT_EQ(d.light_cdf.back(), 1.0f);
+  ASSERT_EQ(d.light_bvh.size(), 5u);
+  for (const LightBvhNode& n : d.light_bvh) EXPECT_TRUE(n.lo.w >= 0 && std::isfinite(n.lo.w)) << n.lo.w;
+  EXPECT_EQ(d.light_cdf.size(), 1u);  // no lights at infinity
 }
 
 TEST(SceneLoad, SmoothNormalsAreIndexedByPrimitiveAfterSpheres) {

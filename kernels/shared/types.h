@@ -144,9 +144,11 @@ typedef struct {
 
 /* A light. emission is the radiance of an area light, the intensity of a point or spot light, the
  * irradiance of a directional light (on a surface facing it) and the radiance (or the scale of the map)
- * of an environment light.
+ * of an environment light. Lights [0, SceneHeader.tree_light_count) (area, point, spot) are chosen through
+ * the light BVH from the shading point; the rest (directional, environment) are the lights at infinity
+ * (kernels/light_tree.cl).
  * emission (16) + position (16) + direction (16) + type (4) + prim (4) + slot (4) + area (4)
- * + select_pdf (4) + cos_inner (4) + cos_outer (4) + texture (4) = 80 bytes. */
+ * + infinite_share (4) + cos_inner (4) + cos_outer (4) + texture (4) + tree_leaf (4) + pad (12) = 96 bytes. */
 typedef struct {
   pc_float4 emission;
   pc_float4 position;  /* point, spot */
@@ -155,11 +157,28 @@ typedef struct {
   pc_uint prim;        /* area: scene-order primitive index */
   pc_uint slot;        /* area: the same primitive's index in the leaf-ordered primitive array */
   float area;          /* area: surface area */
-  float select_pdf;    /* probability of choosing this light, proportional to power */
+  float infinite_share; /* lights at infinity: the probability of choosing this one among them; others 0 */
   float cos_inner;     /* spot: full intensity inside this cone */
   float cos_outer;     /* spot: none outside this cone */
   pc_uint texture;     /* environment: lat-long map in textures, or PC_INVALID for a constant */
+  pc_uint tree_leaf;   /* lights in the light BVH: the index of its leaf in light_bvh; others PC_INVALID */
+  pc_uint pad[3];
 } Light;
+
+/* A node of the light BVH (scene/light_bvh_build.h), flattened depth-first: an interior node's first child
+ * follows it, its second is at `second`, so a leaf's index tells at every node which way leads to it.
+ * The bounds are those of pbrt-v4's LightBounds: a box, the peak radiant intensity, and a cone of emission
+ * axes (half-angle theta_o) that every light of the node emits within theta_e of.
+ * lo (16) + hi (16) + axis (16) + second (4) + light (4) + two_sided (4) + pad (4) = 64 bytes. */
+typedef struct {
+  pc_float4 lo;      /* xyz: the box's lower corner; w: summed peak radiant intensity (luminance, W/sr) */
+  pc_float4 hi;      /* xyz: the box's upper corner; w: cos theta_o */
+  pc_float4 axis;    /* xyz: the cone's axis (unit length); w: cos theta_e */
+  pc_uint second;    /* interior: index of the second child; leaf: PC_INVALID */
+  pc_uint light;     /* leaf: index into lights; interior: PC_INVALID */
+  pc_uint two_sided; /* 1: the lights emit on both sides of their axes too */
+  pc_uint pad;
+} LightBvhNode;
 
 /* How a texture's texels are stored in the texel words (Texture.format), at the precision of the file:
  *   SRGB8: 4 bytes a texel, R G B A in byte order, 8-bit sRGB (decoded by kernels/shared/srgb_table.h)
@@ -185,7 +204,7 @@ typedef struct {
   pc_uint pad[3];
 } Texture;
 
-/* Everything a render pass needs besides the arrays: 4 x 16 + 16 x 4 = 128 bytes. */
+/* Everything a render pass needs besides the arrays: 4 x 16 + 20 x 4 = 144 bytes. */
 typedef struct {
   pc_float4 cam_position;
   pc_float4 cam_right;   /* image right, scaled by tan(fov_y / 2) * aspect */
@@ -207,6 +226,10 @@ typedef struct {
   float filter_radius;   /* in pixels: tent half-width, or the Gaussian's cut-off (box: 0.5) */
   float filter_sigma;    /* Gaussian standard deviation in pixels */
   pc_uint env_light;     /* index of the environment light in lights, or PC_INVALID */
+  pc_uint tree_light_count; /* lights [0, tree_light_count) are in light_bvh; the rest are at infinity */
+  float infinite_irradiance; /* the lights at infinity's irradiance estimate (luminance), weighed against
+                                the light BVH's from each shading point (kernels/light_tree.cl) */
+  pc_uint pad[2];
 } SceneHeader;
 
 /* Statistics of one work unit, added up by its work items with integer atomics (in any order to the same
@@ -243,13 +266,13 @@ typedef struct {
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
   X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading)  \
-  X(pc_float4, normals) X(pc_float4, uvs) X(Material, materials) X(Light, lights) X(float, light_cdf)          \
+  X(pc_float4, normals) X(pc_float4, uvs) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
   X(Texture, textures) X(pc_uint, texels)                                                                      \
   X(float, env_dist)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
+  X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(LightBvhNode) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
@@ -259,12 +282,13 @@ typedef struct {
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior) X(Material, opacity) X(Material, opacity_texture)  \
   X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
-  X(Light, area) X(Light, select_pdf) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture)           \
+  X(Light, area) X(Light, infinite_share) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture) X(Light, tree_leaf) \
+  X(LightBvhNode, lo) X(LightBvhNode, hi) X(LightBvhNode, axis) X(LightBvhNode, second) X(LightBvhNode, light) X(LightBvhNode, two_sided)           \
   X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(Texture, format) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
   X(SceneHeader, rr_depth) X(SceneHeader, node_count) X(SceneHeader, sampler) X(SceneHeader, spp) X(SceneHeader, lens_radius) X(SceneHeader, focus_distance) X(SceneHeader, filter)  \
-  X(SceneHeader, filter_radius) X(SceneHeader, filter_sigma) X(SceneHeader, env_light) X(UnitStats, rays_lo) X(UnitStats, rays_hi) X(UnitStats, nan_samples)         \
+  X(SceneHeader, filter_radius) X(SceneHeader, filter_sigma) X(SceneHeader, env_light) X(SceneHeader, tree_light_count) X(SceneHeader, infinite_irradiance) X(UnitStats, rays_lo) X(UnitStats, rays_hi) X(UnitStats, nan_samples)         \
   X(UnitStats, inf_samples) X(UnitStats, negative_samples) X(RayRecord, org) X(RayRecord, tmin)            \
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
@@ -275,9 +299,10 @@ static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
 static_assert(sizeof(Material) == 80, "Material is 80 bytes");
-static_assert(sizeof(Light) == 80, "Light is 80 bytes");
+static_assert(sizeof(Light) == 96, "Light is 96 bytes");
+static_assert(sizeof(LightBvhNode) == 64, "LightBvhNode is 64 bytes");
 static_assert(sizeof(Texture) == 32, "Texture is 32 bytes");
-static_assert(sizeof(SceneHeader) == 128, "SceneHeader is 128 bytes");
+static_assert(sizeof(SceneHeader) == 144, "SceneHeader is 144 bytes");
 static_assert(sizeof(UnitStats) == 32, "UnitStats is 32 bytes");
 static_assert(sizeof(RayRecord) == 32, "RayRecord is 32 bytes");
 static_assert(sizeof(HitRecord) == 16, "HitRecord is 16 bytes");
