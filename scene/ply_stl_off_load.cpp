@@ -13,7 +13,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <new>
+#include <sstream>
 #include <stdexcept>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -248,6 +250,26 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
   return soup;
 }
 
+// The OFF file's text as CGAL 5.5's reader reads it right. Its ASCII scanner takes a vertex's texture
+// coordinates from its colour bookkeeping (File_scanner_OFF::scan_texture reads
+// entries[first_color_index + color_entries]), which only a header keyword with C sets: for "STOFF" or
+// "STNOFF" those members are uninitialised and the read goes out of bounds (ASan: SEGV in scan_texture).
+// With a C added the colours are counted per line, zero here, and the same file reads correctly. Binary
+// files read their texture coordinates directly and are left alone.
+std::string off_text_for_cgal(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  size_t start = text.find_first_not_of(" \t\r\n");
+  if (start == std::string::npos || text.compare(start, 2, "ST") != 0) return text;
+  size_t end = text.find_first_of(" \t\r\n", start);
+  std::string keyword = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
+  size_t line_end = text.find('\n', start);
+  bool binary = text.substr(start, line_end == std::string::npos ? std::string::npos : line_end - start).find("BINARY") !=
+                std::string::npos;
+  if (keyword.find('C') == std::string::npos && !binary) text.insert(start + 2, "C");
+  return text;
+}
+
 PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings) {
   const std::uintmax_t size = std::filesystem::file_size(path);
   {
@@ -262,7 +284,7 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
                        std::to_string(scanner.size_of_facets()) + " faces, more than a file of " +
                        std::to_string(size) + " bytes holds");
   }
-  std::ifstream in(path, std::ios::binary);
+  std::istringstream in(off_text_for_cgal(path));
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
   std::vector<Kernel::Vector_3> normals;
