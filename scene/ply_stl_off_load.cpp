@@ -93,9 +93,26 @@ std::vector<glm::dvec3> finite_positions(const std::string& path, const std::vec
   return positions;
 }
 
+// CGAL 5.5's PLY_reader::init adds a property to the last element read, without checking that there is
+// one: a property line before any element line is undefined behaviour there (fuzz_obj_clean found it).
+void check_ply_properties_follow_an_element(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line, keyword;
+  bool element = false;
+  for (size_t number = 1; std::getline(in, line); ++number) {
+    std::istringstream words(line);
+    if (!(words >> keyword)) continue;
+    if (keyword == "end_header") return;
+    if (keyword == "element") element = true;
+    if (keyword == "property" && !element)
+      throw SceneError(path + ": line " + std::to_string(number) + ": a property before any element (a garbled PLY header)");
+  }
+}
+
 PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
+  check_ply_properties_follow_an_element(path);
   CGAL::IO::internal::PLY_reader reader(false);
   if (!reader.init(in)) throw SceneError(path + ": not a PLY file (its header cannot be read)");
 

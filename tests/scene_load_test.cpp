@@ -1356,6 +1356,9 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
        "face 0: vertex index 7 out of range (3 vertices before the faces)"},
       {"not.ply", "PLY?\n", "not a PLY file (its header cannot be read)"},
+      // fuzz_obj_clean: CGAL's reader adds a property to the last element without checking there is one.
+      {"property-first.ply", "ply\nformat ascii 1 float x\nproperty float y\nelement face 1\nend_header\n",
+       "line 3: a property before any element (a garbled PLY header)"},
       {"truncated.stl", stl,
        "truncated or garbled binary STL file: its header says 2 triangles, 184 bytes, but the file has 144"},
       {"tiny.stl", "abc", "truncated STL file (3 bytes, less than the 84 of a binary STL header)"},
