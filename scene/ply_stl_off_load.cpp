@@ -287,8 +287,38 @@ std::string off_text_for_cgal(const std::string& path) {
   return text;
 }
 
+// The counts of an ASCII OFF header, checked before CGAL reads them: its header reader converts
+// (vertices + faces) * 2.1 to int with no range check (UBSan in File_header_OFF_impl.h, found by
+// fuzz_obj_clean with a count of -2147483). Every vertex and face takes at least 2 bytes ("0\n"), every
+// edge at least one. Binary headers are left to CGAL.
+void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  auto next = [&](std::string& token) {
+    while (in >> token) {
+      if (token[0] != '#') return true;
+      std::string comment;
+      std::getline(in, comment);
+    }
+    return false;
+  };
+  std::string keyword, token;
+  if (!next(keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  if (!next(token)) return;
+  if (token == "BINARY") return;
+  if (keyword.size() > 3 && keyword[keyword.size() - 4] == 'n' && !next(token)) return;  // nOFF: the dimension first
+  const char* names[] = {"vertices", "faces", "edges"};
+  for (int i = 0; i < 3; ++i) {
+    if (i > 0 && !next(token)) return;
+    bool digits = !token.empty() && token.size() <= 12 && token.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoull(token) > (i < 2 ? size / 2 : size))
+      throw SceneError(path + ": truncated or garbled OFF file: its header's count of " + names[i] + " is " + token +
+                       ", not a number up to what a file of " + std::to_string(size) + " bytes holds");
+  }
+}
+
 PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings) {
   const std::uintmax_t size = std::filesystem::file_size(path);
+  check_ascii_off_counts(path, size);
   {
     // CGAL sizes its arrays by the header's counts before reading them: a garbled count would ask for
     // any amount of memory. Every vertex and face takes at least 2 bytes (ASCII "0\n"; binary, 4 or more).

@@ -1363,7 +1363,9 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
        "truncated or garbled binary STL file: its header says 2 triangles, 184 bytes, but the file has 144"},
       {"tiny.stl", "abc", "truncated STL file (3 bytes, less than the 84 of a binary STL header)"},
       {"garbled.stl", "solid x\nfacet normal 0 0 0\nouter loop\nvertex 0 0 zero\n", "truncated or garbled ASCII STL file: no facet could be read"},
-      {"counts.off", "OFF\n100000 1 0\n0 0 0\n", "truncated or garbled OFF file: its header says 100000 vertices and 1 faces, more than a file of 21 bytes holds"},
+      {"counts.off", "OFF\n100000 1 0\n0 0 0\n", "truncated or garbled OFF file: its header's count of vertices is 100000, not a number up to what a file of 21 bytes holds"},
+      // fuzz_obj_clean: CGAL converts the counts' sum times 2.1 to int unchecked.
+      {"negative.off", "nOFF\n4\n-2147483\n6\n0 0 0 0 0\n", "truncated or garbled OFF file: its header's count of vertices is -2147483, not a number up to what a file of 28 bytes holds"},
       {"garbled.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n", "truncated or garbled OFF file (CGAL's reader cannot read it)"},
   };
   for (const Case& c : cases) {
