@@ -337,13 +337,18 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
   std::vector<Kernel::Vector_3> normals;
   std::vector<Kernel::Point_2> uvs;
   std::vector<CGAL::IO::Color> vertex_colours, face_colours;
-  if (!CGAL::IO::read_OFF(in, points, polygons,
-                          CGAL::parameters::vertex_normal_output_iterator(std::back_inserter(normals))
-                              .vertex_texture_output_iterator(std::back_inserter(uvs))
-                              .vertex_color_output_iterator(std::back_inserter(vertex_colours))
-                              .face_color_output_iterator(std::back_inserter(face_colours))
-                              .verbose(false)))
-    throw SceneError(path + ": truncated or garbled OFF file (CGAL's reader cannot read it)");
+  bool read = false;
+  try {
+    read = CGAL::IO::read_OFF(in, points, polygons,
+                              CGAL::parameters::vertex_normal_output_iterator(std::back_inserter(normals))
+                                  .vertex_texture_output_iterator(std::back_inserter(uvs))
+                                  .vertex_color_output_iterator(std::back_inserter(vertex_colours))
+                                  .face_color_output_iterator(std::back_inserter(face_colours))
+                                  .verbose(false));
+  } catch (const std::length_error&) {  // a face's vertex count of 10^40: CGAL resizes the face to it
+  } catch (const std::bad_alloc&) {
+  }
+  if (!read) throw SceneError(path + ": truncated or garbled OFF file (CGAL's reader cannot read it)");
   PolygonSoup soup;
   soup.positions = finite_positions(path, points);
   for (const auto& polygon : polygons) {
