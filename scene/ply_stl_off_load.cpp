@@ -307,12 +307,27 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   if (token == "BINARY") return;
   if (keyword.size() > 3 && keyword[keyword.size() - 4] == 'n' && !next(token)) return;  // nOFF: the dimension first
   const char* names[] = {"vertices", "faces", "edges"};
+  unsigned long long counts[3] = {};
   for (int i = 0; i < 3; ++i) {
     if (i > 0 && !next(token)) return;
     bool digits = !token.empty() && token.size() <= 12 && token.find_first_not_of("0123456789") == std::string::npos;
     if (!digits || std::stoull(token) > (i < 2 ? size / 2 : size))
       throw SceneError(path + ": truncated or garbled OFF file: its header's count of " + names[i] + " is " + token +
                        ", not a number up to what a file of " + std::to_string(size) + " bytes holds");
+    counts[i] = std::stoull(token);
+  }
+  // Each face's vertex count, which CGAL sizes the face by before reading it (a count of 10^15 asked for
+  // petabytes; fuzz_obj_clean): at most 255, as for OBJ faces.
+  std::string line;
+  std::getline(in, line);  // the rest of the counts' line
+  for (unsigned long long v = 0; v < counts[0] && std::getline(in, line);)
+    if (line.find_first_not_of(" \t\r") != std::string::npos && line[line.find_first_not_of(" \t\r")] != '#') ++v;
+  for (unsigned long long f = 0; f < counts[1] && next(token); ++f) {
+    bool digits = !token.empty() && token.size() <= 3 && token.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoul(token) > 255)
+      throw SceneError(path + ": face " + std::to_string(f) + " has " + token +
+                       " vertices, more than the 255 pathcl reads (or a garbled OFF file)");
+    std::getline(in, line);  // the face's indices and colour
   }
 }
 

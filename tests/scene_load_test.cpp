@@ -1367,6 +1367,9 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       // fuzz_obj_clean: CGAL converts the counts' sum times 2.1 to int unchecked.
       {"negative.off", "nOFF\n4\n-2147483\n6\n0 0 0 0 0\n", "truncated or garbled OFF file: its header's count of vertices is -2147483, not a number up to what a file of 28 bytes holds"},
       {"garbled.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n", "truncated or garbled OFF file (CGAL's reader cannot read it)"},
+      // fuzz_obj_clean: CGAL sizes a face by its count before reading it.
+      {"huge-face.off", "OFF\n3 1 0\n0 0 0\n# a comment\n1 0 0\n0 1 0\n99999999999 0 1 2\n",
+       "face 0 has 99999999999 vertices, more than the 255 pathcl reads (or a garbled OFF file)"},
   };
   for (const Case& c : cases) {
     std::string mesh = write_temp_file("bad-formats/" + c.file, c.content);
