@@ -267,26 +267,6 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
   return soup;
 }
 
-// The OFF file's text as CGAL 5.5's reader reads it right. Its ASCII scanner takes a vertex's texture
-// coordinates from its colour bookkeeping (File_scanner_OFF::scan_texture reads
-// entries[first_color_index + color_entries]), which only a header keyword with C sets: for "STOFF" or
-// "STNOFF" those members are uninitialised and the read goes out of bounds (ASan: SEGV in scan_texture).
-// With a C added the colours are counted per line, zero here, and the same file reads correctly. Binary
-// files read their texture coordinates directly and are left alone.
-std::string off_text_for_cgal(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  size_t start = text.find_first_not_of(" \t\r\n");
-  if (start == std::string::npos || text.compare(start, 2, "ST") != 0) return text;
-  size_t end = text.find_first_of(" \t\r\n", start);
-  std::string keyword = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
-  size_t line_end = text.find('\n', start);
-  bool binary = text.substr(start, line_end == std::string::npos ? std::string::npos : line_end - start).find("BINARY") !=
-                std::string::npos;
-  if (keyword.find('C') == std::string::npos && !binary) text.insert(start + 2, "C");
-  return text;
-}
-
 // The counts of an ASCII OFF header, checked before CGAL reads them: its header reader converts
 // (vertices + faces) * 2.1 to int with no range check (UBSan in File_header_OFF_impl.h, found by
 // fuzz_obj_clean with a count of -2147483). Every vertex and face takes at least 2 bytes ("0\n"), every
@@ -305,6 +285,14 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   if (!next(keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
   if (!next(token)) return;
   if (token == "BINARY") return;
+  // CGAL 5.5's ASCII scanner reads texture coordinates and colours by indices it computes from each line
+  // without checking them: for "ST" it uses uninitialised colour bookkeeping (ASan: SEGV in scan_texture),
+  // and with "C" a short line reads out of bounds (fuzz_obj_clean, scan_color). Until a reader that
+  // checks them, such files are refused rather than misread.
+  std::string prefix = keyword.substr(0, keyword.size() - 3);
+  if (prefix.find("ST") != std::string::npos || prefix.find('C') != std::string::npos)
+    throw SceneError(path + ": " + keyword + ": texture coordinates and colours in ASCII OFF files are not "
+                     "supported (CGAL's OFF reader misreads them); write the mesh as PLY or OBJ");
   if (keyword.size() > 3 && keyword[keyword.size() - 4] == 'n' && !next(token)) return;  // nOFF: the dimension first
   const char* names[] = {"vertices", "faces", "edges"};
   unsigned long long counts[3] = {};
@@ -346,7 +334,7 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
                        std::to_string(scanner.size_of_facets()) + " faces, more than a file of " +
                        std::to_string(size) + " bytes holds");
   }
-  std::istringstream in(off_text_for_cgal(path));
+  std::ifstream in(path, std::ios::binary);
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
   std::vector<Kernel::Vector_3> normals;

@@ -1322,12 +1322,18 @@ TEST(SceneLoadMeshFormats, StlAsciiAndBinary) {
   }
 }
 
-TEST(SceneLoadMeshFormats, OffWithNormalsAndTextureCoordinates) {
-  std::string off = "STNOFF\n# the square of the PLY tests\n5 2 0\n";
+TEST(SceneLoadMeshFormats, OffWithNormals) {
+  std::string off = "NOFF\n# the square of the PLY tests\n5 2 0\n";
   for (const auto& v : kSquare)
-    for (int i : {0, 1, 2, 3, 4, 5, 6, 7}) off += std::to_string(v[i]) + (i == 7 ? "\n" : " ");
+    for (int i : {0, 1, 2, 3, 4, 5}) off += std::to_string(v[i]) + (i == 5 ? "\n" : " ");
   off += "4 0 1 2 3\n3 0 4 1\n";
-  expect_square(load_mesh(write_temp_file("meshes/square.off", off)), true);
+  expect_square(load_mesh(write_temp_file("meshes/square.off", off)), false);
+  // Texture coordinates and colours: refused (CGAL 5.5's ASCII scanner reads them out of bounds).
+  for (const char* keyword : {"STNOFF", "COFF"})
+    EXPECT_NE(scene_load_error(write_temp_file("off-st.json", scene_with_shape(
+                  R"({"type": "mesh", "file": ")" + write_temp_file("meshes/st.off", std::string(keyword) + "\n3 1 0\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n") + R"(", "material": "m"})")))
+                  .find(std::string(keyword) + ": texture coordinates and colours in ASCII OFF files are not supported"),
+              std::string::npos) << keyword;
   // Plain OFF: no normals; with "smooth" they are generated.
   SceneDescription plain = load_mesh(write_temp_file("meshes/plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
                                      R"(, "smooth": true)");
