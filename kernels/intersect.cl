@@ -214,6 +214,26 @@ inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, i
   return ray_boxes4(o, inv_d, negative, tmin, tmax, n->lo_x, n->lo_y, n->lo_z, n->hi_x, n->hi_y, n->hi_z);
 }
 
+/* No hit yet: the nearest so far is the ray's far end. */
+inline void hit_init(Hit* hit, const Ray* ray) {
+  hit->t = ray->tmax;
+  hit->slot = PC_INVALID;
+  hit->prim = PC_INVALID;
+}
+
+/* Pops the next subtree of a traversal stack that can still hold a hit nearer than t into *ref; false
+ * when none is left. */
+__attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const float* stack_entry, int* sp, float t, uint* ref) {
+  while (*sp > 0) {
+    --*sp;
+    if (stack_entry[*sp] <= t) {
+      *ref = stack[*sp];
+      return true;
+    }
+  }
+  return false;
+}
+
 /* Orders two (distance, reference) pairs, nearer first, without branches. */
 inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
   bool swap = *db < *da;
@@ -231,9 +251,7 @@ inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
 __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut, __global const Bvh4Node* nodes,
                                                           __global const Primitive* prims, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  hit->t = ray->tmax;
-  hit->slot = PC_INVALID;
-  hit->prim = PC_INVALID;
+  hit_init(hit, ray);
   uint stack[3 * PC_BVH_STACK];
   float stack_entry[3 * PC_BVH_STACK];
   int sp = 0;
@@ -268,13 +286,7 @@ __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut,
         continue;
       }
     }
-    /* Pop the next subtree that can still hold a closer hit. */
-    for (;;) {
-      if (sp == 0) return hit->slot != PC_INVALID;
-      --sp;
-      if (stack_entry[sp] <= hit->t) break;
-    }
-    ref = stack[sp];
+    if (!pop_subtree(stack, stack_entry, &sp, hit->t, &ref)) return hit->slot != PC_INVALID;
   }
 }
 
@@ -359,9 +371,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
                                                            __global const LeafBlock* blocks,
                                                            __global const Primitive* prims, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  hit->t = ray->tmax;
-  hit->slot = PC_INVALID;
-  hit->prim = PC_INVALID;
+  hit_init(hit, ray);
   uint stack[7 * PC_BVH_STACK];
   float stack_entry[7 * PC_BVH_STACK];
   int sp = 0;
@@ -428,13 +438,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
         continue;
       }
     }
-    /* Pop the next subtree that can still hold a closer hit. */
-    for (;;) {
-      if (sp == 0) return hit->slot != PC_INVALID;
-      --sp;
-      if (stack_entry[sp] <= hit->t) break;
-    }
-    ref = stack[sp];
+    if (!pop_subtree(stack, stack_entry, &sp, hit->t, &ref)) return hit->slot != PC_INVALID;
   }
 }
 

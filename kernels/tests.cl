@@ -74,9 +74,7 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
   Ray ray = ray_from_record(rays + i);
   RayPrecomp rp = ray_precompute(ray.d);
   Hit hit;
-  hit.t = ray.tmax;
-  hit.slot = PC_INVALID;
-  hit.prim = PC_INVALID;
+  hit_init(&hit, &ray);
   for (uint p = 0; p < prim_count; ++p) intersect_prim(0, prims, p, &ray, &rp, rp.kz, hit.t, &hit);
   HitRecord out;
   out.t = hit.slot == PC_INVALID ? INFINITY : hit.t;

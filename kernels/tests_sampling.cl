@@ -140,7 +140,6 @@ __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
    * radiance is 0 is one), so that tests can bin it. */
   vstore3(ls.wi, 0, o);
   if (!ok) return;
-  vstore3(ls.wi, 0, o);
   o[3] = ls.delta ? 2.0f : 1.0f;
   o[4] = ls.pdf;
   float le;

@@ -263,8 +263,6 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary, uint32_t merge_size) 
   return out;
 }
 
-void set_block_lane(pc_float4& v, int lane, float x) { set_lane(v, lane, x); }
-
 }  // namespace
 
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary, 0); }
@@ -285,9 +283,9 @@ std::vector<LeafBlock> make_leaf_blocks(std::vector<Bvh8Node>& nodes, const std:
         for (int lane = 0; lane < 4; ++lane) {
           // Unused lanes repeat the last primitive (and are masked off by count).
           const Primitive& p = prims[first + start + std::min(uint32_t(lane), b.count - 1)];
-          set_block_lane(b.ax, lane, p.a.x), set_block_lane(b.ay, lane, p.a.y), set_block_lane(b.az, lane, p.a.z);
-          set_block_lane(b.bx, lane, p.b.x), set_block_lane(b.by, lane, p.b.y), set_block_lane(b.bz, lane, p.b.z);
-          set_block_lane(b.cx, lane, p.c.x), set_block_lane(b.cy, lane, p.c.y), set_block_lane(b.cz, lane, p.c.z);
+          set_lane(b.ax, lane, p.a.x), set_lane(b.ay, lane, p.a.y), set_lane(b.az, lane, p.a.z);
+          set_lane(b.bx, lane, p.b.x), set_lane(b.by, lane, p.b.y), set_lane(b.bz, lane, p.b.z);
+          set_lane(b.cx, lane, p.c.x), set_lane(b.cy, lane, p.c.y), set_lane(b.cz, lane, p.c.z);
           uint32_t prim, kind;
           std::memcpy(&prim, &p.a.w, 4);
           std::memcpy(&kind, &p.b.w, 4);
