@@ -55,7 +55,9 @@ LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::ca
   auto start = std::chrono::steady_clock::now();
   s.description = load_scene(path);
   s.load_ms = ms_since(start);
-  s.device = build_device_scene_taking_texels(s.description, origin);
+  // Ray files are traced as one flat triangle list (and read so by other tracers): instances flattened.
+  s.device = build_device_scene_taking_texels(s.description, origin,
+                                              origin == DeviceOrigin::world ? Instancing::flatten : Instancing::keep);
   return s;
 }
 
@@ -146,14 +148,16 @@ struct ConvergenceLog {
 // whatever loading changed or ignored (clamped texels, scaled MTL materials, unused MTL statements).
 void warn_about_clean_up(const LoadedScene& s) {
   for (const std::string& w : s.description.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  for (const ShapeDesc& shape : s.description.shapes) {
-    const CleanReport& c = shape.clean;
+  std::vector<std::pair<std::string, CleanReport>> cleaned;
+  for (const ShapeDesc& shape : s.description.shapes) cleaned.push_back({shape.label, shape.clean});
+  for (const InstancedMesh& m : s.description.instanced_meshes) cleaned.push_back({m.label, m.clean});
+  for (const auto& [label, c] : cleaned) {
     if (c.degenerate_faces + c.duplicate_faces > 0)
-      std::fprintf(stderr, "warning: %s: removed %zu degenerate and %zu duplicate faces\n", shape.label.c_str(),
+      std::fprintf(stderr, "warning: %s: removed %zu degenerate and %zu duplicate faces\n", label.c_str(),
                    c.degenerate_faces, c.duplicate_faces);
     if (c.self_intersecting)
       std::fprintf(stderr, "warning: %s: the closed mesh intersects itself; each connected part was oriented to a "
-                   "positive volume instead of by CGAL's orient_to_bound_a_volume\n", shape.label.c_str());
+                   "positive volume instead of by CGAL's orient_to_bound_a_volume\n", label.c_str());
   }
   if (s.device.skipped_zero_area_emitters > 0)
     std::fprintf(stderr, "warning: %u zero-area emitters are not lights%s\n", s.device.skipped_zero_area_emitters,
@@ -345,7 +349,7 @@ std::string cleaned_obj(const SceneDescription& d) {
   char line[160];
   size_t base = 1;
   for (size_t i = 0; i < d.shapes.size(); ++i) {
-    const ShapeDesc& shape = d.shapes[i];
+    const ShapeDesc shape = flattened_shape(d, d.shapes[i]);  // an instance as its placed copy
     if (shape.is_sphere) {
       std::snprintf(line, sizeof line, "# sphere shapes[%zu] %.9g %.9g %.9g %.9g %d\n", i, shape.center.x,
                     shape.center.y, shape.center.z, shape.radius, shape.flip_normals ? 1 : 0);
@@ -380,21 +384,30 @@ int run_info(const std::string& path, const std::string& dump_obj) {
                   shape_emits(shape) ? ", emitter" : "");
       continue;
     }
-    const CleanReport& c = shape.clean;
+    if (shape.instance_of != PC_INVALID) {
+      const InstancedMesh& m = d.instanced_meshes[shape.instance_of];
+      std::printf("%s: instance of %s (%zu triangles)\n", shape.label.c_str(), m.label.c_str(), m.mesh.triangles.size());
+      if (m.label != shape.label) continue;  // the clean-up below once, at the mesh's first placement
+    }
+    const TriangleMesh& mesh = shape.instance_of == PC_INVALID ? shape.mesh : d.instanced_meshes[shape.instance_of].mesh;
+    const CleanReport& c = shape.instance_of == PC_INVALID ? shape.clean : d.instanced_meshes[shape.instance_of].clean;
     std::printf("%s: %zu vertices, %zu polygons in -> %zu vertices, %zu triangles out%s\n", shape.label.c_str(),
-                c.input_vertices, c.input_polygons, shape.mesh.positions.size(), shape.mesh.triangles.size(),
+                c.input_vertices, c.input_polygons, mesh.positions.size(), mesh.triangles.size(),
                 shape_emits(shape) ? ", emitter" : "");
     std::printf("    merged %zu duplicate vertices, removed %zu isolated vertices, %zu degenerate faces, %zu duplicate "
                 "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s\n",
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,
                 c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped,
                 c.self_intersecting ? "closed, self-intersecting" : c.closed ? "closed" : "open",
-                shape.mesh.normals.empty() ? "" : ", shading normals");
+                mesh.normals.empty() ? "" : ", shading normals");
   }
   const DeviceScene& v = s.device;
   size_t by_type[5] = {};
   for (const Light& l : v.lights) by_type[l.type]++;
   std::printf("primitives: %u triangles, %u spheres\n", v.triangle_count, v.sphere_count);
+  if (v.instance_count > 0)
+    std::printf("instances: %u placements of %zu meshes, %llu triangles placed\n", v.instance_count,
+                d.instanced_meshes.size(), (unsigned long long)v.instanced_triangle_count);
   std::printf("lights: %zu area (%u zero-area emitters skipped), %zu point, %zu spot, %zu directional, %zu environment\n",
               by_type[PC_LIGHT_AREA], v.skipped_zero_area_emitters, by_type[PC_LIGHT_POINT], by_type[PC_LIGHT_SPOT],
               by_type[PC_LIGHT_DIRECTIONAL], by_type[PC_LIGHT_ENVIRONMENT]);

@@ -74,6 +74,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
 #ifdef PC_HAS_CUTOUTS
   ray.cutout_seed = cutout_seed(key, 0u);
 #endif
@@ -85,11 +86,11 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
   for (uint depth = 0;; ++depth) {
     Hit hit;
     ++*rays;
-    if (!trace_bvh(sc, PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
+    if (!trace_scene(sc, sc, &ray, false, &hit)) {
       radiance += throughput * escaped_radiance(sc, prev_p, ray.d, prev_bsdf_pdf, prev_delta);
       break;
     }
-    Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
+    Surface s = scene_surface(sc, &ray, &hit);
     PrimShading sh = sc->shading[s.prim];
     float3 wo = -ray.d;
 #ifdef PC_HAS_AREA_LIGHTS
@@ -125,15 +126,16 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
           shadow.tmin = 0.0f;
           shadow.tmax = INFINITY;
           shadow.skip_prim = s.prim;
+          shadow.skip_instance = s.instance;
         } else {
-          shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, ls.p, ls.p_err, ls.n);
+          shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n);
         }
         Hit blocker;
         ++*rays;
 #ifdef PC_HAS_CUTOUTS
         shadow.cutout_seed = cutout_seed(key, 2u * depth + 1u);
 #endif
-        if (!trace_bvh(sc, PC_SCENE_BVH(sc), sc->prims, &shadow, true, &blocker)) {
+        if (!trace_scene(sc, sc, &shadow, true, &blocker)) {
           float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
           radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
         }
@@ -166,6 +168,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
     ray.tmin = 0.0f;
     ray.tmax = INFINITY;
     ray.skip_prim = s.prim;
+    ray.skip_instance = s.instance;
 #ifdef PC_HAS_CUTOUTS
     ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
 #endif

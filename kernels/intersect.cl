@@ -23,6 +23,7 @@ typedef struct {
   float3 o, d;
   float tmin, tmax;
   uint skip_prim; /* scene-order primitive the ray leaves from, or PC_INVALID */
+  uint skip_instance; /* with instances (PC_HAS_INSTANCES): the instance of skip_prim */
   uint cutout_seed; /* with cut-outs: the ray's own random dimension (kernels/cutout.cl) */
 } Ray;
 
@@ -31,6 +32,7 @@ typedef struct {
   uint slot; /* index into the leaf-ordered primitive array, PC_INVALID for a miss */
   uint prim; /* its scene-order primitive index, PC_INVALID for a miss */
   float u, v; /* barycentrics of vertices b and c */
+  uint instance; /* with instances (PC_HAS_INSTANCES): the instance hit, PC_INVALID for a miss */
 } Hit;
 
 /* A ray of a ray file (pathcl rays). */
@@ -42,6 +44,7 @@ inline Ray ray_from_record(__global const RayRecord* record) {
   ray.d = vload3(0, r + 4);
   ray.tmax = r[7];
   ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
   ray.cutout_seed = 0u;
   return ray;
 }
@@ -219,6 +222,7 @@ inline void hit_init(Hit* hit, const Ray* ray) {
   hit->t = ray->tmax;
   hit->slot = PC_INVALID;
   hit->prim = PC_INVALID;
+  hit->instance = PC_INVALID;
 }
 
 /* Pops the next subtree of a traversal stack that can still hold a hit nearer than t into *ref; false
@@ -245,18 +249,19 @@ inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
   *rb = swap ? r : *rb;
 }
 
-/* Traversal of the 4-wide BVH, nearest child first. With any_hit it returns at the first hit (shadow
- * rays). kz is passed as a literal by trace_bvh, so each copy's triangle test has constant axis indices.
- * The stack holds at most 3 entries per level of the tree, whose depth is at most kBvhMaxDepth. */
+/* Traversal of the 4-wide BVH from node root, nearest child first, updating *hit (hit_init, or the
+ * nearest hit of other instances). With any_hit it returns at the first hit (shadow rays); otherwise
+ * whether *hit holds one. kz is passed as a literal by trace_tree, so each copy's triangle test has
+ * constant axis indices. The stack holds at most 3 entries per level of the tree, whose depth is at
+ * most kBvhMaxDepth. */
 __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut, __global const Bvh4Node* nodes,
-                                                          __global const Primitive* prims, const Ray* ray,
+                                                          __global const Primitive* prims, uint root, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  hit_init(hit, ray);
   uint stack[3 * PC_BVH_STACK];
   float stack_entry[3 * PC_BVH_STACK];
   int sp = 0;
   int3 negative = rp->inv_d < 0.0f;
-  uint ref = 0; /* the root node */
+  uint ref = root;
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
       if (intersect_leaf(cut, prims, ref, ray, rp, any_hit, hit, kz)) return true;
@@ -363,20 +368,19 @@ __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut
   return false;
 }
 
-/* Traversal of the 8-wide BVH (CPU devices): one float8 slab test per node. As in Embree, one hit child
+/* Traversal of the 8-wide BVH (CPU devices) from node root, as trace_bvh4_axis: one float8 slab test per node. As in Embree, one hit child
  * is entered at once, of two the nearer is entered and the other pushed, more are insertion-sorted onto
  * the stack by entry distance, nearest on top, and the nearest is popped. The stack holds at most 7
  * entries per level. */
 __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut, __global const Bvh8Node* nodes,
                                                            __global const LeafBlock* blocks,
-                                                           __global const Primitive* prims, const Ray* ray,
+                                                           __global const Primitive* prims, uint root, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  hit_init(hit, ray);
   uint stack[7 * PC_BVH_STACK];
   float stack_entry[7 * PC_BVH_STACK];
   int sp = 0;
   int3 negative = rp->inv_d < 0.0f;
-  uint ref = 0; /* the root node */
+  uint ref = root;
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
       if (intersect_blocks(cut, blocks, prims, ref, ray, rp, any_hit, hit, kz)) return true;
@@ -442,20 +446,127 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
   }
 }
 
-/* The device's layout; kz as a literal, so each copy's triangle test has constant axis indices. cut: the
- * scene whose cut-outs apply (kernels/cutout.cl), or 0 for none. */
-inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
-                      const Ray* ray, bool any_hit, Hit* hit) {
+/* The tree of the device's layout from node root, updating *hit as trace_bvh4_axis does; kz as a literal,
+ * so each copy's triangle test has constant axis indices. cut: the scene whose cut-outs apply
+ * (kernels/cutout.cl), or 0 for none. */
+inline bool trace_tree(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
+                       __global const Primitive* prims, uint root, const Ray* ray, bool any_hit, Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
 #ifdef PC_BVH8
-#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, ray, &rp, any_hit, hit, kz)
+#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, root, ray, &rp, any_hit, hit, kz)
 #else
-#define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, ray, &rp, any_hit, hit, kz)
+#define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, root, ray, &rp, any_hit, hit, kz)
 #endif
   if (rp.kz == 0u) return PC_TRACE_AXIS(0u);
   if (rp.kz == 1u) return PC_TRACE_AXIS(1u);
   return PC_TRACE_AXIS(2u);
 #undef PC_TRACE_AXIS
+}
+
+/* The nearest hit (or with any_hit, any hit) in one tree whose root is node 0: the whole scene without
+ * instances, and the geometry that ray files and the test kernels trace. */
+inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
+                      const Ray* ray, bool any_hit, Hit* hit) {
+  hit_init(hit, ray);
+  return trace_tree(cut, nodes, blocks, prims, 0u, ray, any_hit, hit);
+}
+
+#ifdef PC_HAS_INSTANCES
+/* An affine transform given as three rows (x, y, z, translation) applied to a point or a direction, each
+ * coordinate summed in this order (no contraction: the same bits everywhere). */
+inline float3 transform_point(__global const float4* rows, float3 p) {
+  float4 r0 = rows[0], r1 = rows[1], r2 = rows[2];
+  return (float3)(((r0.x * p.x + r0.y * p.y) + r0.z * p.z) + r0.w, ((r1.x * p.x + r1.y * p.y) + r1.z * p.z) + r1.w,
+                  ((r2.x * p.x + r2.y * p.y) + r2.z * p.z) + r2.w);
+}
+inline float3 transform_vector(__global const float4* rows, float3 v) {
+  float4 r0 = rows[0], r1 = rows[1], r2 = rows[2];
+  return (float3)((r0.x * v.x + r0.y * v.y) + r0.z * v.z, (r1.x * v.x + r1.y * v.y) + r1.z * v.z,
+                  (r2.x * v.x + r2.y * v.y) + r2.z * v.z);
+}
+
+/* Instance k's tree with the ray taken into the mesh's coordinates (the direction is not normalized, so
+ * t is the same parameter as in the device's). A hit of it replaces *hit when nearer, or at an equal t
+ * when k is the lower instance: hits are ordered by (t, instance, primitive), whatever order the instance
+ * BVH visits the instances in. */
+inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, const Ray* ray, bool any_hit, Hit* hit) {
+  __global const Instance* inst = sc->instances + k;
+  Ray mesh_ray = *ray;
+  if (!(inst->flags & PC_INSTANCE_IDENTITY)) {
+    mesh_ray.o = transform_point(inst->to_mesh, ray->o);
+    mesh_ray.d = transform_vector(inst->to_mesh, ray->d);
+  }
+  mesh_ray.skip_prim = ray->skip_instance == k ? ray->skip_prim : PC_INVALID;
+#ifdef PC_HAS_CUTOUTS
+  /* The copies of a cut-out surface along one ray decide independently. */
+  if (k != 0u) mesh_ray.cutout_seed = hash4(ray->cutout_seed, k, 0x510e527fu, 0x9b05688cu);
+#endif
+  Hit h;
+  h.t = hit->t;
+  h.slot = PC_INVALID;
+  /* Equal-t hits of this instance win against a higher instance's (prim PC_INVALID: any primitive
+   * index is lower) and lose against a lower one's (prim 0: none is lower). */
+  h.prim = hit->instance == k ? hit->prim : hit->instance < k ? 0u : PC_INVALID;
+#ifdef PC_BVH8
+  uint root = inst->root8;
+#else
+  uint root = inst->root4;
+#endif
+  if (!trace_tree(cut, PC_SCENE_BVH(sc), sc->prims, root, &mesh_ray, any_hit, &h)) return false;
+  h.instance = k;
+  *hit = h;
+  return true;
+}
+
+/* The instance BVH (binary, its leaves ranges of instances), nearer child first; each instance met is
+ * traced by trace_instance. */
+inline bool trace_instances(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
+  hit_init(hit, ray);
+  uint stack[PC_BVH_STACK];
+  float stack_entry[PC_BVH_STACK];
+  int sp = 0;
+  float3 inv_d = 1.0f / ray->d;
+  int3 negative = inv_d < 0.0f;
+  uint node = 0;
+  for (;;) {
+    __global const BvhNode* n = sc->instance_bvh + node;
+    if (n->prim_count > 0u) {
+      for (uint k = n->left_first; k < n->left_first + n->prim_count; ++k)
+        if (trace_instance(sc, cut, k, ray, any_hit, hit) && any_hit) return true;
+    } else if (n->left_first != 0u) {
+      /* Both children's boxes in one slab test (the other two lanes empty). */
+      __global const BvhNode* a = n + 1;
+      __global const BvhNode* b = sc->instance_bvh + n->left_first;
+      float4 entry = ray_boxes4(ray->o, inv_d, negative, ray->tmin, hit->t, (float4)(a->lo[0], b->lo[0], INFINITY, INFINITY),
+                                (float4)(a->lo[1], b->lo[1], INFINITY, INFINITY), (float4)(a->lo[2], b->lo[2], INFINITY, INFINITY),
+                                (float4)(a->hi[0], b->hi[0], -INFINITY, -INFINITY), (float4)(a->hi[1], b->hi[1], -INFINITY, -INFINITY),
+                                (float4)(a->hi[2], b->hi[2], -INFINITY, -INFINITY));
+      float da = entry.s0, db = entry.s1;
+      uint ra = node + 1u, rb = n->left_first;
+      order_pair(&da, &ra, &db, &rb);
+      if (db != INFINITY) {
+        stack[sp] = rb;
+        stack_entry[sp] = db;
+        ++sp;
+      }
+      if (da != INFINITY) {
+        node = ra;
+        continue;
+      }
+    }
+    if (!pop_subtree(stack, stack_entry, &sp, hit->t, &node)) return hit->slot != PC_INVALID;
+  }
+}
+#endif
+
+/* The scene's nearest hit (any hit with any_hit): its one tree, or with instances the instance BVH over
+ * the instances' trees. cut: as for trace_tree. */
+inline bool trace_scene(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
+#ifdef PC_HAS_INSTANCES
+  return trace_instances(sc, cut, ray, any_hit, hit);
+#else
+  return trace_bvh(cut, PC_SCENE_BVH(sc), sc->prims, ray, any_hit, hit);
+#endif
 }
 
 #endif

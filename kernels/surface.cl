@@ -8,6 +8,7 @@ typedef struct {
   float3 ng;    /* geometric normal: the front side (counter-clockwise, or outwards unless flipped) */
   float3 ns;    /* shading normal, on the same side as ng */
   uint prim;    /* scene-order primitive index */
+  uint instance; /* with instances (PC_HAS_INSTANCES): the instance of prim; 0 otherwise */
 } Surface;
 
 inline float3 triangle_normal(Primitive p) { return pc_normalize(pc_cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz)); }
@@ -23,6 +24,7 @@ inline Surface surface_at(__global const Primitive* prims, __global const PrimSh
   Surface s;
   Primitive p = prims[hit->slot];
   s.prim = prim_index_of(p);
+  s.instance = 0u;
 #ifdef PC_HAS_SPHERES
   if (prim_kind_of(p) == PC_PRIM_SPHERE) {
     /* Re-project onto the sphere (pbrt-v4): the error is then a few ulps of the offset from the centre. */
@@ -53,19 +55,60 @@ inline Surface surface_at(__global const Primitive* prims, __global const PrimSh
   return s;
 }
 
+#ifdef PC_HAS_INSTANCES
+/* A normal of the mesh's coordinates in the device's: by the inverse transpose of to_device's linear part,
+ * which is the transpose of to_mesh's. It keeps the side a normal points to, also for a mirroring
+ * transform, so the front stays the front. */
+inline float3 transform_normal(__global const float4* to_mesh, float3 n) {
+  float4 r0 = to_mesh[0], r1 = to_mesh[1], r2 = to_mesh[2];
+  return (float3)((r0.x * n.x + r1.x * n.y) + r2.x * n.z, (r0.y * n.x + r1.y * n.y) + r2.y * n.z,
+                  (r0.z * n.x + r1.z * n.y) + r2.z * n.z);
+}
+
+/* A surface of an instance's mesh (in the mesh's coordinates, as surface_at gives it) in the device's
+ * coordinates. The error bound of the transformed point is pbrt-v4's: the point's own bound carried
+ * through the matrix, plus the rounding of the transform's products and sums. */
+inline void place_surface(Surface* s, __global const Instance* inst) {
+  float3 p = s->p, e = s->p_err;
+  __global const float4* m = inst->to_device;
+  s->p = transform_point(m, p);
+  float3 carried, rounded;
+  carried.x = (fabs(m[0].x) * e.x + fabs(m[0].y) * e.y) + fabs(m[0].z) * e.z;
+  carried.y = (fabs(m[1].x) * e.x + fabs(m[1].y) * e.y) + fabs(m[1].z) * e.z;
+  carried.z = (fabs(m[2].x) * e.x + fabs(m[2].y) * e.y) + fabs(m[2].z) * e.z;
+  rounded.x = ((fabs(m[0].x * p.x) + fabs(m[0].y * p.y)) + fabs(m[0].z * p.z)) + fabs(m[0].w);
+  rounded.y = ((fabs(m[1].x * p.x) + fabs(m[1].y * p.y)) + fabs(m[1].z * p.z)) + fabs(m[1].w);
+  rounded.z = ((fabs(m[2].x * p.x) + fabs(m[2].y * p.y)) + fabs(m[2].z * p.z)) + fabs(m[2].w);
+  s->p_err = (1.0f + error_gamma(3)) * carried + error_gamma(3) * rounded;
+  s->ng = pc_normalize(transform_normal(inst->to_mesh, s->ng));
+  s->ns = pc_normalize(transform_normal(inst->to_mesh, s->ns));
+}
+#endif
+
+/* The surface at a hit of the scene (trace_scene), in the device's coordinates. */
+inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
+  Surface s = surface_at(sc->prims, sc->shading, sc->normals, ray, hit);
+#ifdef PC_HAS_INSTANCES
+  s.instance = hit->instance;
+  if (!(sc->instances[hit->instance].flags & PC_INSTANCE_IDENTITY)) place_surface(&s, sc->instances + hit->instance);
+#endif
+  return s;
+}
+
 /* Shadow rays stop this fraction short of their far end. */
 #define PC_SHADOW_EPSILON 1e-4f
 
 /* A shadow ray between two surface points, each moved off its surface by its error bound towards the
  * other (pbrt-v4's SpawnRayTo): neither end's own surface can block it. The direction is not unit
  * length; the ray covers [0, 1 - PC_SHADOW_EPSILON] of the way. */
-inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, float3 q, float3 q_err, float3 nq) {
+inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
   Ray r;
   r.o = offset_ray_origin(p, p_err, n, q - p);
   r.d = offset_ray_origin(q, q_err, nq, r.o - q) - r.o;
   r.tmin = 0.0f;
   r.tmax = 1.0f - PC_SHADOW_EPSILON;
   r.skip_prim = prim;
+  r.skip_instance = instance;
   return r;
 }
 

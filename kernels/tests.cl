@@ -113,13 +113,14 @@ __kernel void spawn_test(__global const WideNode* nodes, __global const LeafBloc
   Ray ray;
   ray.tmin = 0.0f;
   ray.skip_prim = s.prim;
+  ray.skip_instance = s.instance;
   if (mode == 0u) {
     ray.d = pc_normalize(vload3(0, q + 3));
     ray.o = offset_ray_origin(s.p, s.p_err, s.ng, ray.d);
     ray.tmax = INFINITY;
   } else {
     Surface target = query_surface(prims, shading, normals, q + 3);
-    ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, target.p, target.p_err, target.ng);
+    ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, target.p, target.p_err, target.ng);
   }
   Hit hit;
   out[i] = trace_bvh(0, nodes, blocks, prims, &ray, mode == 1u, &hit) ? prim_index_of(prims[hit.slot]) : PC_INVALID;

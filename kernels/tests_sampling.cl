@@ -109,10 +109,11 @@ inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float*
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
   Hit hit;
   *le = 0.0f;
-  if (trace_bvh(0, PC_SCENE_BVH(sc), sc->prims, &ray, false, &hit)) {
-    Surface s = surface_at(sc->prims, sc->shading, sc->normals, &ray, &hit);
+  if (trace_scene(sc, 0, &ray, false, &hit)) {
+    Surface s = scene_surface(sc, &ray, &hit);
     PrimShading sh = sc->shading[s.prim];
     if (sh.light == PC_INVALID) return 0.0f;
     *le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, x).x;
@@ -153,8 +154,9 @@ __kernel void light_sample_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
   Hit hit;
-  o[11] = trace_bvh(0, PC_SCENE_BVH(&sc), prims, &ray, false, &hit) ? hit.t : INFINITY;
+  o[11] = trace_scene(&sc, 0, &ray, false, &hit) ? hit.t : INFINITY;
 }
 
 /* Integral of direction_light_pdf(x, .) over each listed bin by order x order Gauss-Legendre; out as
@@ -229,4 +231,28 @@ __kernel void light_choice_test(PC_SCENE_PARAMS, float4 x4, uint seed, __global 
   p[i] = light_choice(&sc, x4.xyz, PC_INVALID, test_random4(i, seed).x, &index);
   chosen[i] = index;
   if (i < h->light_count) pdf_of_light[i] = light_choice_pdf(&sc, x4.xyz, i);
+}
+
+/* ---- The surface a ray meets (trace_scene, scene_surface; with instances the placed surface) ---- */
+
+/* Per ray of rays: t (+inf for a miss), p (3), ng (3), ns (3), the largest component of p_err, the
+ * instance: 12 floats. No cut-outs (their stochastic choice differs between instances and copies). */
+__kernel void scene_hit_test(PC_SCENE_PARAMS, __global const RayRecord* rays, __global float* out) {
+  uint i = get_global_id(0);
+  SceneData sc = PC_SCENE_DATA;
+  Ray ray = ray_from_record(rays + i);
+  __global float* o = out + 12 * i;
+  for (int k = 0; k < 12; ++k) o[k] = 0.0f;
+  Hit hit;
+  if (!trace_scene(&sc, 0, &ray, false, &hit)) {
+    o[0] = INFINITY;
+    return;
+  }
+  Surface s = scene_surface(&sc, &ray, &hit);
+  o[0] = hit.t;
+  vstore3(s.p, 0, o + 1);
+  vstore3(s.ng, 0, o + 4);
+  vstore3(s.ns, 0, o + 7);
+  o[10] = max_component(s.p_err);
+  o[11] = (float)s.instance;
 }

@@ -295,7 +295,7 @@ BenchSceneResult bench_scene(const std::vector<DeviceInfo>& devices, const Suite
   if (single && !interrupted(options)) {
     SceneDescription rays = description;
     rays.camera.width = rays.camera.height = options.suite.ray_size;
-    measure_rays(devices.front(), build_device_scene(rays, DeviceOrigin::world), options, r);
+    measure_rays(devices.front(), build_device_scene(rays, DeviceOrigin::world, Instancing::flatten), options, r);
   }
 
   if (!interrupted(options)) {

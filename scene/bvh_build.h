@@ -8,17 +8,8 @@
 #include "kernels/shared/types.h"
 #include "scene/device_scene.h"
 
-// One node of the binary tree, flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4)
-// = 32 bytes. Interior node (prim_count == 0): the left child is the next node, the right child is
-// left_first. Leaf: primitives [left_first, left_first + prim_count) in leaf order. The empty scene's
-// root has neither. The device gets the 4-wide tree collapsed from it (collapse_to_bvh4).
-struct BvhNode {
-  float lo[3];
-  uint32_t left_first;
-  float hi[3];
-  uint32_t prim_count;
-};
-static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
+// The binary tree's nodes are BvhNodes (kernels/shared/types.h), flattened depth-first; leaves hold
+// primitives in leaf order. The device gets the wide trees collapsed from it (collapse_to_bvh4/8).
 
 struct Aabb {
   glm::vec3 lo{1e30f}, hi{-1e30f};

@@ -29,8 +29,14 @@ enum : uint32_t {
   kFeatureEnvironment = 1u << 14,
   kFeatureEnvironmentMap = 1u << 15,
   kFeatureCutouts = 1u << 16,  // a material with opacity below 1 or an opacity texture
-  kFeatureAll = (1u << 17) - 1,
+  kFeatureInstances = 1u << 17,  // a mesh placed more than once, stored once (two-level BVH)
+  kFeatureAll = (1u << 18) - 1,
 };
+
+// Whether meshes that several shapes place stay instances (stored once, with a BVH of their own under the
+// instance BVH) or become copies in world coordinates (ray files, which other tracers read as triangles,
+// and tests that compare the two).
+enum class Instancing { keep, flatten };
 
 
 // Where the device's float coordinates have their origin. Rendering puts it at the camera (the kernel's
@@ -63,6 +69,10 @@ struct BvhStats {
 //   light_bvh  the light BVH over the finite lights (scene/light_bvh_build.h), depth-first
 //   textures, texels
 //   env_dist   the environment map's sampling distribution (kernels/environment.cl)
+//   instances  the rest of the scene (identity) and each placement of an instanced mesh, in the order of
+//              instance_bvh's leaves; nodes, nodes8, leaf_blocks and prims hold the rest of the scene's
+//              BVH first (root 0), then each instanced mesh's
+//   instance_bvh  the binary BVH over the instances' boxes
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
   glm::dvec3 origin{0};              // world position of the device coordinates' origin (DeviceOrigin)
@@ -71,7 +81,9 @@ struct DeviceScene {
 #undef PC_DEVICE_SCENE_VECTOR
   std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims (host only)
   uint32_t features = 0;
-  uint32_t triangle_count = 0, sphere_count = 0;
+  uint32_t triangle_count = 0, sphere_count = 0;  // as stored (an instanced mesh's triangles once)
+  uint32_t instance_count = 0;            // placements of instanced meshes
+  uint64_t instanced_triangle_count = 0;  // the triangles they place, counted per placement
   uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
   BvhStats bvh;
   uint32_t wide_depth = 0;           // depth of the 4-wide tree

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -87,8 +88,93 @@ Primitive scene_primitive(const DeviceScene& scene, uint32_t prim_index) {
   return scene.prims[scene.leaf_slot[prim_index]];
 }
 
+namespace {
+
+// Where a BVH appended to the device scene starts, and what it bounds.
+struct TreeRoots {
+  uint32_t root4 = 0, root8 = 0;  // root nodes in nodes and nodes8
+  Aabb box;                        // of its primitives, in the coordinates they are stored in
+};
+
+// Builds the BVH over prims[first, end) (in scene order; boxes alike) and appends it to out: those
+// primitives in its leaf order (out.prims must hold exactly `first` of them before), their leaf slots,
+// its 4- and 8-wide nodes after out's with references offset, and its leaf blocks.
+TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, const std::vector<Aabb>& boxes, uint32_t first,
+                      uint32_t end, BvhStats* stats) {
+  Bvh bvh = build_bvh(std::vector<Aabb>(boxes.begin() + first, boxes.begin() + end));
+  auto collapse_start = std::chrono::steady_clock::now();
+  Bvh4 wide = collapse_to_bvh4(bvh.nodes);
+  Bvh8 wide8 = collapse_to_bvh8(bvh.nodes);
+  bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
+  bvh.node_count = uint32_t(bvh.nodes.size());
+  *stats = bvh;
+  for (uint32_t slot = 0; slot < end - first; ++slot) {
+    out.prims.push_back(prims[first + bvh.prim_order[slot]]);
+    out.leaf_slot[first + bvh.prim_order[slot]] = first + slot;
+  }
+  TreeRoots roots;
+  roots.root4 = uint32_t(out.nodes.size());
+  roots.root8 = uint32_t(out.nodes8.size());
+  const BvhNode& top = bvh.nodes[0];
+  roots.box = {{top.lo[0], top.lo[1], top.lo[2]}, {top.hi[0], top.hi[1], top.hi[2]}};
+  // Interior references by the node offset, leaf references (primitive slots) by `first`.
+  auto offset = [](pc_uint& ref, uint32_t nodes, uint32_t slots) {
+    if (ref == PC_INVALID) return;
+    if (ref & PC_BVH4_LEAF)
+      ref = PC_BVH4_LEAF | (((ref & ~PC_BVH4_LEAF) >> 4) + slots) << 4 | (ref & 15u);
+    else
+      ref += nodes;
+  };
+  for (Bvh4Node& n : wide.nodes)
+    for (pc_uint& ref : n.child) offset(ref, roots.root4, first);
+  for (Bvh8Node& n : wide8.nodes)
+    for (pc_uint& ref : n.child) offset(ref, roots.root8, first);
+  std::vector<LeafBlock> blocks = make_leaf_blocks(wide8.nodes, out.prims);
+  for (Bvh8Node& n : wide8.nodes)  // leaf references now count blocks from this tree's first
+    for (pc_uint& ref : n.child)
+      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) offset(ref, 0, uint32_t(out.leaf_blocks.size()));
+  out.nodes.insert(out.nodes.end(), wide.nodes.begin(), wide.nodes.end());
+  out.nodes8.insert(out.nodes8.end(), wide8.nodes.begin(), wide8.nodes.end());
+  out.leaf_blocks.insert(out.leaf_blocks.end(), blocks.begin(), blocks.end());
+  out.wide_depth = std::max(out.wide_depth, wide.depth);
+  out.wide8_depth = std::max(out.wide8_depth, wide8.depth);
+  return roots;
+}
+
+// An affine transform's three rows (x, y, z, translation) as floats.
+void set_rows(pc_float4 (&rows)[3], const glm::dmat4& m) {
+  for (int i = 0; i < 3; ++i) rows[i] = {float(m[0][i]), float(m[1][i]), float(m[2][i]), float(m[3][i])};
+}
+
+Instance instance_of_transform(const glm::dmat4& to_device, const TreeRoots& tree) {
+  Instance inst{};
+  set_rows(inst.to_device, to_device);
+  set_rows(inst.to_mesh, glm::inverse(to_device));
+  inst.root4 = tree.root4;
+  inst.root8 = tree.root8;
+  return inst;
+}
+
+// A mesh box placed by a transform: the box of its eight corners, widened so that the float rounding of
+// the ray's transform into the mesh's coordinates (kernels/intersect.cl) can never miss what the mesh's
+// own BVH would hit.
+Aabb placed_box(const Aabb& box, const glm::dmat4& m) {
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (int corner = 0; corner < 8; ++corner) {
+    glm::dvec3 c(corner & 1 ? box.hi.x : box.lo.x, corner & 2 ? box.hi.y : box.lo.y, corner & 4 ? box.hi.z : box.lo.z);
+    glm::dvec3 p(m * glm::dvec4(c, 1.0));
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  glm::dvec3 margin = 1e-5 * (glm::abs(lo) + glm::abs(hi) + (hi - lo));
+  return {glm::vec3(lo - margin), glm::vec3(hi + margin)};
+}
+
+}  // namespace
+
 // Everything but the texel words (DeviceScene::texels), which the two public functions below copy or move.
-static DeviceScene build_device_scene_without_texels(const SceneDescription& scene, DeviceOrigin origin) {
+static DeviceScene build_device_scene_without_texels(const SceneDescription& scene, DeviceOrigin origin,
+                                                     Instancing instancing) {
   DeviceScene out;
   out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
   out.header = camera_header(scene.camera, out.origin);
@@ -136,7 +222,80 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   struct Emitter { uint32_t prim; glm::vec3 emission; double area; bool two_sided; };
   std::vector<Emitter> emitters;
   const bool textures = out.features & kFeatureTextures;
-  for (const ShapeDesc& s : scene.shapes) {
+  // A mesh's triangles (positions: its vertices in the coordinates they are stored in, device or the
+  // instanced mesh's own), in mesh order, with their shading, uvs, normals and emitters.
+  auto add_triangles = [&](const ShapeDesc& s, const TriangleMesh& mesh, const std::vector<glm::vec3>& positions,
+                           const std::vector<uint32_t>& triangle_materials) {
+    uint32_t flags = s.two_sided ? PC_FLAG_TWO_SIDED : 0;
+    auto material_of = [&](size_t t) { return triangle_materials.empty() ? s.material : triangle_materials[t]; };
+    const bool has_normals = !mesh.normals.empty();
+    for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
+      const auto& t = mesh.triangles[ti];
+      glm::vec3 emission = triangle_emission(s, ti);
+      bool emits = emission.x > 0 || emission.y > 0 || emission.z > 0;
+      if (emits && is_cutout(scene.materials[material_of(ti)]))
+        throw SceneError(scene.path + ": " + s.label + ": an emitter cannot be a cut-out (material \"" +
+                         scene.materials[material_of(ti)].name + "\" has an opacity)");
+      uint32_t index = uint32_t(prims.size());
+      glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
+      prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
+      Aabb box;
+      box.grow(a);
+      box.grow(b);
+      box.grow(c);
+      boxes.push_back(box);
+      // Flat unless some corner has a shading normal (from the file or generated).
+      bool smooth = false;
+      if (has_normals)
+        for (const glm::vec3& n : mesh.normals[ti]) smooth = smooth || glm::dot(n, n) > 0;
+      if (smooth) out.features |= kFeatureSmoothNormals;
+      out.shading.push_back(
+          {material_of(ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
+      if (textures) {
+        // (u0, v0, u1, v1), (u2, v2, 0, 0); a mesh without uvs has no textured material (scene_load.cpp).
+        std::array<glm::vec2, 3> uv{};
+        if (!mesh.uvs.empty()) uv = mesh.uvs[ti];
+        out.uvs.push_back({uv[0].x, uv[0].y, uv[1].x, uv[1].y});
+        out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
+      }
+      if (smooth) {
+        // A corner without a normal (zero: a zero normal in the file, or generated normals that cancel,
+        // as on a mesh folded flat) takes this face's geometric normal.
+        const glm::dvec3 &wa = mesh.positions[t[0]], &wb = mesh.positions[t[1]], &wc = mesh.positions[t[2]];
+        glm::dvec3 face = glm::cross(wb - wa, wc - wa);
+        double face_length = glm::length(face);
+        glm::vec3 fallback = face_length > 0 ? glm::vec3(face / face_length) : glm::vec3(0);
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3& n = mesh.normals[ti][k];
+          out.normals.push_back(f4(glm::dot(n, n) > 0 ? n : fallback));
+        }
+      } else {
+        out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
+      }
+      // The area of the float triangle the device samples (computed in double from its vertices).
+      double area = 0.5 * glm::length(glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a)));
+      if (emits) {
+        if (float(area) > 0)
+          emitters.push_back({index, emission, area, s.two_sided});
+        else
+          out.skipped_zero_area_emitters++;
+      }
+      out.triangle_count++;
+      out.features |= kFeatureTriangles;
+    }
+  };
+  std::vector<const ShapeDesc*> placements;  // instances, kept as such
+  std::vector<ShapeDesc> flattened;          // instances flattened (Instancing::flatten)
+  if (instancing == Instancing::flatten)
+    for (const ShapeDesc& s : scene.shapes)
+      if (s.instance_of != PC_INVALID) flattened.push_back(flattened_shape(scene, s));
+  size_t next_flattened = 0;
+  for (const ShapeDesc& placed : scene.shapes) {
+    if (placed.instance_of != PC_INVALID && instancing == Instancing::keep) {
+      placements.push_back(&placed);
+      continue;
+    }
+    const ShapeDesc& s = placed.instance_of == PC_INVALID ? placed : flattened[next_flattened++];
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
       bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
@@ -173,89 +332,65 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       out.features |= kFeatureSpheres;
       continue;
     }
-    const bool has_normals = !s.mesh.normals.empty();
     std::vector<glm::vec3> positions;
     positions.reserve(s.mesh.positions.size());
     for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(s, p));
-    for (size_t ti = 0; ti < s.mesh.triangles.size(); ++ti) {
-      const auto& t = s.mesh.triangles[ti];
-      glm::vec3 emission = triangle_emission(s, ti);
-      bool emits = emission.x > 0 || emission.y > 0 || emission.z > 0;
-      if (emits && is_cutout(scene.materials[triangle_material(s, ti)]))
-        throw SceneError(scene.path + ": " + s.label + ": an emitter cannot be a cut-out (material \"" +
-                         scene.materials[triangle_material(s, ti)].name + "\" has an opacity)");
-      uint32_t index = uint32_t(prims.size());
-      glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
-      prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
-      Aabb box;
-      box.grow(a);
-      box.grow(b);
-      box.grow(c);
-      boxes.push_back(box);
-      // Flat unless some corner has a shading normal (from the file or generated).
-      bool smooth = false;
-      if (has_normals)
-        for (const glm::vec3& n : s.mesh.normals[ti]) smooth = smooth || glm::dot(n, n) > 0;
-      if (smooth) out.features |= kFeatureSmoothNormals;
-      out.shading.push_back(
-          {triangle_material(s, ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
-      if (textures) {
-        // (u0, v0, u1, v1), (u2, v2, 0, 0); a mesh without uvs has no textured material (scene_load.cpp).
-        std::array<glm::vec2, 3> uv{};
-        if (!s.mesh.uvs.empty()) uv = s.mesh.uvs[ti];
-        out.uvs.push_back({uv[0].x, uv[0].y, uv[1].x, uv[1].y});
-        out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
-      }
-      if (smooth) {
-        // A corner without a normal (zero: a zero normal in the file, or generated normals that cancel,
-        // as on a mesh folded flat) takes this face's geometric normal.
-        const glm::dvec3 &wa = s.mesh.positions[t[0]], &wb = s.mesh.positions[t[1]], &wc = s.mesh.positions[t[2]];
-        glm::dvec3 face = glm::cross(wb - wa, wc - wa);
-        double face_length = glm::length(face);
-        glm::vec3 fallback = face_length > 0 ? glm::vec3(face / face_length) : glm::vec3(0);
-        for (int k = 0; k < 3; ++k) {
-          const glm::vec3& n = s.mesh.normals[ti][k];
-          out.normals.push_back(f4(glm::dot(n, n) > 0 ? n : fallback));
-        }
-      } else {
-        out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});
-      }
-      // The area of the float triangle the device samples (computed in double from its vertices).
-      double area = 0.5 * glm::length(glm::cross(glm::dvec3(b) - glm::dvec3(a), glm::dvec3(c) - glm::dvec3(a)));
-      if (emits) {
-        if (float(area) > 0)
-          emitters.push_back({index, emission, area, s.two_sided});
-        else
-          out.skipped_zero_area_emitters++;
-      }
-      out.triangle_count++;
-      out.features |= kFeatureTriangles;
-    }
+    add_triangles(s, s.mesh, positions, s.triangle_materials);
+  }
+  const uint32_t world_prims = uint32_t(prims.size());
+  // Each instanced mesh that a shape places: its triangles once, in the mesh's own coordinates.
+  std::vector<uint32_t> mesh_first(scene.instanced_meshes.size() + 1, PC_INVALID);
+  std::vector<uint32_t> mesh_used;
+  for (const ShapeDesc* p : placements) {
+    if (mesh_first[p->instance_of] != PC_INVALID) continue;
+    const InstancedMesh& m = scene.instanced_meshes[p->instance_of];
+    mesh_first[p->instance_of] = uint32_t(prims.size());
+    mesh_used.push_back(p->instance_of);
+    std::vector<glm::vec3> positions(m.mesh.positions.begin(), m.mesh.positions.end());
+    add_triangles(*p, m.mesh, positions, m.triangle_materials);
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
 
   if (boxes.size() >= PC_BVH4_MAX_LEAF_FIRST)
     throw SceneError(scene.path + ": " + std::to_string(boxes.size()) + " primitives; at most " +
                      std::to_string(PC_BVH4_MAX_LEAF_FIRST - 1) + " are supported");
-  Bvh bvh = build_bvh(boxes);
-  auto collapse_start = std::chrono::steady_clock::now();
-  // Only the wide trees go to the device, each device taking the layout chosen for it (runtime/device.h).
-  Bvh4 wide = collapse_to_bvh4(bvh.nodes);
-  Bvh8 wide8 = collapse_to_bvh8(bvh.nodes);
-  bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
-  bvh.node_count = uint32_t(bvh.nodes.size());
-  out.bvh = bvh;
-  out.nodes = std::move(wide.nodes);
-  out.wide_depth = wide.depth;
-  out.nodes8 = std::move(wide8.nodes);
-  out.wide8_depth = wide8.depth;
-  out.prims.reserve(prims.size());
+  // One BVH over the rest of the scene, then one per instanced mesh, each over its range of primitives.
   out.leaf_slot.resize(prims.size());
-  for (uint32_t slot = 0; slot < prims.size(); ++slot) {
-    out.prims.push_back(prims[bvh.prim_order[slot]]);
-    out.leaf_slot[bvh.prim_order[slot]] = slot;
+  out.prims.reserve(prims.size());
+  TreeRoots world = append_tree(out, prims, boxes, 0, world_prims, &out.bvh);
+  std::vector<TreeRoots> mesh_tree(scene.instanced_meshes.size());
+  for (size_t i = 0; i < mesh_used.size(); ++i) {
+    uint32_t m = mesh_used[i];
+    uint32_t end = i + 1 < mesh_used.size() ? mesh_first[mesh_used[i + 1]] : uint32_t(prims.size());
+    BvhStats stats;
+    mesh_tree[m] = append_tree(out, prims, boxes, mesh_first[m], end, &stats);
+    out.bvh.build_ms += stats.build_ms;
   }
-  out.leaf_blocks = make_leaf_blocks(out.nodes8, out.prims);
+  // The instances: the rest of the scene (untransformed), then each placement, in the order of the
+  // instance BVH's leaves.
+  std::vector<Instance> items;
+  std::vector<Aabb> item_boxes;
+  if (world_prims > 0) {
+    Instance world_instance{};
+    world_instance.root4 = world.root4;
+    world_instance.root8 = world.root8;
+    world_instance.flags = PC_INSTANCE_IDENTITY;
+    items.push_back(world_instance);
+    item_boxes.push_back(world.box);
+  }
+  for (const ShapeDesc* p : placements) {
+    const TreeRoots& tree = mesh_tree[p->instance_of];
+    if (scene.instanced_meshes[p->instance_of].mesh.triangles.empty()) continue;  // nothing to place
+    glm::dmat4 to_device = glm::translate(glm::dmat4(1.0), -out.origin) * p->transform;
+    items.push_back(instance_of_transform(to_device, tree));
+    item_boxes.push_back(placed_box(tree.box, to_device));
+    out.instance_count++;
+    out.instanced_triangle_count += scene.instanced_meshes[p->instance_of].mesh.triangles.size();
+  }
+  if (out.instance_count > 0) out.features |= kFeatureInstances;
+  Bvh instance_bvh = build_bvh(item_boxes);
+  out.instance_bvh = std::move(instance_bvh.nodes);
+  for (uint32_t slot : instance_bvh.prim_order) out.instances.push_back(items[slot]);
   // Every light: area lights first, in primitive order, then point and spot lights, then the lights at
   // infinity (directional, environment). The first two kinds go into the light BVH with their bounds.
   std::vector<LightBounds> bounds;
@@ -367,14 +502,14 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   return out;
 }
 
-DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin) {
-  DeviceScene out = build_device_scene_without_texels(scene, origin);
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin, Instancing instancing) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing);
   for (const TextureImage& t : scene.textures) out.texels.insert(out.texels.end(), t.words.begin(), t.words.end());
   return out;
 }
 
-DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin) {
-  DeviceScene out = build_device_scene_without_texels(scene, origin);
+DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin, Instancing instancing) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing);
   if (scene.textures.size() == 1) {
     out.texels = std::move(scene.textures[0].words);
     scene.textures[0].words.clear();  // a moved-from vector is only valid; now it is empty

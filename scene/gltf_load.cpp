@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <filesystem>
 #include <set>
 
@@ -32,6 +33,7 @@ struct Reader {
   std::vector<std::string>& warnings;
   GltfScene scene;
   int default_material = -1;  // index into scene.materials of the glTF default material, once used
+  std::map<std::pair<int, size_t>, uint32_t> first_placement;  // (mesh, primitive) -> its first GltfPrimitive
 
   [[noreturn]] void fail(const std::string& what) const { throw SceneError(path + ": " + what); }
   void warn(const std::string& what) { warnings.push_back(path + ": " + what); }
@@ -248,6 +250,7 @@ std::vector<std::array<uint32_t, 3>> primitive_triangles(const Reader& r, int mo
   return tris;
 }
 
+// The primitive in its mesh's coordinates (the caller places it by `global`, the node's transform).
 void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& global, const std::string& where) {
   auto attribute = [&](const char* name) {
     auto it = p.attributes.find(name);
@@ -257,13 +260,13 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
   AccessorData positions = read_accessor(r, attribute("POSITION"), "POSITION of " + where, 3);
   GltfPrimitive out;
   out.where = r.path + ": " + where;
+  out.transform = global;
   PolygonSoup& soup = out.soup;
   for (size_t i = 0; i < positions.count; ++i) {
     glm::dvec3 pos(positions.get(i, 0), positions.get(i, 1), positions.get(i, 2));
-    glm::dvec3 world = glm::dvec3(global * glm::dvec4(pos, 1.0));
-    if (!std::isfinite(world.x) || !std::isfinite(world.y) || !std::isfinite(world.z))
-      r.fail(where + ": POSITION " + std::to_string(i) + " is not finite (after its node's transform)");
-    soup.positions.push_back(world);
+    if (!std::isfinite(pos.x) || !std::isfinite(pos.y) || !std::isfinite(pos.z))
+      r.fail(where + ": POSITION " + std::to_string(i) + " is not finite");
+    soup.positions.push_back(pos);
   }
   std::vector<uint32_t> indices;
   if (p.indices >= 0) {
@@ -290,10 +293,9 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
   if (attribute("NORMAL") >= 0) {
     AccessorData d = read_accessor(r, attribute("NORMAL"), "NORMAL of " + where, 3);
     if (d.count != positions.count) r.fail(where + ": NORMAL has " + std::to_string(d.count) + " elements, POSITION " + std::to_string(positions.count));
-    // Normals take the inverse transpose; normalized (and checked) after the shape's transform.
-    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(global)));
+    // Normalized (and checked) by clean-up; placed with the mesh.
     for (size_t i = 0; i < d.count; ++i) {
-      glm::dvec3 n = normal_matrix * glm::dvec3(d.get(i, 0), d.get(i, 1), d.get(i, 2));
+      glm::dvec3 n(d.get(i, 0), d.get(i, 1), d.get(i, 2));
       if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) n = glm::dvec3(0);
       normals.push_back(glm::vec3(n));
     }
@@ -308,11 +310,9 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
       uvs.push_back(glm::vec2(float(u), float(1 - v)));  // glTF's v runs down the image, pathcl's up
     }
   }
-  // A mirroring node transform turns counter-clockwise into clockwise (glTF 2.0, 3.7.2.1: the
-  // determinant of the global transform decides the winding).
-  const bool mirrored = glm::determinant(glm::dmat3(global)) < 0;
+  // (A mirroring node transform turns counter-clockwise into clockwise, glTF 2.0, 3.7.2.1: placing the
+  // mesh swaps the winding then, placed_mesh.)
   for (std::array<uint32_t, 3> t : triangles) {
-    if (mirrored) std::swap(t[1], t[2]);
     soup.polygons.push_back({t[0], t[1], t[2]});
     if (!normals.empty()) soup.normals.push_back({normals[t[0]], normals[t[1]], normals[t[2]]});
     if (!uvs.empty()) soup.uvs.push_back({uvs[t[0]], uvs[t[1]], uvs[t[2]]});
@@ -549,9 +549,21 @@ void read_node(Reader& r, int index, const glm::dmat4& parent, std::vector<bool>
       r.fail(where + ": mesh " + std::to_string(n.mesh) + " out of range (" + std::to_string(m.meshes.size()) + " meshes)");
     if (n.skin >= 0) r.warn(where + ": skins are not supported: the mesh is rendered in its bind pose");
     const tinygltf::Mesh& mesh = m.meshes[size_t(n.mesh)];
-    for (size_t p = 0; p < mesh.primitives.size(); ++p)
-      read_primitive(r, mesh.primitives[p], global,
-                     where + " meshes[" + std::to_string(n.mesh) + "].primitives[" + std::to_string(p) + "]");
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      const std::string primitive_where = where + " meshes[" + std::to_string(n.mesh) + "].primitives[" + std::to_string(p) + "]";
+      auto [first, is_first] = r.first_placement.try_emplace({n.mesh, p}, uint32_t(r.scene.primitives.size()));
+      if (is_first) {
+        read_primitive(r, mesh.primitives[p], global, primitive_where);
+        continue;
+      }
+      // Another node places the same mesh: its geometry is read once (GltfPrimitive::same_as).
+      GltfPrimitive again;
+      again.where = r.path + ": " + primitive_where;
+      again.transform = global;
+      again.same_as = first->second;
+      again.material = r.scene.primitives[first->second].material;
+      r.scene.primitives.push_back(std::move(again));
+    }
   }
   auto light = n.extensions.find("KHR_lights_punctual");
   if (light != n.extensions.end() && light->second.Has("light"))

@@ -43,10 +43,13 @@ struct GltfMaterial {
 // every byte of each texel, thresholded to 0 or 1 at cutoff when cutoff >= 0 (alphaMode MASK).
 TextureImage alpha_as_opacity(TextureImage image, float factor, float cutoff);
 
-// The triangles of one primitive of one mesh as one node places it (nodes sharing a mesh give copies).
+// The triangles of one primitive of one mesh as one node places it. Nodes that share a mesh share its
+// geometry: the first placement holds it, the others refer to it (same_as).
 struct GltfPrimitive {
   std::string where;   // "model.glb: nodes[3] meshes[1].primitives[0]"
-  PolygonSoup soup;    // positions and normals in the glTF scene's space, uvs with v up (pathcl's)
+  PolygonSoup soup;    // positions and normals in the mesh's coordinates, uvs with v up (pathcl's)
+  glm::dmat4 transform{1.0};  // the node's: from the mesh's coordinates to the glTF scene's
+  uint32_t same_as = PC_INVALID;  // another placement's index in GltfScene::primitives whose soup this is
   uint32_t material = 0;  // index into GltfScene::materials
 };
 

@@ -94,7 +94,23 @@ const char* sampler_name(uint32_t sampler);
 // at most 12 E^2, and 4 pi 12 E^2 stays below FLT_MAX for E = 1.5e18.
 constexpr double kMaxSceneExtent = 1.5e18;
 
-// One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space.
+// A mesh that several shapes place becomes an instanced mesh when the shapes ask for it ("instance":
+// true), or by default when its copies would hold at least this many triangles: below that, copies cost
+// little memory, and tracing them directly saves each ray the instance level.
+constexpr size_t kMinInstancedTriangles = 4096;
+
+// A mesh that several shapes place (instances): loaded and cleaned once, in its own coordinates, and
+// stored once on the device with a BVH of its own (kernels/intersect.cl, trace_instances).
+struct InstancedMesh {
+  std::string label;  // the first shape that places it, for messages and `pathcl info`
+  TriangleMesh mesh;  // in the mesh's own coordinates (positions in double like a shape's)
+  CleanReport clean;
+  // Per triangle the material index ("material": "from_mtl"); empty when all have the shapes' material.
+  std::vector<uint32_t> triangle_materials;
+};
+
+// One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space, or a
+// placement of an InstancedMesh.
 struct ShapeDesc {
   std::string label;  // "shapes[3] (meshes/box.obj)" for messages and `pathcl info`
   bool is_sphere = false;
@@ -111,7 +127,22 @@ struct ShapeDesc {
   // the emission; empty when every triangle has `material` and `emission`.
   std::vector<uint32_t> triangle_materials;
   std::vector<glm::vec3> triangle_emission;
+  // An instance: index into SceneDescription::instanced_meshes, placed in the world by `transform`
+  // (mesh, clean and the per-triangle vectors are then empty; an instance never emits). PC_INVALID for
+  // a shape that holds its own geometry.
+  uint32_t instance_of = 0xffffffffu;
+  glm::dmat4 transform{1.0};
 };
+
+struct SceneDescription;
+// A mesh's copy placed by a transform, in double: positions, normals (by the inverse transpose,
+// normalized) and, for a mirroring transform, the winding, so that the front stays the front.
+TriangleMesh placed_mesh(TriangleMesh mesh, const glm::dmat4& transform);
+// An instance as a shape of its own: its mesh placed in the world (placed_mesh), its per-triangle
+// materials; any other shape as it is.
+ShapeDesc flattened_shape(const SceneDescription& scene, const ShapeDesc& s);
+// The triangles a shape puts into the world (an instance's mesh's).
+size_t shape_triangle_count(const SceneDescription& scene, const ShapeDesc& s);
 
 inline uint32_t triangle_material(const ShapeDesc& s, size_t t) {
   return s.triangle_materials.empty() ? s.material : s.triangle_materials[t];
@@ -133,6 +164,7 @@ struct SceneDescription {
   std::vector<ShapeDesc> shapes;
   std::vector<LightDesc> lights;
   std::vector<TextureImage> textures;
+  std::vector<InstancedMesh> instanced_meshes;
   RenderSettings render;
   std::vector<std::string> warnings;  // things loading changed or ignored, each naming its place
 };

@@ -552,13 +552,16 @@ void check_inline_triangles(const Node& positions, const Node& indices, const No
   }
 }
 
+// The place of a shape's transform in messages (the shape itself when it has none).
+Node transform_node(const Node& n) { return n.has("transform") ? n.at("transform") : n; }
+
 // Applies a shape's transform to its soup, in double: positions, normals (by the inverse transpose) and,
 // for a mirroring transform, the winding.
 void place_soup(PolygonSoup& soup, const glm::dmat4& transform, const Node& n) {
   for (glm::dvec3& p : soup.positions) {
     p = glm::dvec3(transform * glm::dvec4(p, 1.0));
     if (!within_float_range(p))
-      (n.has("transform") ? n.at("transform") : n).fail("the transform takes a vertex to infinity");
+      transform_node(n).fail("the transform takes a vertex to infinity");
   }
   // Normals take the inverse transpose, so that they stay perpendicular to the surface under non-uniform
   // scale; normalized in double (clean_mesh normalizes again), a zero normal stays zero.
@@ -574,6 +577,22 @@ void place_soup(PolygonSoup& soup, const glm::dmat4& transform, const Node& n) {
     for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
     for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
     for (auto& normals : soup.normals) std::reverse(normals.begin(), normals.end());
+  }
+}
+
+// An instance's placement: the corners of its mesh's bounding box (which contain every placed vertex)
+// within float range.
+void check_placement(const TriangleMesh& mesh, const glm::dmat4& transform, const Node& n) {
+  if (mesh.positions.empty()) return;
+  glm::dvec3 lo = mesh.positions[0], hi = lo;
+  for (const glm::dvec3& p : mesh.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  for (int corner = 0; corner < 8; ++corner) {
+    glm::dvec3 c(corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z);
+    if (!within_float_range(glm::dvec3(transform * glm::dvec4(c, 1.0))))
+      transform_node(n).fail("the transform takes a vertex to infinity");
   }
 }
 
@@ -602,18 +621,33 @@ void add_mtl_materials(const ObjFile& obj, const std::vector<uint32_t>& used, Sc
   }
 }
 
-ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
-                     const std::map<std::string, uint32_t>& materials, SceneDescription& scene) {
+// The key under which shapes placing the same mesh are one instanced mesh: the shape's JSON without its
+// transform; "" for a shape that is never instanced (a sphere, a glTF file, an emitter).
+std::string instance_key(const Node& n) {
+  if (!n.value.is_object() || !n.has("type") || n.has("emission")) return "";
+  const auto& type = n.at("type").value;
+  if (type != "mesh" && type != "triangles") return "";
+  auto copy = n.value;
+  copy.erase("transform");
+  return copy.dump();
+}
+
+// A shape as the file describes it, placed by its transform; but a mesh that `placements` shapes place
+// and that is to be instanced (see load_scene) in its own coordinates, with its transform, and
+// *own_coordinates set.
+ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std::map<std::string, uint32_t>& materials,
+                     SceneDescription& scene, size_t placements, bool* own_coordinates) {
+  *own_coordinates = false;
   if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
   std::string type = n.at("type").string();
   ShapeDesc s;
   if (type == "mesh")
     n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth",
-                     "smooth_angle_degrees"},
+                     "smooth_angle_degrees", "instance"},
                     {"file", "material"});
   else if (type == "triangles")
     n.expect_object({"type", "positions", "indices", "uvs", "material", "emission", "two_sided", "transform",
-                     "orient", "smooth", "smooth_angle_degrees"},
+                     "orient", "smooth", "smooth_angle_degrees", "instance"},
                     {"positions", "indices", "material"});
   else if (type == "sphere")
     n.expect_object({"type", "center", "radius", "material", "emission", "two_sided", "transform",
@@ -633,6 +667,8 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     s.material = it->second;
   }
   if (n.has("emission")) s.emission = n.at("emission").light_color();
+  if (n.has("instance") && n.at("instance").boolean() && n.has("emission"))
+    n.at("instance").fail("an emitter is not instanced (lights are sampled in world coordinates)");
   if (n.has("two_sided")) s.two_sided = n.at("two_sided").boolean();
   glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
   s.label = n.path;
@@ -680,7 +716,19 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir,
     Node uvs = n.has("uvs") ? n.at("uvs") : n;
     check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
   }
-  place_soup(soup, transform, n);
+  bool emits_mtl = false;  // an MTL material with Ke on some face
+  for (uint32_t id : soup.materials) emits_mtl = emits_mtl || obj.materials[id].emission != glm::vec3(0);
+  if (n.has("instance") && n.at("instance").boolean() && emits_mtl)
+    n.at("instance").fail("the mesh emits (MTL Ke), and an emitter is not instanced (lights are sampled in world coordinates)");
+  const bool instance = placements > 1 && !n.has("emission") && !emits_mtl &&
+                        (n.has("instance") ? n.at("instance").boolean()
+                                           : placements * soup.polygons.size() >= kMinInstancedTriangles);
+  if (instance) {
+    s.transform = transform;  // cleaned in its own coordinates, to be instanced
+    *own_coordinates = true;
+  } else {
+    place_soup(soup, transform, n);  // cleaned in the world (a triangulation may depend on coordinates)
+  }
   CleanOptions options;
   if (n.has("orient")) options.orient = n.at("orient").boolean();
   if (n.has("smooth")) options.smooth_normals = n.at("smooth").boolean();
@@ -738,7 +786,7 @@ void check_light_reach(const SceneDescription& scene, const LightDesc& light, co
 // primitive that a node places (nodes sharing a mesh give copies), its materials and textures added to
 // the scene's, its KHR_lights_punctual lights to the scene's lights.
 void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescription& scene) {
-  n.expect_object({"type", "file", "transform"}, {"file"});
+  n.expect_object({"type", "file", "transform", "instance"}, {"file"});
   const std::string file = (dir / n.at("file").string()).string();
   GltfScene gltf;
   try {
@@ -754,6 +802,12 @@ void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescr
     const GltfImage& image = gltf.images[i];
     return [&image] { return image.file.empty() ? decode_texture_image(image.name, image.bytes) : load_texture_image(image.file); };
   };
+  // Per primitive whose geometry the file holds (same_as unset): how many nodes place it, and its
+  // instanced mesh where it has one (as for mesh shapes: asked for with "instance", or by default with
+  // at least kMinInstancedTriangles polygons in all its copies, never for an emitter).
+  std::vector<uint32_t> placements(gltf.primitives.size(), 0), instance_of(gltf.primitives.size(), PC_INVALID);
+  for (size_t i = 0; i < gltf.primitives.size(); ++i)
+    placements[gltf.primitives[i].same_as == PC_INVALID ? i : gltf.primitives[i].same_as]++;
   for (GltfPrimitive& p : gltf.primitives) {
     const GltfMaterial& gm = gltf.materials[p.material];
     if (scene_material[p.material] == PC_INVALID) {
@@ -779,13 +833,40 @@ void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescr
     s.material = scene_material[p.material];
     s.emission = gm.emission;
     s.two_sided = gm.two_sided;
-    if ((gm.color_image != PC_INVALID || gm.emission_image != PC_INVALID) && p.soup.uvs.empty())
-      n.fail(p.where + ": no TEXCOORD_0, but its material (" + gm.where + ") has a texture");
-    place_soup(p.soup, transform, n);
+    s.transform = transform * p.transform;
+    const uint32_t source = p.same_as == PC_INVALID ? uint32_t(&p - gltf.primitives.data()) : p.same_as;
+    const GltfPrimitive& g = gltf.primitives[source];
+    if ((gm.color_image != PC_INVALID || gm.emission_image != PC_INVALID) && g.soup.uvs.empty())
+      n.fail(g.where + ": no TEXCOORD_0, but its material (" + gm.where + ") has a texture");
+    const bool emits = gm.emission != glm::vec3(0);
+    const bool instance = placements[source] > 1 && !emits &&
+                          (n.has("instance") ? n.at("instance").boolean()
+                                             : placements[source] * g.soup.polygons.size() >= kMinInstancedTriangles);
+    if (instance) {
+      // Nodes sharing a mesh: one instanced mesh, cleaned in its own coordinates, placed by each.
+      if (instance_of[source] == PC_INVALID) {
+        InstancedMesh m{s.label, {}, {}, {}};
+        try {
+          m.mesh = clean_mesh(g.soup, CleanOptions{}, m.clean);
+        } catch (const SceneError& e) {
+          n.fail(g.where + ": " + e.what());
+        }
+        instance_of[source] = uint32_t(scene.instanced_meshes.size());
+        scene.instanced_meshes.push_back(std::move(m));
+      }
+      s.instance_of = instance_of[source];
+      check_placement(scene.instanced_meshes[s.instance_of].mesh, s.transform, n);
+      scene.shapes.push_back(std::move(s));
+      continue;
+    }
+    // A copy, placed and then cleaned in the world, as a mesh shape placed once.
+    PolygonSoup soup = placements[source] == 1 ? std::move(gltf.primitives[source].soup) : g.soup;
+    place_soup(soup, s.transform, n);
+    s.transform = glm::dmat4(1.0);
     try {
-      s.mesh = clean_mesh(p.soup, CleanOptions{}, s.clean);
+      s.mesh = clean_mesh(soup, CleanOptions{}, s.clean);
     } catch (const SceneError& e) {
-      n.fail(p.where + ": " + e.what());
+      n.fail(g.where + ": " + e.what());
     }
     if (gm.emission_image != PC_INVALID) {
       // Emission is constant per triangle on the device: each triangle takes the emissive texel at
@@ -958,11 +1039,45 @@ SceneDescription load_scene(const std::string& path) {
     by_name[name] = uint32_t(scene.materials.size());
     scene.materials.push_back(read_material(mats.at(name), name, scene, dir));
   }
+  // A mesh that several shapes place with the same settings (everything but the transform) becomes
+  // one instanced mesh, loaded once, when they ask for it ("instance": true) or, by default, when its
+  // copies would hold at least kMinInstancedTriangles polygons; never when it emits (lights are sampled
+  // in world coordinates). Otherwise each placement is a copy, loaded and cleaned in the world.
+  std::map<std::string, uint32_t> placements;
   for (const Node& s : top.at("shapes").array()) {
-    if (s.value.is_object() && s.has("type") && s.at("type").value == "gltf")
+    std::string key = instance_key(s);
+    if (!key.empty()) placements[key]++;
+  }
+  std::map<std::string, ShapeDesc> first_instance;  // per key: the first placement, without its mesh
+  for (const Node& s : top.at("shapes").array()) {
+    if (s.value.is_object() && s.has("type") && s.at("type").value == "gltf") {
       read_gltf_shape(s, dir, scene);
-    else
-      scene.shapes.push_back(read_shape(s, dir, by_name, scene));
+      continue;
+    }
+    std::string key = instance_key(s);
+    auto found = first_instance.find(key);
+    if (found != first_instance.end()) {
+      // A further placement: the settings are the first's (the same JSON), the label and transform its own.
+      ShapeDesc shape = found->second;
+      shape.label = s.path + (s.has("file") ? " (" + s.at("file").string() + ")" : "");
+      shape.transform = s.has("transform") ? read_transform(s.at("transform")) : glm::dmat4(1.0);
+      check_placement(scene.instanced_meshes[shape.instance_of].mesh, shape.transform, s);
+      scene.shapes.push_back(std::move(shape));
+      continue;
+    }
+    bool own_coordinates = false;
+    ShapeDesc shape = read_shape(s, dir, by_name, scene, key.empty() ? 1 : placements[key], &own_coordinates);
+    if (own_coordinates) {
+      check_placement(shape.mesh, shape.transform, s);
+      shape.instance_of = uint32_t(scene.instanced_meshes.size());
+      scene.instanced_meshes.push_back({shape.label, std::move(shape.mesh), shape.clean, std::move(shape.triangle_materials)});
+      shape.mesh = TriangleMesh{};
+      shape.clean = CleanReport{};
+      shape.triangle_materials.clear();
+      shape.triangle_emission.clear();  // all zero: an instanced mesh does not emit
+      first_instance.emplace(key, shape);
+    }
+    scene.shapes.push_back(std::move(shape));
   }
   if (top.has("lights")) {
     bool environment = false;

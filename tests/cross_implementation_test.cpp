@@ -55,9 +55,11 @@ std::string textured_scene() {
     "render": {"spp": 2, "max_depth": 5, "seed": 3}})");
 }
 
-// A copy of a bundled scene at another resolution.
-std::string resized(const std::string& bundled, int width, int height, int spp) {
-  std::string text = read_text_file(kScenes + "/" + bundled + ".json");
+// A copy of a bundled scene (or with `from`, another scene file whose meshes are the bundled ones) at
+// another resolution.
+std::string resized(const std::string& bundled, int width, int height, int spp, const std::string& from = "") {
+  std::string text = read_text_file(from.empty() ? kScenes + "/" + bundled + ".json" : from);
+  for (size_t at = 0; (at = text.find("\"../../scenes/meshes/", at)) != std::string::npos;) text.erase(at + 1, 13);
   auto replace = [&](const std::string& key, int value) {
     size_t at = text.find("\"" + key + "\":");
     size_t end = text.find_first_of(",}", at);
@@ -79,7 +81,9 @@ std::vector<Case> cases() {
           {"cornell box, halton", cornell, "--sampler halton"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
           {"glass and metal", resized("glass-metal", 16, 12, 2), ""},
-          {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""}};
+          {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},
+          {"instances: moved, scaled, mirrored, smooth, cut-out",
+           resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}};
 }
 
 struct Render {

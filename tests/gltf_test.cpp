@@ -129,11 +129,24 @@ json hierarchy_document(const QuadBuffer& q) {
 TEST(Gltf, HierarchyAndTransforms) {
   write_temp_file("hierarchy.gltf", hierarchy_document(quad_buffer()).dump());
   const std::string path = write_temp_file(
-      "hierarchy.json", scene_json(R"({"type": "gltf", "file": "hierarchy.gltf", "transform": {"translate": [10, 0, 0]}})"));
+      "hierarchy.json", scene_json(R"({"type": "gltf", "file": "hierarchy.gltf", "transform": {"translate": [10, 0, 0]}, "instance": true})"));
   SceneDescription scene = load_scene(path);
-  // Two nodes place mesh 0: two copies (no instancing yet).
+  // By default two small copies stay copies (scene_description.h, kMinInstancedTriangles).
+  SceneDescription copies = load_scene(write_temp_file(
+      "copies.json", scene_json(R"({"type": "gltf", "file": "hierarchy.gltf", "transform": {"translate": [10, 0, 0]}})")));
+  ASSERT_EQ(copies.shapes.size(), 2u);
+  EXPECT_TRUE(copies.instanced_meshes.empty());
+  EXPECT_EQ(copies.shapes[0].mesh.triangles.size(), 2u);
+  EXPECT_EQ(copies.shapes[1].mesh.positions, flattened_shape(scene, scene.shapes[1]).mesh.positions);
+  // Asked for, the two nodes placing mesh 0 make one instanced mesh, in its own coordinates, placed twice.
   ASSERT_EQ(scene.shapes.size(), 2u);
-  const TriangleMesh& child = scene.shapes[0].mesh;
+  ASSERT_EQ(scene.instanced_meshes.size(), 1u);
+  EXPECT_EQ(scene.shapes[0].instance_of, 0u);
+  EXPECT_EQ(scene.shapes[1].instance_of, 0u);
+  EXPECT_TRUE(scene.shapes[0].mesh.triangles.empty());
+  EXPECT_EQ(scene.instanced_meshes[0].mesh.triangles.size(), 2u);
+  const TriangleMesh child = flattened_shape(scene, scene.shapes[0]).mesh;
+  const TriangleMesh root = flattened_shape(scene, scene.shapes[1]).mesh;
   EXPECT_EQ(child.triangles.size(), 2u);
   // p -> child (z + 1) -> scale 2 -> rotate 90 degrees about y ((x, y, z) -> (z, y, -x)) -> translate
   // (1, 2, 3) -> the shape's translate (10, 0, 0).
@@ -145,7 +158,7 @@ TEST(Gltf, HierarchyAndTransforms) {
   };
   for (glm::dvec3 p : {glm::dvec3(0, 0, 0), glm::dvec3(1, 0, 0), glm::dvec3(1, 1, 0), glm::dvec3(0, 1, 0)}) {
     EXPECT_TRUE(has_position(child, placed(p))) << p.x << " " << p.y;
-    EXPECT_TRUE(has_position(scene.shapes[1].mesh, p + glm::dvec3(10, 0, 0))) << p.x << " " << p.y;
+    EXPECT_TRUE(has_position(root, p + glm::dvec3(10, 0, 0))) << p.x << " " << p.y;
   }
   // The normal +z turns with the rotation to +x; shading normals per corner.
   ASSERT_EQ(child.normals.size(), 2u);

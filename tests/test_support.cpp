@@ -72,7 +72,8 @@ std::string write_temp_png(const std::string& name, int width, int height, const
 }
 
 DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin) {
-  return build_device_scene(load_scene(path), origin);
+  // Around the world origin the scene is traced as ray files are: one flat tree (as `pathcl rays` does).
+  return build_device_scene(load_scene(path), origin, origin == DeviceOrigin::world ? Instancing::flatten : Instancing::keep);
 }
 
 std::string scene_load_error(const std::string& path) {

@@ -48,7 +48,8 @@ std::string write_temp_file(const std::string& name, const std::string& text);
 // rgb: 3 bytes a pixel, or 4 (RGBA).
 std::string write_temp_png(const std::string& name, int width, int height, const std::vector<unsigned char>& rgb);
 
-// Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise).
+// Loads and flattens a scene file (around the camera, as `pathcl render` does, unless told otherwise;
+// around the world origin with instances flattened, as `pathcl rays` does).
 DeviceScene load_device_scene(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera);
 
 // The message of the SceneError that loading the scene file `path` throws, or "" if it loads.

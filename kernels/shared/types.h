@@ -98,6 +98,32 @@ typedef struct {
   pc_uint pad;
 } LeafBlock;
 
+/* A node of a binary BVH flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4) = 32
+ * bytes. Interior node (prim_count == 0): the left child is the next node, the right child is left_first.
+ * Leaf: items [left_first, left_first + prim_count). The empty tree's root has neither. The host builds every BVH this way (scene/bvh_build.h); the device
+ * gets it only as the instance BVH (instance_bvh: items are instances), the others collapsed to wide nodes. */
+typedef struct {
+  float lo[3];
+  pc_uint left_first;
+  float hi[3];
+  pc_uint prim_count;
+} BvhNode;
+
+/* A placement of a mesh (PC_HAS_INSTANCES): the mesh's own BVH (its root in nodes and in nodes8, over its
+ * primitives, which are stored once in the mesh's coordinates) and the affine transforms between the
+ * mesh's and the device's coordinates as three rows (x, y, z, translation) each. Instance 0 is the rest of
+ * the scene, stored in device coordinates (PC_INSTANCE_IDENTITY: no transform is applied).
+ * to_device (3 x 16) + to_mesh (3 x 16) + root4 (4) + root8 (4) + flags (4) + pad (4) = 112 bytes. */
+#define PC_INSTANCE_IDENTITY 1u
+typedef struct {
+  pc_float4 to_device[3];
+  pc_float4 to_mesh[3];
+  pc_uint root4; /* the mesh's root node in nodes (4-wide layout) */
+  pc_uint root8; /* in nodes8 (8-wide layout) */
+  pc_uint flags; /* PC_INSTANCE_* */
+  pc_uint pad;
+} Instance;
+
 /* Geometry in BVH leaf order: 3 x 16 = 48 bytes.
  * Triangle: a, b, c are the vertices. Sphere: a.xyz is the centre, b.x the radius.
  * a.w holds the primitive index (bits of a uint) in scene order, b.w the kind (bits of a uint). */
@@ -268,12 +294,14 @@ typedef struct {
   X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading)  \
   X(pc_float4, normals) X(pc_float4, uvs) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
   X(Texture, textures) X(pc_uint, texels)                                                                      \
-  X(float, env_dist)
+  X(float, env_dist) X(Instance, instances) X(BvhNode, instance_bvh)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(LightBvhNode) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
+  X(BvhNode) X(Instance) X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(LightBvhNode) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
+  X(BvhNode, lo) X(BvhNode, left_first) X(BvhNode, hi) X(BvhNode, prim_count) X(Instance, to_device) X(Instance, to_mesh) \
+  X(Instance, root4) X(Instance, root8) X(Instance, flags) \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
   X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(LeafBlock, ax) \
@@ -293,6 +321,8 @@ typedef struct {
   X(RayRecord, dir) X(RayRecord, tmax) X(HitRecord, t) X(HitRecord, prim) X(HitRecord, u) X(HitRecord, v)
 
 #ifndef __OPENCL_VERSION__
+static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
+static_assert(sizeof(Instance) == 112, "Instance is 112 bytes");
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
 static_assert(sizeof(Bvh8Node) == 224, "Bvh8Node is 224 bytes");
 static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
