@@ -594,6 +594,18 @@ bool is_gltf_file(const std::string& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
+// Refuses a file whose extensionsRequired names an extension pathcl does not read, before tinygltf reads
+// the rest: such files may be invalid without the extension (KHR_draco_mesh_compression's accessors have no
+// buffer view, which tinygltf reports as "accessor[0] invalid bufferView"; assimp-testmodels' draco/).
+void check_required_extensions(const std::string& path, const nlohmann::json& doc) {
+  if (!doc.is_object() || !doc.contains("extensionsRequired") || !doc["extensionsRequired"].is_array()) return;
+  for (const nlohmann::json& e : doc["extensionsRequired"])
+    if (e.is_string() && !kSupportedExtensions.count(e.get<std::string>()))
+      throw SceneError(path + ": requires the extension " + e.get<std::string>() +
+                       ", which pathcl does not support (it reads KHR_lights_punctual, "
+                       "KHR_materials_emissive_strength, KHR_materials_transmission and KHR_materials_ior)");
+}
+
 GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings) {
   const std::string bytes = read_input_file(path, kMeshInput);
   const std::string dir = std::filesystem::path(path).parent_path().string();
@@ -604,6 +616,9 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
   bool ok;
   if (bytes.rfind("glTF", 0) == 0) {
     check_glb_header(path, bytes);
+    const std::string json_chunk = bytes.substr(20, read_u32(bytes, 12));
+    nlohmann::json doc = nlohmann::json::parse(json_chunk, nullptr, false);  // malformed: tinygltf says why
+    if (!doc.is_discarded()) check_required_extensions(path, doc);
     ok = loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
                                      unsigned(bytes.size()), dir);
   } else {
@@ -618,6 +633,7 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
     } catch (const nlohmann::json::exception& e) {
       throw SceneError(malformed_json_message(path, e.what()));
     }
+    check_required_extensions(path, doc);
     if (doc.is_object() && doc.contains("buffers") && doc["buffers"].is_array())
       for (size_t i = 0; i < doc["buffers"].size(); ++i) {
         const nlohmann::json& b = doc["buffers"][i];
@@ -635,10 +651,6 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
   }
   if (!ok) throw SceneError(path + ": " + (err.empty() ? "tinygltf cannot read the file" : one_line(err)));
   Reader r{path, model, warnings, {}};
-  for (const std::string& e : model.extensionsRequired)
-    if (!kSupportedExtensions.count(e))
-      r.fail("requires the extension " + e + ", which pathcl does not support (it reads KHR_lights_punctual, "
-             "KHR_materials_emissive_strength, KHR_materials_transmission and KHR_materials_ior)");
   std::string ignored;
   for (const std::string& e : model.extensionsUsed)
     if (!kSupportedExtensions.count(e)) ignored += (ignored.empty() ? "" : ", ") + e;

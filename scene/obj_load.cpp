@@ -86,6 +86,9 @@ void check_obj_content(const std::string& path, const std::string& head) {
   size_t first = head.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && head[first] == '{')
     throw SceneError(path + ": looks like JSON (a glTF mesh or a scene file?), expected " + kMeshInput.expected);
+  // UTF-16 text (an exporter's "Unicode"; assimp-testmodels' box_UTF16BE.obj): by its byte order mark.
+  if (head.rfind("\xfe\xff", 0) == 0 || head.rfind("\xff\xfe", 0) == 0)
+    throw SceneError(path + ": the file is UTF-16 text, expected an OBJ file in ASCII or UTF-8 (convert it, e.g. with iconv)");
   // Control characters other than white space do not occur in text.
   for (unsigned char c : head)
     if (c < 0x20 && c != '\t' && c != '\n' && c != '\v' && c != '\f' && c != '\r')

@@ -9,6 +9,7 @@
 // read (the vertices, the faces) when it failed.
 #include "scene/ply_stl_off_load.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -114,6 +115,18 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
   check_ply_properties_follow_an_element(path);
   CGAL::IO::internal::PLY_reader reader(false);
   if (!reader.init(in)) throw SceneError(path + ": not a PLY file (its header cannot be read)");
+
+  // A file whose header has no faces is a point cloud (a scan's raw points, as most scan collections also
+  // ship): say so before reading its body, whatever the body holds.
+  std::size_t header_vertices = 0, header_faces = 0;
+  for (std::size_t e = 0; e < reader.number_of_elements(); ++e) {
+    const std::string& name = reader.element(e).name();
+    if (name == "vertex" || name == "vertices") header_vertices += reader.element(e).number_of_items();
+    if (name == "face" || name == "faces") header_faces += reader.element(e).number_of_items();
+  }
+  if (header_faces == 0)
+    throw SceneError(path + ": no faces (" + std::to_string(header_vertices) +
+                     " vertices: a point cloud? pathcl renders surfaces)");
 
   PolygonSoup soup;
   std::vector<glm::vec3> vertex_normals;
@@ -232,11 +245,12 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
 }
 
 // A binary STL file is an 80-byte header, a triangle count and 50 bytes per triangle: a file of another
-// length that does not begin as ASCII STL does ("solid ") is truncated (CGAL would try it as ASCII and
+// length that does not begin as ASCII STL does ("solid" and white space: a blank, a tab as in
+// assimp-testmodels' sphereWithHole.stl, or the line's end) is truncated (CGAL would try it as ASCII and
 // report only that it failed).
 void check_binary_stl_size(const std::string& path, const std::string& head) {
   const std::uintmax_t size = std::filesystem::file_size(path);
-  if (head.rfind("solid", 0) == 0 && head.size() > 5 && (head[5] == ' ' || head[5] == '\n' || head[5] == '\r')) return;
+  if (head.rfind("solid", 0) == 0 && head.size() > 5 && std::isspace(static_cast<unsigned char>(head[5]))) return;
   if (size < 84)
     throw SceneError(path + ": truncated STL file (" + std::to_string(size) +
                      " bytes, less than the 84 of a binary STL header)");
@@ -250,8 +264,20 @@ void check_binary_stl_size(const std::string& path, const std::string& head) {
 
 PolygonSoup load_stl(const std::string& path, const std::string& head) {
   check_binary_stl_size(path, head);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot open the mesh file");
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw SceneError(path + ": cannot open the mesh file");
+  // CGAL 5.5 takes a file for ASCII only when "solid" is followed by a blank or a line end, and reads any
+  // other as binary without checking its size: "solid\tname" (assimp-testmodels' sphereWithHole.stl)
+  // gave a garbage mesh. The same text with a blank there is what the file means.
+  std::istringstream retyped;
+  std::istream* stream = &file;
+  if (head.rfind("solid", 0) == 0 && head.size() > 5 && head[5] != ' ' && head[5] != '\n' && head[5] != '\r') {
+    std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    text[5] = ' ';
+    retyped.str(std::move(text));
+    stream = &retyped;
+  }
+  std::istream& in = *stream;
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> triangles;
   if (!CGAL::IO::read_STL(in, points, triangles, CGAL::parameters::verbose(false)))

@@ -51,6 +51,54 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
   EXPECT_EQ(run_pathcl("frobnicate"), 2);
 }
 
+// The bad files issue 16 lists, each written here: `pathcl render` names the file and what is wrong, exits
+// with status 2 and writes nothing.
+TEST(Cli, BadMeshGltfAndImageFilesExitWithTwoAndNameTheFile) {
+  auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  std::string doc = R"({"asset": {"version": "2.0"}})";
+  while (doc.size() % 4) doc += ' ';
+  const std::string glb = "glTF" + u32(2) + u32(uint32_t(20 + doc.size())) + u32(uint32_t(doc.size())) + "JSON" + doc;
+  const std::string lfs = "version https://git-lfs.github.com/spec/v1\noid sha256:0123\nsize 4096\n";
+  const std::string camera = R"("camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "width": 8, "height": 8})";
+  auto mesh_scene = [&](const std::string& file) {
+    return "{" + camera + R"(, "materials": {"m": {"type": "diffuse"}}, "shapes": [{"type": "mesh", "file": ")" + file +
+           R"(", "material": "m"}]})";
+  };
+  auto gltf_scene = [&](const std::string& file) {
+    return "{" + camera + R"(, "materials": {}, "shapes": [{"type": "gltf", "file": ")" + file + R"("}]})";
+  };
+  auto texture_scene = [&](const std::string& file) {
+    return "{" + camera + R"(, "materials": {"m": {"type": "diffuse", "reflectance": {"texture": ")" + file +
+           R"("}}}, "shapes": [{"type": "triangles", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+           "indices": [[0, 1, 2]], "uvs": [[0, 0], [1, 0], [0, 1]]}]})";
+  };
+  struct Case {
+    std::string file, content, scene, message;
+  } cases[] = {
+      {"points.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n",
+       mesh_scene("points.ply"), "no faces (1 vertices: a point cloud? pathcl renders surfaces)"},
+      {"truncated.glb", glb.substr(0, 24), gltf_scene("truncated.glb"),
+       "truncated GLB file: its header says " + std::to_string(glb.size()) + " bytes, but the file has 24"},
+      {"draco.gltf", R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_draco_mesh_compression"],
+                       "extensionsRequired": ["KHR_draco_mesh_compression"]})",
+       gltf_scene("draco.gltf"), "requires the extension KHR_draco_mesh_compression, which pathcl does not support"},
+      {"scan.tif", std::string("MM\x00*", 4), texture_scene("scan.tif"), "TIFF images are not supported"},
+      {"notes.png", "these are not pixels", texture_scene("notes.png"), "unrecognised image format"},
+      {"bunny.ply", lfs, mesh_scene("bunny.ply"), "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+      {"bunny.obj", lfs, mesh_scene("bunny.obj"), "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+      {"lantern.glb", lfs, gltf_scene("lantern.glb"), "looks like a Git LFS pointer, not a mesh (run git lfs pull)"},
+  };
+  for (const Case& c : cases) {
+    const std::string file = write_temp_file("bad-files/" + c.file, c.content);
+    const std::string scene = write_temp_file("bad-files/" + c.file + ".json", c.scene);
+    const std::string out = temp_dir() + "/bad-file.exr";
+    std::string err;
+    EXPECT_EQ(run_pathcl("render " + scene + " -o " + out, &err), 2) << c.file << "\n" << err;
+    EXPECT_NE(err.find(file + ": " + c.message), std::string::npos) << c.file << "\n" << err;
+    EXPECT_FALSE(fs::exists(out)) << c.file;
+  }
+}
+
 TEST(Cli, RenderWritesExrPngAndStats) {
   std::string out = temp_dir() + "/tiny.exr", png = temp_dir() + "/tiny.png", stats = temp_dir() + "/tiny.json";
   std::string err;
