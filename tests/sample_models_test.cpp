@@ -514,8 +514,11 @@ void expect_gltf_scene(const std::string& file, const SceneDescription& scene) {
   ASSERT_FALSE(placed.empty());
   EXPECT_EQ(scene.shapes.size(), placed.size());
   for (const Placed& p : placed) {
-    const ShapeDesc* s = shape_of(scene, p.node, p.primitive);
-    ASSERT_NE(s, nullptr) << "nodes[" << p.node << "] primitives[" << p.primitive << "]";
+    const ShapeDesc* placed_shape = shape_of(scene, p.node, p.primitive);
+    ASSERT_NE(placed_shape, nullptr) << "nodes[" << p.node << "] primitives[" << p.primitive << "]";
+    // An instance as its placed copy: the instanced mesh's clean-up and triangles, placed by the shape.
+    const ShapeDesc flat = flattened_shape(scene, *placed_shape);
+    const ShapeDesc* s = &flat;
     ASSERT_EQ(p.prim->value("mode", 4), 4);
     const json& position = g.doc["accessors"][(*p.prim)["attributes"]["POSITION"].get<size_t>()];
     const size_t corners = p.prim->contains("indices") ? g.doc["accessors"][(*p.prim)["indices"].get<size_t>()]["count"].get<size_t>()
@@ -602,6 +605,17 @@ TEST(SampleModels, GltfEngineNodeHierarchyPlacesEveryPrimitive) {
   std::set<uint32_t> pathcl_materials;
   for (const ShapeDesc& s : scene.shapes) pathcl_materials.insert(s.material);
   EXPECT_EQ(pathcl_materials.size(), used.size());
+  // Instances: every primitive that several nodes place, with at least kMinInstancedTriangles triangles
+  // in all its copies, is one instanced mesh (the engine's materials emit nothing).
+  std::map<const json*, size_t> placements;
+  for (const Placed& p : placed_primitives(g.doc)) placements[p.prim]++;
+  size_t expected = 0;
+  for (const auto& [prim, count] : placements) {
+    const size_t triangles = g.doc["accessors"][(*prim)["indices"].get<size_t>()]["count"].get<size_t>() / 3;
+    expected += count > 1 && count * triangles >= kMinInstancedTriangles ? 1 : 0;
+  }
+  EXPECT_GT(expected, 0u);
+  EXPECT_EQ(scene.instanced_meshes.size(), expected);
 }
 
 // Cameras.gltf: the first camera (perspective, yfov 0.7) of the node at (0.5, 0.5, 3) looking along -z;
