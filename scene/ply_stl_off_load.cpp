@@ -13,6 +13,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <new>
 #include <sstream>
 #include <stdexcept>
@@ -266,6 +268,44 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
   return soup;
 }
 
+// Each face's vertex count of a binary OFF file, which CGAL 5.5 resizes the face to before reading it, as it
+// does in ASCII files: a count of 10^9 (a float's bits read as the count) asked for 8.5 GB (fuzz_obj_clean,
+// out of memory). The file is walked as CGAL's read_OFF reads it: after the line with BINARY, big-endian
+// int32 counts (a dimension first for nOFF), then per vertex 3 float32 coordinates (4 for 4OFF) and as many
+// for the normal (NOFF), then per face its vertex count and indices (CGAL reads no colour count after
+// them). Colours and texture coordinates are refused as in ASCII files. `in` stands after "BINARY".
+void check_binary_off_faces(const std::string& path, const std::string& keyword, std::istream& in) {
+  const std::string prefix = keyword.substr(0, keyword.size() - 3);
+  if (prefix.find("ST") != std::string::npos || prefix.find('C') != std::string::npos)
+    throw SceneError(path + ": " + keyword + " BINARY: texture coordinates and colours in OFF files are not "
+                     "supported (CGAL's OFF reader misreads them); write the mesh as PLY or OBJ");
+  char c = 0;
+  if (in.get(c) && c != '\n') in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+  const std::string data(std::istreambuf_iterator<char>(in), {});
+  size_t at = 0;
+  auto int32 = [&](int64_t& v) {
+    if (at + 4 > data.size()) return false;
+    uint32_t u = 0;
+    for (int i = 0; i < 4; ++i) u = u << 8 | static_cast<unsigned char>(data[at + i]);
+    at += 4;
+    v = int32_t(u);
+    return true;
+  };
+  int64_t vertices = 0, faces = 0, edges = 0, dimension = 0;
+  if (prefix.find('n') != std::string::npos && !int32(dimension)) return;
+  if (!int32(vertices) || !int32(faces) || !int32(edges) || vertices < 0 || faces < 0) return;  // CGAL refuses it
+  const bool homogeneous = prefix.find('4') != std::string::npos, normals = prefix.find('N') != std::string::npos;
+  const uint64_t vertex_bytes = 4 * (3 + homogeneous) * (1 + normals);
+  if (uint64_t(vertices) > data.size() / vertex_bytes) return;  // truncated: CGAL fails reading the vertices
+  at += size_t(vertices) * vertex_bytes;
+  for (int64_t f = 0, count = 0; f < faces && int32(count); ++f) {
+    if (count < 0 || count > 255)
+      throw SceneError(path + ": face " + std::to_string(f) + " has " + std::to_string(count) +
+                       " vertices, more than the 255 pathcl reads (or a garbled binary OFF file)");
+    at += size_t(4 * count);
+  }
+}
+
 // The counts of an ASCII OFF header, checked before CGAL reads them: its header reader converts
 // (vertices + faces) * 2.1 to int with no range check (UBSan in File_header_OFF_impl.h, found by
 // fuzz_obj_clean with a count of -2147483). Every vertex and face takes at least 2 bytes ("0\n"), every
@@ -283,7 +323,10 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   std::string keyword, token;
   if (!next(keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
   if (!next(token)) return;
-  if (token == "BINARY") return;
+  if (token == "BINARY") {
+    check_binary_off_faces(path, keyword, in);
+    return;
+  }
   // CGAL 5.5's ASCII scanner reads texture coordinates and colours by indices it computes from each line
   // without checking them: for "ST" it uses uninitialised colour bookkeeping (ASan: SEGV in scan_texture),
   // and with "C" a short line reads out of bounds (fuzz_obj_clean, scan_color). Until a reader that

@@ -1376,6 +1376,14 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       // fuzz_obj_clean: CGAL sizes a face by its count before reading it.
       {"huge-face.off", "OFF\n3 1 0\n0 0 0\n# a comment\n1 0 0\n0 1 0\n99999999999 0 1 2\n",
        "face 0 has 99999999999 vertices, more than the 255 pathcl reads (or a garbled OFF file)"},
+      // fuzz_obj_clean: the same in a binary file, the bits of a float 1.0 read as a face's vertex count
+      // (CGAL asked for 8.5 GB).
+      {"huge-face-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') +
+                                   std::string("\x3f\x80\0\0", 4) + std::string(12, '\0'),
+       "face 0 has 1065353216 vertices, more than the 255 pathcl reads (or a garbled binary OFF file)"},
+      {"colours-binary.off", std::string("COFF BINARY\n\0\0\0\0\0\0\0\0\0\0\0\0", 24),
+       "COFF BINARY: texture coordinates and colours in OFF files are not supported (CGAL's OFF reader misreads "
+       "them); write the mesh as PLY or OBJ"},
   };
   for (const Case& c : cases) {
     std::string mesh = write_temp_file("bad-formats/" + c.file, c.content);
