@@ -174,6 +174,12 @@ TEST(FuzzRegression, TruncatedTgaIsRejected) {
                                                      "texels take at least 1179756 bytes, the file has 19"),
               std::string::npos)
         << texture_outcome(path, in_memory);
+  // The same with a header cut short (17 bytes, stb_image reads the missing ones as zeros).
+  const std::string short_header = regressions() + "/texture-tga-short-header.tga";
+  for (bool in_memory : {false, true})
+    EXPECT_NE(texture_outcome(short_header, in_memory).find("truncated TGA image: its 93621960 texels take at least 93621960 bytes, the file has 17"),
+              std::string::npos)
+        << texture_outcome(short_header, in_memory);
 }
 
 // stb_image 2.27 looped forever on a Radiance HDR RLE packet of length 0 (fuzz_texture, a timeout).
