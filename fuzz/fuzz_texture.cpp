@@ -2,8 +2,8 @@
 // PNG, JPEG, BMP, TGA and Radiance HDR, OpenEXR for .exr) and the texel accessors the scene builder uses.
 // The first input byte selects how (bits 0 to 2: the file's extension, which only TGA's detection and
 // the messages depend on: .png .jpg .bmp .tga .hdr .exr .gif .img; bit 3: decode the bytes in memory,
-// as for an image embedded in a glTF file, instead of reading the file); the seeds begin with '0' to '5'
-// (a file of that extension) and '8' to '<' (the same in memory). The rest is the image. Bad input must
+// as for an image embedded in a glTF file, instead of reading the file); the seeds begin with '0' to '7'
+// (a file of that extension) and '8' to '?' (the same in memory). The rest is the image. Bad input must
 // end in SceneError; any other exception, crash, sanitizer report or broken invariant below is a bug.
 // Run by scripts/fuzz.
 #include <cmath>
