@@ -298,11 +298,19 @@ void check_binary_off_faces(const std::string& path, const std::string& keyword,
   const uint64_t vertex_bytes = 4 * (3 + homogeneous) * (1 + normals);
   if (uint64_t(vertices) > data.size() / vertex_bytes) return;  // truncated: CGAL fails reading the vertices
   at += size_t(vertices) * vertex_bytes;
-  for (int64_t f = 0, count = 0; f < faces && int32(count); ++f) {
+  for (int64_t f = 0, count = 0; f < faces; ++f) {
+    // CGAL takes a count cut short by the end of the file as a count (fuzz_obj_clean: 3 bytes of text read
+    // as 1886547712 vertices), and reads no further once the stream has failed only if it is not at its end.
+    auto truncated = [&] {
+      return SceneError(path + ": truncated binary OFF file: face " + std::to_string(f) + " of " +
+                        std::to_string(faces) + " is cut short");
+    };
+    if (!int32(count)) throw truncated();
     if (count < 0 || count > 255)
       throw SceneError(path + ": face " + std::to_string(f) + " has " + std::to_string(count) +
                        " vertices, more than the 255 pathcl reads (or a garbled binary OFF file)");
     at += size_t(4 * count);
+    if (at > data.size()) throw truncated();
   }
 }
 

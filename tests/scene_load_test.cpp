@@ -1381,6 +1381,9 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       {"huge-face-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') +
                                    std::string("\x3f\x80\0\0", 4) + std::string(12, '\0'),
        "face 0 has 1065353216 vertices, more than the 255 pathcl reads (or a garbled binary OFF file)"},
+      // fuzz_obj_clean: a face count cut short by the end of the file, which CGAL took as a count.
+      {"short-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') + "pro",
+       "truncated binary OFF file: face 0 of 1 is cut short"},
       {"colours-binary.off", std::string("COFF BINARY\n\0\0\0\0\0\0\0\0\0\0\0\0", 24),
        "COFF BINARY: texture coordinates and colours in OFF files are not supported (CGAL's OFF reader misreads "
        "them); write the mesh as PLY or OBJ"},
