@@ -1384,6 +1384,10 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       // fuzz_obj_clean: a face count cut short by the end of the file, which CGAL took as a count.
       {"short-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') + "pro",
        "truncated binary OFF file: face 0 of 1 is cut short"},
+      // fuzz_obj_clean: CGAL doubles the count of edges as an int, unchecked.
+      {"edges-binary.off", std::string("OFF BINARY\n\0\0\0\0\0\0\0\0nan\0", 23) + std::string(16, '\0'),
+       "truncated or garbled OFF file: its header's count of edges is 1851878912, not a number up to what the 28 "
+       "bytes after its binary header hold"},
       {"colours-binary.off", std::string("COFF BINARY\n\0\0\0\0\0\0\0\0\0\0\0\0", 24),
        "COFF BINARY: texture coordinates and colours in OFF files are not supported (CGAL's OFF reader misreads "
        "them); write the mesh as PLY or OBJ"},
