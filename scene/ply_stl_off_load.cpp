@@ -10,6 +10,7 @@
 #include "scene/ply_stl_off_load.h"
 
 #include <cmath>
+#include <cctype>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include <new>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/OFF.h>
@@ -273,14 +275,12 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
 // out of memory). The file is walked as CGAL's read_OFF reads it: after the line with BINARY, big-endian
 // int32 counts (a dimension first for nOFF), then per vertex 3 float32 coordinates (4 for 4OFF) and as many
 // for the normal (NOFF), then per face its vertex count and indices (CGAL reads no colour count after
-// them). Colours and texture coordinates are refused as in ASCII files. `in` stands after "BINARY".
+// them). Colours and texture coordinates are refused as in ASCII files. `in` stands after BINARY's line.
 void check_binary_off_faces(const std::string& path, const std::string& keyword, std::istream& in) {
   const std::string prefix = keyword.substr(0, keyword.size() - 3);
   if (prefix.find("ST") != std::string::npos || prefix.find('C') != std::string::npos)
     throw SceneError(path + ": " + keyword + " BINARY: texture coordinates and colours in OFF files are not "
                      "supported (CGAL's OFF reader misreads them); write the mesh as PLY or OBJ");
-  char c = 0;
-  if (in.get(c) && c != '\n') in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
   const std::string data(std::istreambuf_iterator<char>(in), {});
   size_t at = 0;
   auto int32 = [&](int64_t& v) {
@@ -338,13 +338,32 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
     }
     return false;
   };
-  std::string keyword, token;
-  if (!next(keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
-  if (!next(token)) return;
-  if (token == "BINARY") {
+  // The keyword as CGAL's File_header_OFF reads it: after blank space and '#' comment lines, letters and
+  // digits, the character after them taken with them ("OFF." is OFF: fuzz_obj_clean found binary files so
+  // named past these checks); then a count, or BINARY and the rest of its line.
+  const auto line_end = [&] { in.ignore(std::numeric_limits<std::streamsize>::max(), '\n'); };
+  auto word = [&](char c) {
+    std::string w(1, c);
+    while (in.get(c) && std::isalnum(static_cast<unsigned char>(c))) w += c;
+    return std::make_pair(w, c);
+  };
+  char c = 0;
+  while (in >> c && c == '#') line_end();
+  if (!in) return;
+  const std::string keyword = word(c).first;
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  while (in >> c && c == '#') line_end();
+  if (!in) return;
+  if (!std::isdigit(static_cast<unsigned char>(c))) {
+    const auto [binary, after] = word(c);
+    if (binary != "BINARY") return;  // CGAL refuses it
+    if (after != '\n') line_end();
     check_binary_off_faces(path, keyword, in);
     return;
   }
+  in.putback(c);
+  std::string token;
+  if (!next(token)) return;
   // CGAL 5.5's ASCII scanner reads texture coordinates and colours by indices it computes from each line
   // without checking them: for "ST" it uses uninitialised colour bookkeeping (ASan: SEGV in scan_texture),
   // and with "C" a short line reads out of bounds (fuzz_obj_clean, scan_color). Until a reader that

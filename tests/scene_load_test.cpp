@@ -1388,6 +1388,12 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       {"edges-binary.off", std::string("OFF BINARY\n\0\0\0\0\0\0\0\0nan\0", 23) + std::string(16, '\0'),
        "truncated or garbled OFF file: its header's count of edges is 1851878912, not a number up to what the 28 "
        "bytes after its binary header hold"},
+      // fuzz_obj_clean: CGAL reads "OFF." as the keyword OFF (letters and digits, then one character).
+      {"dot-binary.off", std::string("OFF.  BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 25) + std::string(36, '\0') +
+                             std::string("\x3f\x80\0\0", 4) + std::string(12, '\0'),
+       "face 0 has 1065353216 vertices, more than the 255 pathcl reads (or a garbled binary OFF file)"},
+      {"dot-ascii.off", "OFF. 3 1 -2147483\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "truncated or garbled OFF file: its header's count of edges is -2147483, not a number up to what a file of 44 bytes holds"},
       {"colours-binary.off", std::string("COFF BINARY\n\0\0\0\0\0\0\0\0\0\0\0\0", 24),
        "COFF BINARY: texture coordinates and colours in OFF files are not supported (CGAL's OFF reader misreads "
        "them); write the mesh as PLY or OBJ"},
