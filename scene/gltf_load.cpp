@@ -303,8 +303,13 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
   for (size_t i = 0; i < positions.count; ++i) {
     glm::dvec3 pos(positions.get(i, 0), positions.get(i, 1), positions.get(i, 2));
     glm::dvec3 world = glm::dvec3(global * glm::dvec4(pos, 1.0));
-    if (!std::isfinite(world.x) || !std::isfinite(world.y) || !std::isfinite(world.z))
-      r.fail(where + ": POSITION " + std::to_string(i) + " is not finite (after its node's transform)");
+    // Within float range as well, as the JSON loader asks of positions: a node's scale of 1e300 kept
+    // positions finite in double, and CGAL's clean-up overflowed on them (see ply_stl_off_load.cpp).
+    const double m = 3.4028234663852886e38;
+    if (!std::isfinite(world.x) || !std::isfinite(world.y) || !std::isfinite(world.z) || std::abs(world.x) > m ||
+        std::abs(world.y) > m || std::abs(world.z) > m)
+      r.fail(where + ": POSITION " + std::to_string(i) +
+             " is not finite or beyond float range (after its node's transform)");
     soup.positions.push_back(world);
   }
   std::vector<uint32_t> indices;

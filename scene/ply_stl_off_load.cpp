@@ -84,14 +84,23 @@ bool read_ply_item(std::istream& in, PlyElement& element) {
 
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
-// CGAL's points as the soup's positions; throws for one that is not finite.
+// A position pathcl can hold: finite and within float range, as the JSON loader asks of its positions
+// (PLY doubles of 1e300 are finite, but CGAL's clean-up overflows on them to infinity and GMP raised
+// SIGFPE converting it: fuzz_obj_clean).
+bool position_in_range(const glm::dvec3& p) {
+  const double m = 3.4028234663852886e38;
+  return finite(p) && std::abs(p.x) <= m && std::abs(p.y) <= m && std::abs(p.z) <= m;
+}
+
+// CGAL's points as the soup's positions; throws for one that is not finite or beyond float range.
 std::vector<glm::dvec3> finite_positions(const std::string& path, const std::vector<Point>& points) {
   std::vector<glm::dvec3> positions;
   positions.reserve(points.size());
   for (const Point& p : points) {
     positions.push_back({p.x(), p.y(), p.z()});
-    if (!finite(positions.back()))
-      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) + ": coordinate is not finite");
+    if (!position_in_range(positions.back()))
+      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) +
+                       ": coordinate is not finite or beyond float range");
   }
   return positions;
 }
@@ -143,7 +152,8 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
                            " of " + items);
         glm::dvec3 p;
         ply_number(element, "x", p.x), ply_number(element, "y", p.y), ply_number(element, "z", p.z);
-        if (!finite(p)) throw SceneError(path + ": vertex " + std::to_string(j) + ": coordinate is not finite");
+        if (!position_in_range(p))
+          throw SceneError(path + ": vertex " + std::to_string(j) + ": coordinate is not finite or beyond float range");
         soup.positions.push_back(p);
         if (normals) {
           glm::dvec3 n;

@@ -1362,6 +1362,10 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
        "face 0: vertex index 7 out of range (3 vertices before the faces)"},
       {"not.ply", "PLY?\n", "not a PLY file (its header cannot be read)"},
+      // fuzz_obj_clean: doubles beyond float range overflowed to infinity in CGAL's clean-up (GMP: SIGFPE).
+      {"huge.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1e300 0 0\n0 1 0\n3 0 1 2\n",
+       "vertex 1: coordinate is not finite or beyond float range"},
       // fuzz_obj_clean: CGAL's reader adds a property to the last element without checking there is one.
       {"property-first.ply", "ply\nformat ascii 1 float x\nproperty float y\nelement face 1\nend_header\n",
        "line 3: a property before any element (a garbled PLY header)"},
