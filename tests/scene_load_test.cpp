@@ -1362,6 +1362,10 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
        "face 0: vertex index 7 out of range (3 vertices before the faces)"},
       {"not.ply", "PLY?\n", "not a PLY file (its header cannot be read)"},
+      // fuzz_obj_clean: an element without properties and a count of -1 (2^64 - 1 empty items) hung the reader.
+      {"empty-element.ply", "ply\nformat binary_little_endian 1.0\nelement e -1\nelement vertex 0\nproperty float x\n"
+                            "property float y\nproperty float z\nend_header\n",
+       "no faces (0 vertices: a point cloud? pathcl renders surfaces)"},
       // fuzz_obj_clean: doubles beyond float range overflowed to infinity in CGAL's clean-up (GMP: SIGFPE).
       {"huge.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1e300 0 0\n0 1 0\n3 0 1 2\n",
