@@ -69,6 +69,46 @@ void check_glb_header(const std::string& path, const std::string& bytes) {
   }
 }
 
+// tinygltf 2.7 hands an image's buffer view to the image callback without checking that the view lies
+// inside its buffer (fuzz_gltf: a GLB image whose view ran past the BIN chunk was read out of bounds), and
+// only checks the accessors' views later: the images' views are checked here first, on the JSON, taking
+// tinygltf's default (0) where it would not read a number. tinygltf makes every buffer its byteLength long.
+void check_image_buffer_views(const std::string& path, const nlohmann::json& doc) {
+  using nlohmann::json;
+  auto array = [&](const char* key) -> const json* {
+    auto it = doc.find(key);
+    return it != doc.end() && it->is_array() ? &*it : nullptr;
+  };
+  if (!doc.is_object()) return;
+  const json *images = array("images"), *views = array("bufferViews"), *buffers = array("buffers");
+  if (!images || !views || !buffers) return;
+  // An index or size as tinygltf reads it, or -1 where it reports the file itself.
+  auto index = [](const json& o, const char* key, size_t count) -> int64_t {
+    if (!o.is_object() || !o.contains(key) || !o[key].is_number_integer()) return -1;
+    int64_t i = o[key].get<int64_t>();
+    return i >= 0 && uint64_t(i) < count ? i : -1;
+  };
+  auto number = [](const json& o, const char* key) -> uint64_t {
+    return o.contains(key) && o[key].is_number_unsigned() ? o[key].get<uint64_t>() : 0;
+  };
+  for (size_t i = 0; i < images->size(); ++i) {
+    const int64_t v = index((*images)[i], "bufferView", views->size());
+    if (v < 0) continue;
+    const json& view = (*views)[size_t(v)];
+    const int64_t b = index(view, "buffer", buffers->size());
+    if (b < 0 || !(*buffers)[size_t(b)].is_object() || !(*buffers)[size_t(b)].contains("byteLength") ||
+        !(*buffers)[size_t(b)]["byteLength"].is_number_unsigned())
+      continue;
+    const uint64_t size = (*buffers)[size_t(b)]["byteLength"].get<uint64_t>();
+    const uint64_t offset = number(view, "byteOffset"), length = number(view, "byteLength");
+    const std::string where = path + ": images[" + std::to_string(i) + "]: bufferViews[" + std::to_string(v) + "]";
+    if (length == 0) throw SceneError(where + ": the image's buffer view is empty");
+    if (offset >= size || length > size - offset)
+      throw SceneError(where + ": " + std::to_string(length) + " bytes from byte " + std::to_string(offset) +
+                       " reach beyond the end of buffers[" + std::to_string(b) + "] (" + std::to_string(size) + " bytes)");
+  }
+}
+
 // Keeps an embedded image's encoded bytes for pathcl's own decoder (scene/texture_load.h), which reads
 // the formats pathcl reads with pathcl's messages; external images are read from their files there.
 bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
@@ -186,16 +226,18 @@ AccessorData read_accessor(const Reader& r, int index, const std::string& use, i
     r.fail(view_where + ": buffer " + std::to_string(v.buffer) + " out of range (" + std::to_string(m.buffers.size()) +
            " buffers)");
   const tinygltf::Buffer& b = m.buffers[size_t(v.buffer)];
-  if (uint64_t(v.byteOffset) + v.byteLength > b.data.size())
-    r.fail(view_where + ": bytes " + std::to_string(v.byteOffset) + " to " + std::to_string(v.byteOffset + v.byteLength) +
-           " are beyond the end of buffers[" + std::to_string(v.buffer) + "] (" + std::to_string(b.data.size()) + " bytes)");
+  // Each offset and length alone first: tinygltf takes them as any unsigned 64-bit number, and a sum of
+  // two near 2^64 wraps around to a small one (fuzz_gltf: an offset of 2^64 - 16 read before the buffer).
+  if (v.byteOffset > b.data.size() || v.byteLength > b.data.size() - v.byteOffset)
+    r.fail(view_where + ": " + std::to_string(v.byteLength) + " bytes from byte " + std::to_string(v.byteOffset) +
+           " reach beyond the end of buffers[" + std::to_string(v.buffer) + "] (" + std::to_string(b.data.size()) + " bytes)");
   const size_t element = size_t(component_bytes(a.componentType)) * size_t(components);
   d.stride = v.byteStride ? v.byteStride : element;
   if (d.stride < element) r.fail(view_where + ": byteStride " + std::to_string(v.byteStride) + " is smaller than an element");
   if (a.count > 0) {
-    // In 64 bits, from values each below 2^63 (tinygltf's size_t fields): no overflow.
-    uint64_t end = uint64_t(a.byteOffset) + uint64_t(d.stride) * (a.count - 1) + element;
-    if (a.count > (uint64_t(1) << 40) || end > v.byteLength)
+    // No overflow: the offset is at most the view's length, the count at most 2^40 and the stride 252.
+    if (a.count > (uint64_t(1) << 40) || a.byteOffset > v.byteLength ||
+        uint64_t(a.byteOffset) + uint64_t(d.stride) * (a.count - 1) + element > v.byteLength)
       r.fail(where + ": " + std::to_string(a.count) + " elements from byte " + std::to_string(a.byteOffset) +
              " reach beyond the end of " + view_where + " (" + std::to_string(v.byteLength) + " bytes)");
   }
@@ -264,8 +306,13 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
   PolygonSoup& soup = out.soup;
   for (size_t i = 0; i < positions.count; ++i) {
     glm::dvec3 pos(positions.get(i, 0), positions.get(i, 1), positions.get(i, 2));
-    if (!std::isfinite(pos.x) || !std::isfinite(pos.y) || !std::isfinite(pos.z))
-      r.fail(where + ": POSITION " + std::to_string(i) + " is not finite");
+    // Within float range, as the JSON loader asks of positions: a coordinate of 1e300 is finite in double,
+    // and CGAL's clean-up overflowed on it (see ply_stl_off_load.cpp). The node's transform is checked
+    // where the mesh is placed (scene_load.cpp).
+    const double m = 3.4028234663852886e38;
+    if (!std::isfinite(pos.x) || !std::isfinite(pos.y) || !std::isfinite(pos.z) || std::abs(pos.x) > m ||
+        std::abs(pos.y) > m || std::abs(pos.z) > m)
+      r.fail(where + ": POSITION " + std::to_string(i) + " is not finite or beyond float range");
     soup.positions.push_back(pos);
   }
   std::vector<uint32_t> indices;
@@ -566,8 +613,13 @@ void read_node(Reader& r, int index, const glm::dmat4& parent, std::vector<bool>
     }
   }
   auto light = n.extensions.find("KHR_lights_punctual");
-  if (light != n.extensions.end() && light->second.Has("light"))
-    read_light(r, light->second.Get("light").GetNumberAsInt(), global, where);
+  if (light != n.extensions.end() && light->second.Has("light")) {
+    // An integer: tinygltf's GetNumberAsInt converts a real to int unchecked (fuzz_gltf: 1e30 is undefined
+    // behaviour) and reads anything else as light 0.
+    const tinygltf::Value& index = light->second.Get("light");
+    if (!index.IsInt()) r.fail(where + ": KHR_lights_punctual: expected an integer light index");
+    read_light(r, index.GetNumberAsInt(), global, where);
+  }
   if (n.camera >= 0 && !r.scene.camera.present) {
     if (size_t(n.camera) >= m.cameras.size())
       r.fail(where + ": camera " + std::to_string(n.camera) + " out of range (" + std::to_string(m.cameras.size()) + " cameras)");
@@ -616,9 +668,11 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
   bool ok;
   if (bytes.rfind("glTF", 0) == 0) {
     check_glb_header(path, bytes);
-    const std::string json_chunk = bytes.substr(20, read_u32(bytes, 12));
-    nlohmann::json doc = nlohmann::json::parse(json_chunk, nullptr, false);  // malformed: tinygltf says why
-    if (!doc.is_discarded()) check_required_extensions(path, doc);
+    const nlohmann::json doc = nlohmann::json::parse(bytes.substr(20, read_u32(bytes, 12)), nullptr, false);
+    if (!doc.is_discarded()) {  // malformed: tinygltf says why
+      check_required_extensions(path, doc);
+      check_image_buffer_views(path, doc);
+    }
     ok = loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
                                      unsigned(bytes.size()), dir);
   } else {
@@ -647,6 +701,7 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
           throw SceneError(path + ": buffers[" + std::to_string(i) + "]: " + e.what());
         }
       }
+    check_image_buffer_views(path, doc);
     ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), dir);
   }
   if (!ok) throw SceneError(path + ": " + (err.empty() ? "tinygltf cannot read the file" : one_line(err)));

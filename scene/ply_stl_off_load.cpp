@@ -11,12 +11,16 @@
 
 #include <cctype>
 #include <cmath>
+#include <cctype>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <new>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/OFF.h>
@@ -81,14 +85,23 @@ bool read_ply_item(std::istream& in, PlyElement& element) {
 
 bool finite(const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
-// CGAL's points as the soup's positions; throws for one that is not finite.
+// A position pathcl can hold: finite and within float range, as the JSON loader asks of its positions
+// (PLY doubles of 1e300 are finite, but CGAL's clean-up overflows on them to infinity and GMP raised
+// SIGFPE converting it: fuzz_obj_clean).
+bool position_in_range(const glm::dvec3& p) {
+  const double m = 3.4028234663852886e38;
+  return finite(p) && std::abs(p.x) <= m && std::abs(p.y) <= m && std::abs(p.z) <= m;
+}
+
+// CGAL's points as the soup's positions; throws for one that is not finite or beyond float range.
 std::vector<glm::dvec3> finite_positions(const std::string& path, const std::vector<Point>& points) {
   std::vector<glm::dvec3> positions;
   positions.reserve(points.size());
   for (const Point& p : points) {
     positions.push_back({p.x(), p.y(), p.z()});
-    if (!finite(positions.back()))
-      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) + ": coordinate is not finite");
+    if (!position_in_range(positions.back()))
+      throw SceneError(path + ": vertex " + std::to_string(positions.size() - 1) +
+                       ": coordinate is not finite or beyond float range");
   }
   return positions;
 }
@@ -152,7 +165,8 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
                            " of " + items);
         glm::dvec3 p;
         ply_number(element, "x", p.x), ply_number(element, "y", p.y), ply_number(element, "z", p.z);
-        if (!finite(p)) throw SceneError(path + ": vertex " + std::to_string(j) + ": coordinate is not finite");
+        if (!position_in_range(p))
+          throw SceneError(path + ": vertex " + std::to_string(j) + ": coordinate is not finite or beyond float range");
         soup.positions.push_back(p);
         if (normals) {
           glm::dvec3 n;
@@ -218,7 +232,9 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
         soup.polygons.push_back(std::move(polygon));
       }
     } else {
-      // Other elements (edges, materials, a scanner's own) are read past.
+      // Other elements (edges, materials, a scanner's own) are read past. One without properties takes no
+      // bytes, whatever its count says (fuzz_obj_clean: "element e -1" looped over 2^64 - 1 empty items).
+      if (element.number_of_properties() == 0) continue;
       for (std::size_t j = 0; j < element.number_of_items(); ++j)
         if (!read_ply_item(in, element))
           throw SceneError(path + ": truncated or garbled PLY file: cannot read " + name + " " + std::to_string(j) +
@@ -292,6 +308,60 @@ PolygonSoup load_stl(const std::string& path, const std::string& head) {
   return soup;
 }
 
+// Each face's vertex count of a binary OFF file, which CGAL 5.5 resizes the face to before reading it, as it
+// does in ASCII files: a count of 10^9 (a float's bits read as the count) asked for 8.5 GB (fuzz_obj_clean,
+// out of memory). The file is walked as CGAL's read_OFF reads it: after the line with BINARY, big-endian
+// int32 counts (a dimension first for nOFF), then per vertex 3 float32 coordinates (4 for 4OFF) and as many
+// for the normal (NOFF), then per face its vertex count and indices (CGAL reads no colour count after
+// them). Colours and texture coordinates are refused as in ASCII files. `in` stands after BINARY's line.
+void check_binary_off_faces(const std::string& path, const std::string& keyword, std::istream& in) {
+  const std::string prefix = keyword.substr(0, keyword.size() - 3);
+  if (prefix.find("ST") != std::string::npos || prefix.find('C') != std::string::npos)
+    throw SceneError(path + ": " + keyword + " BINARY: texture coordinates and colours in OFF files are not "
+                     "supported (CGAL's OFF reader misreads them); write the mesh as PLY or OBJ");
+  const std::string data(std::istreambuf_iterator<char>(in), {});
+  size_t at = 0;
+  auto int32 = [&](int64_t& v) {
+    if (at + 4 > data.size()) return false;
+    uint32_t u = 0;
+    for (int i = 0; i < 4; ++i) u = u << 8 | static_cast<unsigned char>(data[at + i]);
+    at += 4;
+    v = int32_t(u);
+    return true;
+  };
+  int64_t vertices = 0, faces = 0, edges = 0, dimension = 0;
+  if (prefix.find('n') != std::string::npos && !int32(dimension)) return;
+  if (!int32(vertices) || !int32(faces) || !int32(edges)) return;  // CGAL refuses a header cut short
+  // As in ASCII files: CGAL doubles the count of edges and adds the others times 2.1, as ints, unchecked
+  // (fuzz_obj_clean: UBSan, 2 * 1851878912, the bytes of "nan" read as the count of edges).
+  const char* names[] = {"vertices", "faces", "edges"};
+  const int64_t counts[] = {vertices, faces, edges};
+  const uint64_t size = data.size();
+  for (int i = 0; i < 3; ++i)
+    if (counts[i] < 0 || uint64_t(counts[i]) > (i < 2 ? size / 2 : size))
+      throw SceneError(path + ": truncated or garbled OFF file: its header's count of " + names[i] + " is " +
+                       std::to_string(counts[i]) + ", not a number up to what the " + std::to_string(size) +
+                       " bytes after its binary header hold");
+  const bool homogeneous = prefix.find('4') != std::string::npos, normals = prefix.find('N') != std::string::npos;
+  const uint64_t vertex_bytes = 4 * (3 + homogeneous) * (1 + normals);
+  if (uint64_t(vertices) > data.size() / vertex_bytes) return;  // truncated: CGAL fails reading the vertices
+  at += size_t(vertices) * vertex_bytes;
+  for (int64_t f = 0, count = 0; f < faces; ++f) {
+    // CGAL takes a count cut short by the end of the file as a count (fuzz_obj_clean: 3 bytes of text read
+    // as 1886547712 vertices), and reads no further once the stream has failed only if it is not at its end.
+    auto truncated = [&] {
+      return SceneError(path + ": truncated binary OFF file: face " + std::to_string(f) + " of " +
+                        std::to_string(faces) + " is cut short");
+    };
+    if (!int32(count)) throw truncated();
+    if (count < 0 || count > 255)
+      throw SceneError(path + ": face " + std::to_string(f) + " has " + std::to_string(count) +
+                       " vertices, more than the 255 pathcl reads (or a garbled binary OFF file)");
+    at += size_t(4 * count);
+    if (at > data.size()) throw truncated();
+  }
+}
+
 // The counts of an ASCII OFF header, checked before CGAL reads them: its header reader converts
 // (vertices + faces) * 2.1 to int with no range check (UBSan in File_header_OFF_impl.h, found by
 // fuzz_obj_clean with a count of -2147483). Every vertex and face takes at least 2 bytes ("0\n"), every
@@ -306,10 +376,32 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
     }
     return false;
   };
-  std::string keyword, token;
-  if (!next(keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  // The keyword as CGAL's File_header_OFF reads it: after blank space and '#' comment lines, letters and
+  // digits, the character after them taken with them ("OFF." is OFF: fuzz_obj_clean found binary files so
+  // named past these checks); then a count, or BINARY and the rest of its line.
+  const auto line_end = [&] { in.ignore(std::numeric_limits<std::streamsize>::max(), '\n'); };
+  auto word = [&](char c) {
+    std::string w(1, c);
+    while (in.get(c) && std::isalnum(static_cast<unsigned char>(c))) w += c;
+    return std::make_pair(w, c);
+  };
+  char c = 0;
+  while (in >> c && c == '#') line_end();
+  if (!in) return;
+  const std::string keyword = word(c).first;
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  while (in >> c && c == '#') line_end();
+  if (!in) return;
+  if (!std::isdigit(static_cast<unsigned char>(c))) {
+    const auto [binary, after] = word(c);
+    if (binary != "BINARY") return;  // CGAL refuses it
+    if (after != '\n') line_end();
+    check_binary_off_faces(path, keyword, in);
+    return;
+  }
+  in.putback(c);
+  std::string token;
   if (!next(token)) return;
-  if (token == "BINARY") return;
   // CGAL 5.5's ASCII scanner reads texture coordinates and colours by indices it computes from each line
   // without checking them: for "ST" it uses uninitialised colour bookkeeping (ASan: SEGV in scan_texture),
   // and with "C" a short line reads out of bounds (fuzz_obj_clean, scan_color). Until a reader that

@@ -15,5 +15,5 @@ bool is_ply_stl_off_file(const std::string& path);
 // become the soup's per-corner normals and uvs; STL's facet normals are the faces' own, and are not read.
 // Vertex and face colours are not used: a warning says so. Throws SceneError "FILE: what is wrong" for a
 // file that cannot be read, is truncated or garbled, has a face index out of range, a coordinate that is
-// not finite, or no faces.
+// not finite or beyond float range, or no faces.
 PolygonSoup load_ply_stl_off(const std::string& path, std::vector<std::string>& warnings);

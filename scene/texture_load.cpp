@@ -103,22 +103,133 @@ TextureImage load_exr(const std::string& path) {
   }
 }
 
+// stb_image reads TGA, BMP, Radiance HDR and JPEG data past the end of a truncated file as zeros, and
+// decodes it without complaint: a 19-byte TGA file that says 32771 x 2304 texels took 3 s and 600 MB
+// (fuzz_texture, a slow unit). A file smaller than its texels take at the format's densest encoding is
+// refused as truncated: TGA 1 byte a texel uncompressed (more for more bits) and 2 bytes per RLE packet of
+// at most 128; BMP at least 1 bit a texel (stb_image reads no compressed BMP); Radiance HDR 2 bytes per run
+// of at most 127 texels in each of 4 channels; JPEG at least 1 bit per 8 x 8 block. PNG's zlib stream
+// cannot be cut short unnoticed.
+void check_not_truncated(const std::string& name, const std::string& bytes, const std::string& format, uint64_t texels) {
+  uint64_t least = 0;
+  if (format == "TGA") {
+    // stb_image reads a header cut short as zeros too (fuzz_texture: 17 bytes for 11008 x 22572 texels of 32 bits).
+    auto byte = [&](size_t i) -> unsigned { return i < bytes.size() ? static_cast<unsigned char>(bytes[i]) : 0u; };
+    const unsigned type = byte(2), bits = byte(16);
+    least = type >= 8 ? (texels + 127) / 128 * 2 : texels * std::max(1u, bits / 8);
+  } else if (format == "BMP") {
+    least = texels / 8;
+  } else if (format == "Radiance HDR") {
+    least = texels / 16;
+  } else if (format == "JPEG") {
+    least = texels / 512;
+  }
+  if (bytes.size() < least)
+    throw SceneError(name + ": truncated " + format + " image: its " + std::to_string(texels) + " texels take at least " +
+                     std::to_string(least) + " bytes, the file has " + std::to_string(bytes.size()));
+}
+
+// stb_image 2.27 loops forever on an RLE packet of length 0 in a Radiance HDR scanline, which is also what
+// it reads past the end of a truncated file (fuzz_texture, a timeout; stb_image 2.28 refuses the packet).
+// The scanlines are walked here as stb_image reads them (scanlines 8 to 32767 wide are RLE when they begin
+// 2 2 and their width; anything else is flat from there on), and such a packet refused.
+void check_hdr_runs(const std::string& name, const std::string& bytes, int width, int height) {
+  if (width < 8 || width >= 32768) return;  // flat: 4 bytes a texel, read without a loop on their values
+  const size_t n = bytes.size();
+  auto byte = [&](size_t i) -> unsigned { return i < n ? static_cast<unsigned char>(bytes[i]) : 0u; };  // 0 past the end, as stb
+  // The header's lines up to the empty one, then the resolution line.
+  size_t at = 0;
+  auto line = [&] {
+    size_t end = bytes.find('\n', at), start = at;
+    at = end == std::string::npos ? n : end + 1;
+    return (end == std::string::npos ? n : end) - start;
+  };
+  while (at < n && line() > 0) {
+  }
+  line();
+  for (int y = 0; y < height; ++y) {
+    if (byte(at) != 2 || byte(at + 1) != 2 || (byte(at + 2) & 0x80)) return;  // flat from here on
+    if ((byte(at + 2) << 8 | byte(at + 3)) != unsigned(width)) return;       // stb_image refuses it
+    at += 4;
+    for (int channel = 0; channel < 4; ++channel)
+      for (int i = 0; i < width;) {
+        unsigned count = byte(at++);
+        if (count > 128) {  // a run of count - 128 (1 to 127) copies of the next byte
+          count -= 128;
+          ++at;
+        } else if (count == 0) {
+          throw SceneError(name + ": corrupt or truncated Radiance HDR image: scanline " + std::to_string(y) +
+                           " has an RLE packet of length 0" + (at > n ? " (the file ends there)" : ""));
+        } else {
+          at += count;
+        }
+        if (count > unsigned(width - i)) return;  // stb_image refuses it
+        i += int(count);
+      }
+  }
+}
+
 // Through stb_image from the file's bytes: 8-bit formats as sRGB bytes (RGBA), Radiance HDR (`hdr`) as floats.
 TextureImage decode_stb(const std::string& name, const std::string& bytes, const char* format_name, bool hdr) {
   int width = 0, height = 0, channels = 0;
   const auto* data_bytes = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int size = bytes.size() > size_t(INT32_MAX) ? INT32_MAX : int(bytes.size());
   // The header alone first: stb_image would decode anything it can allocate.
-  if (stbi_info_from_memory(data_bytes, size, &width, &height, &channels)) check_size(name, width, height);
+  if (stbi_info_from_memory(data_bytes, size, &width, &height, &channels)) {
+    check_size(name, width, height);
+    check_not_truncated(name, bytes, format_name, uint64_t(width) * uint64_t(height));
+    if (hdr) check_hdr_runs(name, bytes, width, height);
+  }
   std::unique_ptr<void, void (*)(void*)> data(
       hdr ? static_cast<void*>(stbi_loadf_from_memory(data_bytes, size, &width, &height, &channels, 3))
           : static_cast<void*>(stbi_load_from_memory(data_bytes, size, &width, &height, &channels, 4)),
       stbi_image_free);
   // stb_image's reasons are terse internals ("bad zlib header"), not for users.
   if (!data) throw SceneError(name + ": cannot decode the " + format_name + " image (corrupt or truncated)");
+  // Again, for a file whose header stbi_info did not read (it is stricter than the decoders).
+  check_size(name, width, height);
+  check_not_truncated(name, bytes, format_name, uint64_t(width) * uint64_t(height));
   TextureImage image = empty_image(uint32_t(width), uint32_t(height), hdr ? PC_TEXELS_FLOAT : PC_TEXELS_SRGB8);
   std::memcpy(image.words.data(), data.get(), image.words.size() * sizeof(uint32_t));
   return image;
+}
+
+// stb_image 2.27 (Debian's) builds a JPEG Huffman table of as many codes as its 16 counts sum to, up to
+// 4080, into arrays of 256 (fuzz_texture: UBSan, index 257 out of bounds in stbi__build_huffman; stb_image
+// 2.28 refuses the table). The segments are walked here as stb_image reads them, and such a table refused.
+void check_jpeg_huffman_tables(const std::string& name, const std::string& bytes) {
+  const size_t n = bytes.size();
+  auto byte = [&](size_t i) -> unsigned { return i < n ? static_cast<unsigned char>(bytes[i]) : 0u; };  // 0 past the end, as stb
+  size_t at = 2;  // after SOI
+  while (at < n) {
+    // The next marker: 0xFF, fill bytes 0xFF, then its code.
+    while (at < n && byte(at) != 0xFF) ++at;
+    while (at < n && byte(at) == 0xFF) ++at;
+    if (at >= n) return;
+    const unsigned marker = byte(at++);
+    if (marker == 0xD9) return;                                               // EOI
+    if (marker == 0x00 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) continue;  // no length
+    const size_t length = byte(at) << 8 | byte(at + 1);
+    if (marker != 0xC4) {
+      at += length;
+      if (marker == 0xDA)  // SOS: the entropy-coded data, to the next marker (0xFF not followed by 0 or RSTn)
+        while (at + 1 < n && !(byte(at) == 0xFF && byte(at + 1) != 0 && !(byte(at + 1) >= 0xD0 && byte(at + 1) <= 0xD7))) ++at;
+      continue;
+    }
+    long left = long(length) - 2;  // DHT: tables while stb_image's count of the segment's bytes is positive
+    at += 2;
+    while (left > 0) {
+      size_t codes = 0;
+      for (size_t i = 0; i < 16; ++i) codes += byte(at + 1 + i);
+      if (codes > 256)
+        throw SceneError(name + ": corrupt JPEG image: a Huffman table of " + std::to_string(codes) +
+                         " codes (at most 256)");
+      at += 17 + codes;
+      left -= long(17 + codes);
+      if (at >= n) return;
+    }
+    if (left != 0) return;  // stb_image refuses the segment
+  }
 }
 
 // Image formats pathcl does not read (stb_image could read some of them: GIF's palettes, Photoshop's
@@ -182,7 +293,7 @@ TextureImage decode_not_exr(const std::string& name, const std::string& bytes) {
   if (starts_with(bytes, "\x89PNG\r\n\x1a\n"))
     image = decode_stb(name, bytes, "PNG", false);
   else if (starts_with(bytes, "\xff\xd8\xff"))
-    image = decode_stb(name, bytes, "JPEG", false);
+    check_jpeg_huffman_tables(name, bytes), image = decode_stb(name, bytes, "JPEG", false);
   else if (starts_with(bytes, "BM"))
     image = decode_stb(name, bytes, "BMP", false);
   else if (starts_with(bytes, "#?RADIANCE") || starts_with(bytes, "#?RGBE"))
@@ -248,7 +359,9 @@ glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv) {
   // Texel coordinates with the texel centres at half-integers, as kernels/texture.cl places them.
   auto index = [&](float t, uint32_t n) {
     double x = std::floor(double(t) * n);
-    if (image.wrap == PC_WRAP_CLAMP) return uint32_t(std::clamp(x, 0.0, double(n - 1)));
+    // NaN (a coordinate not finite) takes texel 0, as the wrapped modes below do (fuzz_texture: the clamp
+    // passed NaN through to the integer conversion, undefined behaviour).
+    if (image.wrap == PC_WRAP_CLAMP) return x >= 0 ? uint32_t(std::min(x, double(n - 1))) : 0u;
     double period = image.wrap == PC_WRAP_MIRROR ? 2.0 * n : n;
     double m = x - period * std::floor(x / period);
     if (!(m >= 0 && m < period)) m = 0;  // not finite

@@ -3,8 +3,12 @@
 // Scenes go through load_scene and build_device_scene; meshes through load_obj and clean_mesh with every
 // combination of orient and smooth normals (the fuzzer's leading option byte is stripped from them).
 // fuzz_render's findings (*.scene, in its input format: fuzz/render_input.h) are also rendered, tiny as
-// the fuzzer renders them, on the test device ($PATHCL_TEST_DEVICE).
+// the fuzzer renders them, on the test device ($PATHCL_TEST_DEVICE). fuzz_gltf's (*.gltf, *.glb) go through
+// load_gltf, fuzz_texture's (image files by extension) through load_texture_image and decode_texture_image;
+// the fuzzers' option byte is stripped from all of them.
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -17,9 +21,11 @@
 #include "runtime/renderer.h"
 #include "scene/bvh_build.h"
 #include "scene/device_scene_build.h"
+#include "scene/gltf_load.h"
 #include "scene/mesh_clean.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
+#include "scene/texture_load.h"
 #include "test_support.h"
 
 namespace {
@@ -73,7 +79,134 @@ std::string render_outcome(const std::string& path) {
   }
 }
 
+// "" if the glTF file loads, the SceneError message if it is rejected; fails the test on any other exception.
+std::string gltf_outcome(const std::string& path) {
+  try {
+    std::vector<std::string> warnings;
+    load_gltf(path, warnings);
+  } catch (const SceneError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << path << ": unexpected exception: " << e.what();
+    return "unexpected";
+  }
+  return "";
+}
+
+// The same for an image file, read from the file and (as an image embedded in glTF) decoded from its bytes:
+// the two messages, or "" for an image that loads.
+std::string texture_outcome(const std::string& path, bool in_memory) {
+  try {
+    if (in_memory)
+      decode_texture_image(path, read_text_file(path));
+    else
+      load_texture_image(path);
+  } catch (const SceneError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << path << ": unexpected exception: " << e.what();
+    return "unexpected";
+  }
+  return "";
+}
+
 }  // namespace
+
+TEST(FuzzRegression, GltfFilesLoadOrFailWithSceneError) {
+  std::vector<std::string> files = files_ending(".gltf"), glb = files_ending(".glb");
+  files.insert(files.end(), glb.begin(), glb.end());
+  ASSERT_FALSE(files.empty());
+  for (const std::string& path : files) gltf_outcome(path);
+}
+
+TEST(FuzzRegression, ImagesLoadOrFailWithSceneError) {
+  size_t images = 0;
+  for (const char* extension : {".png", ".jpg", ".bmp", ".tga", ".hdr", ".exr"})
+    for (const std::string& path : files_ending(extension)) {
+      ++images;
+      texture_outcome(path, false);
+      texture_outcome(path, true);
+    }
+  ASSERT_GT(images, 0u);
+}
+
+// glTF offsets are unsigned 64-bit numbers: an offset near 2^64 plus a length wrapped around to a small sum
+// that passed the range check, and the accessor read before its buffer (fuzz_gltf).
+TEST(FuzzRegression, GltfOffsetsThatWrapAreRejected) {
+  const std::string dir = regressions();
+  EXPECT_NE(gltf_outcome(dir + "/gltf-accessor-offset-wraps.gltf").find("4 elements from byte 18446744073709551600 reach beyond the end of bufferViews[0] (48 bytes)"),
+            std::string::npos);
+  EXPECT_NE(gltf_outcome(dir + "/gltf-view-offset-wraps.gltf").find("bufferViews[0]: 48 bytes from byte 18446744073709551600 reach beyond the end of buffers[0] (140 bytes)"),
+            std::string::npos);
+}
+
+// tinygltf passed an image's buffer view to the image callback unchecked: a GLB image view past the end of
+// its BIN chunk was read out of bounds (fuzz_gltf, ASan).
+TEST(FuzzRegression, GltfImageViewPastItsBufferIsRejected) {
+  const std::string message = gltf_outcome(regressions() + "/gltf-image-view-past-buffer.glb");
+  EXPECT_NE(message.find("gltf-image-view-past-buffer.glb: images[0]: bufferViews["), std::string::npos) << message;
+  EXPECT_NE(message.find("reach beyond the end of buffers[0]"), std::string::npos) << message;
+}
+
+// tinygltf's GetNumberAsInt converted a light index of 1e30 to int (undefined behaviour; found by reading
+// the loader for fuzz_gltf, which confirmed it with UBSan).
+TEST(FuzzRegression, GltfLightIndexThatIsNoIntegerIsRejected) {
+  const std::string message = gltf_outcome(regressions() + "/gltf-light-index-huge.gltf");
+  EXPECT_NE(message.find("nodes[2]: KHR_lights_punctual: expected an integer light index"), std::string::npos) << message;
+}
+
+// stb_image 2.27 built a JPEG Huffman table of more than 256 codes out of bounds (fuzz_texture, UBSan).
+TEST(FuzzRegression, JpegHuffmanTableOfTooManyCodesIsRejected) {
+  const std::string path = regressions() + "/texture-jpeg-huffman-overflow.jpg";
+  for (bool in_memory : {false, true}) {
+    const std::string message = texture_outcome(path, in_memory);
+    EXPECT_NE(message.find("texture-jpeg-huffman-overflow.jpg: corrupt JPEG image: a Huffman table of "), std::string::npos)
+        << message;
+  }
+}
+
+// stb_image decoded a 19-byte RLE TGA file saying 32771 x 2304 texels, reading zeros past its end: 3 s and
+// 600 MB (fuzz_texture, a slow unit). A file too short for its texels is truncated.
+TEST(FuzzRegression, TruncatedTgaIsRejected) {
+  const std::string path = regressions() + "/texture-tga-truncated-huge.tga";
+  for (bool in_memory : {false, true})
+    EXPECT_NE(texture_outcome(path, in_memory).find("texture-tga-truncated-huge.tga: truncated TGA image: its 75504384 "
+                                                     "texels take at least 1179756 bytes, the file has 19"),
+              std::string::npos)
+        << texture_outcome(path, in_memory);
+  // The same with a header cut short (17 bytes, stb_image reads the missing ones as zeros).
+  const std::string short_header = regressions() + "/texture-tga-short-header.tga";
+  for (bool in_memory : {false, true})
+    EXPECT_NE(texture_outcome(short_header, in_memory).find("truncated TGA image: its 248472576 texels take at least 993890304 bytes, the file has 17"),
+              std::string::npos)
+        << texture_outcome(short_header, in_memory);
+}
+
+// stb_image 2.27 looped forever on a Radiance HDR RLE packet of length 0 (fuzz_texture, a timeout).
+TEST(FuzzRegression, HdrRlePacketOfLengthZeroIsRejected) {
+  const std::string path = regressions() + "/texture-hdr-rle-zero-packet.hdr";
+  for (bool in_memory : {false, true})
+    EXPECT_NE(texture_outcome(path, in_memory).find("texture-hdr-rle-zero-packet.hdr: corrupt or truncated Radiance HDR "
+                                                     "image: scanline 0 has an RLE packet of length 0"),
+              std::string::npos)
+        << texture_outcome(path, in_memory);
+}
+
+// texel_nearest with clamping converted a NaN coordinate to an integer (fuzz_texture, UBSan): texel 0, as
+// the other wrap modes give.
+TEST(FuzzRegression, TexelNearestOfNanIsTexelZero) {
+  TextureImage image;
+  image.width = 2;
+  image.height = 1;
+  image.format = PC_TEXELS_FLOAT;
+  image.words.resize(6);
+  const float texels[6] = {1, 2, 3, 4, 5, 6};
+  std::memcpy(image.words.data(), texels, sizeof texels);
+  for (uint32_t wrap : {PC_WRAP_CLAMP, PC_WRAP_REPEAT, PC_WRAP_MIRROR}) {
+    image.wrap = wrap;
+    EXPECT_EQ(texel_nearest(image, glm::vec2(NAN, NAN)), glm::vec3(1, 2, 3)) << wrap;
+  }
+}
 
 TEST(FuzzRegression, ScenesLoadOrFailWithSceneError) {
   const std::vector<std::string> scenes = files_ending(".json");

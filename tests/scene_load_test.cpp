@@ -1362,6 +1362,14 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
        "face 0: vertex index 7 out of range (3 vertices before the faces)"},
       {"not.ply", "PLY?\n", "not a PLY file (its header cannot be read)"},
+      // fuzz_obj_clean: an element without properties and a count of -1 (2^64 - 1 empty items) hung the reader.
+      {"empty-element.ply", "ply\nformat binary_little_endian 1.0\nelement e -1\nelement vertex 0\nproperty float x\n"
+                            "property float y\nproperty float z\nend_header\n",
+       "no faces (0 vertices: a point cloud? pathcl renders surfaces)"},
+      // fuzz_obj_clean: doubles beyond float range overflowed to infinity in CGAL's clean-up (GMP: SIGFPE).
+      {"huge.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1e300 0 0\n0 1 0\n3 0 1 2\n",
+       "vertex 1: coordinate is not finite or beyond float range"},
       // fuzz_obj_clean: CGAL's reader adds a property to the last element without checking there is one.
       {"property-first.ply", "ply\nformat ascii 1 float x\nproperty float y\nelement face 1\nend_header\n",
        "line 3: a property before any element (a garbled PLY header)"},
@@ -1376,6 +1384,27 @@ TEST(SceneLoadMeshFormats, BadFilesSayWhatIsWrong) {
       // fuzz_obj_clean: CGAL sizes a face by its count before reading it.
       {"huge-face.off", "OFF\n3 1 0\n0 0 0\n# a comment\n1 0 0\n0 1 0\n99999999999 0 1 2\n",
        "face 0 has 99999999999 vertices, more than the 255 pathcl reads (or a garbled OFF file)"},
+      // fuzz_obj_clean: the same in a binary file, the bits of a float 1.0 read as a face's vertex count
+      // (CGAL asked for 8.5 GB).
+      {"huge-face-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') +
+                                   std::string("\x3f\x80\0\0", 4) + std::string(12, '\0'),
+       "face 0 has 1065353216 vertices, more than the 255 pathcl reads (or a garbled binary OFF file)"},
+      // fuzz_obj_clean: a face count cut short by the end of the file, which CGAL took as a count.
+      {"short-binary.off", std::string("OFF BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 23) + std::string(36, '\0') + "pro",
+       "truncated binary OFF file: face 0 of 1 is cut short"},
+      // fuzz_obj_clean: CGAL doubles the count of edges as an int, unchecked.
+      {"edges-binary.off", std::string("OFF BINARY\n\0\0\0\0\0\0\0\0nan\0", 23) + std::string(16, '\0'),
+       "truncated or garbled OFF file: its header's count of edges is 1851878912, not a number up to what the 28 "
+       "bytes after its binary header hold"},
+      // fuzz_obj_clean: CGAL reads "OFF." as the keyword OFF (letters and digits, then one character).
+      {"dot-binary.off", std::string("OFF.  BINARY\n\0\0\0\3\0\0\0\1\0\0\0\0", 25) + std::string(36, '\0') +
+                             std::string("\x3f\x80\0\0", 4) + std::string(12, '\0'),
+       "face 0 has 1065353216 vertices, more than the 255 pathcl reads (or a garbled binary OFF file)"},
+      {"dot-ascii.off", "OFF. 3 1 -2147483\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "truncated or garbled OFF file: its header's count of edges is -2147483, not a number up to what a file of 44 bytes holds"},
+      {"colours-binary.off", std::string("COFF BINARY\n\0\0\0\0\0\0\0\0\0\0\0\0", 24),
+       "COFF BINARY: texture coordinates and colours in OFF files are not supported (CGAL's OFF reader misreads "
+       "them); write the mesh as PLY or OBJ"},
   };
   for (const Case& c : cases) {
     std::string mesh = write_temp_file("bad-formats/" + c.file, c.content);
