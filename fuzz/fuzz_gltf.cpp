@@ -74,6 +74,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // What read_gltf_shape (scene/scene_load.cpp) relies on.
     for (const GltfPrimitive& p : scene.primitives) {
       if (p.material >= scene.materials.size()) fuzz::invariant_failed("primitive material out of range");
+      const size_t index = size_t(&p - scene.primitives.data());
+      if (p.same_as != PC_INVALID && (p.same_as >= index || scene.primitives[p.same_as].same_as != PC_INVALID ||
+                                      !p.soup.positions.empty()))
+        fuzz::invariant_failed("a repeated placement not referring to an earlier primitive's geometry");
       const PolygonSoup& soup = p.soup;
       for (const glm::dvec3& x : soup.positions)
         if (!finite(x)) fuzz::invariant_failed("a position not finite");
