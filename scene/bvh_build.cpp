@@ -30,8 +30,8 @@ constexpr uint32_t kMedianSplitDepth = kBvhMaxDepth - 24;  // past this, split b
 // infinite, and 0 * infinity is NaN (found by fuzz/fuzz_scene_json).
 int bin_index(float scaled) { return scaled >= float(kBins - 1) ? kBins - 1 : scaled > 0 ? int(scaled) : 0; }
 
-// Subtrees of at least this many primitives build their two children as parallel tasks, each into a node
-// array of its own that the parent then appends (left, then right), so the depth-first layout is the one a
+// Subtrees of at least this many primitives build their two children as parallel tasks, the right one into a
+// node array of its own that is appended after the left subtree, so the depth-first layout is the one a
 // serial build gives, whatever the number of threads and whichever task finishes first.
 constexpr uint32_t kParallelSubtree = 8192;
 // Nodes of at least twice this many primitives gather their bounds and bins in parallel, over chunks of this
@@ -181,18 +181,17 @@ struct Builder {
       return;
     }
     uint32_t right;
+    const uint32_t left = uint32_t(nodes.size());
+    nodes.emplace_back();
     if (count >= kParallelSubtree) {
-      std::vector<BvhNode> left_nodes(1), right_nodes(1);
-      left_nodes.reserve(2 * (mid - begin));
-      right_nodes.reserve(2 * (end - mid));
-      tbb::parallel_invoke([&] { build(left_nodes, 0, begin, mid, depth + 1); },
+      // The left subtree goes on in `nodes` (it follows its parent there); the right one, built meanwhile into
+      // an array of its own, is appended after it.
+      std::vector<BvhNode> right_nodes(1);
+      tbb::parallel_invoke([&] { build(nodes, left, begin, mid, depth + 1); },
                            [&] { build(right_nodes, 0, mid, end, depth + 1); });
-      append(nodes, left_nodes);
       right = uint32_t(nodes.size());
       append(nodes, right_nodes);
     } else {
-      uint32_t left = uint32_t(nodes.size());
-      nodes.emplace_back();
       build(nodes, left, begin, mid, depth + 1);
       right = uint32_t(nodes.size());
       nodes.emplace_back();

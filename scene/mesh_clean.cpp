@@ -270,12 +270,13 @@ std::array<std::size_t, 3> follow_corners(const std::vector<Point>& points, cons
 
 // Whether every undirected edge is used by exactly two triangles: the sorted list of edges has runs of two.
 bool is_closed_soup(const std::vector<Polygon>& triangles) {
-  std::vector<std::pair<std::size_t, std::size_t>> edges(3 * triangles.size());
+  // An edge as one 64-bit key (the output's vertex indices are 32-bit): half the memory of a pair.
+  std::vector<uint64_t> edges(3 * triangles.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size()), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t t = r.begin(); t < r.end(); ++t)
       for (std::size_t i = 0; i < 3; ++i) {
-        std::size_t a = triangles[t][i], b = triangles[t][(i + 1) % 3];
-        edges[3 * t + i] = {std::min(a, b), std::max(a, b)};
+        const uint64_t a = triangles[t][i], b = triangles[t][(i + 1) % 3];
+        edges[3 * t + i] = std::min(a, b) << 32 | std::max(a, b);
       }
   });
   tbb::parallel_sort(edges.begin(), edges.end());
