@@ -394,6 +394,8 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
     }
   }
 
+  polygons = {};  // one allocation per polygon: freed early (see below)
+
   // 4. Degenerate triangles: exact collinearity test on the coordinates as given (also catches a
   // repeated vertex).
   std::vector<std::array<std::size_t, 3>> kept;
@@ -409,18 +411,25 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
     kept.push_back(t);
     kept_sources.push_back(sources[i]);
   }
+  // Freed as soon as they are dead, here, above and below: on a million triangles each of these arrays is
+  // tens of megabytes, and the peak memory of loading is reached in the clean-up.
+  triangles = {};
+  sources = {};
 
   // 5. Duplicate faces, in either orientation: the first of each group stays.
   std::vector<char> duplicate;
   report.duplicate_faces = mark_duplicate_triangles(kept, duplicate);
   std::vector<Polygon> tris;
   tris.reserve(kept.size() - report.duplicate_faces);
-  sources.clear();
+  sources.reserve(kept.size() - report.duplicate_faces);
   for (std::size_t i = 0; i < kept.size(); ++i) {
     if (duplicate[i]) continue;
     tris.push_back({kept[i][0], kept[i][1], kept[i][2]});
     sources.push_back(kept_sources[i]);
   }
+  kept = {};
+  kept_sources = {};
+  duplicate = {};
 
   // 6. Isolated points. Run on the vertex ids rather than the points: CGAL only moves the range's
   // elements around and renumbers the polygons, so afterwards ids[k] is the old index of new vertex k.
