@@ -9,15 +9,10 @@
 #include <cstring>
 
 #include <glm/common.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
-void Aabb::grow(const glm::vec3& p) {
-  lo = glm::min(lo, p);
-  hi = glm::max(hi, p);
-}
-void Aabb::grow(const Aabb& b) {
-  lo = glm::min(lo, b.lo);
-  hi = glm::max(hi, b.hi);
-}
 float Aabb::half_area() const {
   glm::vec3 e = hi - lo;
   if (e.x < 0 || e.y < 0 || e.z < 0) return 0;
@@ -35,26 +30,90 @@ constexpr uint32_t kMedianSplitDepth = kBvhMaxDepth - 24;  // past this, split b
 // infinite, and 0 * infinity is NaN (found by fuzz/fuzz_scene_json).
 int bin_index(float scaled) { return scaled >= float(kBins - 1) ? kBins - 1 : scaled > 0 ? int(scaled) : 0; }
 
+// Subtrees of at least this many primitives build their two children as parallel tasks, the right one into a
+// node array of its own that is appended after the left subtree, so the depth-first layout is the one a
+// serial build gives, whatever the number of threads and whichever task finishes first.
+constexpr uint32_t kParallelSubtree = 8192;
+// Nodes of at least twice this many primitives gather their bounds and bins in parallel, over chunks of this
+// size whose results are combined in chunk order: a fixed split, so the result does not depend on the
+// threads either (and the min and max of a box are the serial ones, ties of -0 and +0 included, because
+// keeping the first of equal values is associative).
+constexpr uint32_t kParallelChunk = 32768;
+
+struct Bins {
+  Aabb box[3][kBins];
+  uint32_t count[3][kBins] = {};
+};
+
 struct Builder {
   const std::vector<Aabb>& boxes;
   std::vector<glm::vec3> centroids;
-  Bvh& bvh;
-  float root_area = 0;
+  std::vector<uint32_t>& order;  // the Bvh's prim_order; each task partitions its own range of it
 
-  // Builds the subtree of order[begin, end) into nodes[index]; returns nothing, fills bvh.
-  void build(uint32_t index, uint32_t begin, uint32_t end, uint32_t depth) {
-    bvh.depth = std::max(bvh.depth, depth + 1);
-    Aabb bounds, centroid_bounds;
+  // Bounds of the boxes and of the centroids of order[begin, end).
+  void gather_bounds(uint32_t begin, uint32_t end, Aabb& bounds, Aabb& centroid_bounds) const {
     for (uint32_t i = begin; i < end; ++i) {
-      bounds.grow(boxes[bvh.prim_order[i]]);
-      centroid_bounds.grow(centroids[bvh.prim_order[i]]);
+      bounds.grow(boxes[order[i]]);
+      centroid_bounds.grow(centroids[order[i]]);
     }
-    BvhNode& node = bvh.nodes[index];
+  }
+  void gather_bounds_parallel(uint32_t begin, uint32_t end, Aabb& bounds, Aabb& centroid_bounds) const {
+    std::vector<std::pair<Aabb, Aabb>> parts((end - begin + kParallelChunk - 1) / kParallelChunk);
+    tbb::parallel_for(size_t(0), parts.size(), [&](size_t c) {
+      gather_bounds(begin + uint32_t(c) * kParallelChunk, std::min(end, begin + uint32_t(c + 1) * kParallelChunk),
+                    parts[c].first, parts[c].second);
+    });
+    for (const auto& [box, centroid_box] : parts) {
+      bounds.grow(box);
+      centroid_bounds.grow(centroid_box);
+    }
+  }
+
+  // The bins of order[begin, end) along each axis with a scale > 0.
+  void gather_bins(uint32_t begin, uint32_t end, const Aabb& centroid_bounds, const glm::vec3& scale, Bins& bins) const {
+    // One pass for the three axes; each bin still grows in primitive order.
+    const bool binned[3] = {scale.x > 0, scale.y > 0, scale.z > 0};
+    for (uint32_t i = begin; i < end; ++i) {
+      const uint32_t p = order[i];
+      const Aabb& box = boxes[p];
+      for (int axis = 0; axis < 3; ++axis) {
+        if (!binned[axis]) continue;
+        int b = bin_index((centroids[p][axis] - centroid_bounds.lo[axis]) * scale[axis]);
+        bins.box[axis][b].grow(box);
+        ++bins.count[axis][b];
+      }
+    }
+  }
+  void gather_bins_parallel(uint32_t begin, uint32_t end, const Aabb& centroid_bounds, const glm::vec3& scale,
+                            Bins& bins) const {
+    std::vector<Bins> parts((end - begin + kParallelChunk - 1) / kParallelChunk);
+    tbb::parallel_for(size_t(0), parts.size(), [&](size_t c) {
+      gather_bins(begin + uint32_t(c) * kParallelChunk, std::min(end, begin + uint32_t(c + 1) * kParallelChunk),
+                  centroid_bounds, scale, parts[c]);
+    });
+    for (const Bins& part : parts)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int b = 0; b < kBins; ++b) {
+          bins.box[axis][b].grow(part.box[axis][b]);
+          bins.count[axis][b] += part.count[axis][b];
+        }
+  }
+
+  // Builds the subtree of order[begin, end) into nodes[index] and the nodes it appends to `nodes`.
+  // Interior nodes' left_first are indices into `nodes`.
+  void build(std::vector<BvhNode>& nodes, uint32_t index, uint32_t begin, uint32_t end, uint32_t depth) {
+    uint32_t count = end - begin;
+    const bool parallel = count >= 2 * kParallelChunk;
+    Aabb bounds, centroid_bounds;
+    if (parallel)
+      gather_bounds_parallel(begin, end, bounds, centroid_bounds);
+    else
+      gather_bounds(begin, end, bounds, centroid_bounds);
+    BvhNode& node = nodes[index];
     for (int k = 0; k < 3; ++k) {
       node.lo[k] = bounds.lo[k];
       node.hi[k] = bounds.hi[k];
     }
-    uint32_t count = end - begin;
     float area = bounds.half_area();
     float leaf_cost = kIntersectionCost * float(count);
 
@@ -62,17 +121,18 @@ struct Builder {
     float best_cost = INFINITY;
     glm::vec3 extent = centroid_bounds.hi - centroid_bounds.lo;
     if (count > 1 && depth < kMedianSplitDepth) {
+      glm::vec3 scale(0);
+      for (int axis = 0; axis < 3; ++axis)
+        if (extent[axis] > 0) scale[axis] = kBins / extent[axis];
+      Bins bins;
+      if (parallel)
+        gather_bins_parallel(begin, end, centroid_bounds, scale, bins);
+      else
+        gather_bins(begin, end, centroid_bounds, scale, bins);
       for (int axis = 0; axis < 3; ++axis) {
         if (!(extent[axis] > 0)) continue;
-        Aabb bin_box[kBins];
-        uint32_t bin_count[kBins] = {};
-        float scale = kBins / extent[axis];
-        for (uint32_t i = begin; i < end; ++i) {
-          uint32_t p = bvh.prim_order[i];
-          int b = bin_index((centroids[p][axis] - centroid_bounds.lo[axis]) * scale);
-          bin_box[b].grow(boxes[p]);
-          ++bin_count[b];
-        }
+        const Aabb* bin_box = bins.box[axis];
+        const uint32_t* bin_count = bins.count[axis];
         // Sweep from the right to get the right side's area and count for every plane.
         float right_area[kBins];
         uint32_t right_count[kBins];
@@ -105,37 +165,70 @@ struct Builder {
     if (best_axis >= 0 && (best_cost < leaf_cost || count > kBvhMaxLeafSize)) {
       float scale = kBins / extent[best_axis];
       float lo = centroid_bounds.lo[best_axis];
-      auto first_right = std::partition(
-          bvh.prim_order.begin() + begin, bvh.prim_order.begin() + end, [&](uint32_t p) {
-            return bin_index((centroids[p][best_axis] - lo) * scale) < best_plane;
-          });
-      mid = uint32_t(first_right - bvh.prim_order.begin());
+      auto first_right = std::partition(order.begin() + begin, order.begin() + end, [&](uint32_t p) {
+        return bin_index((centroids[p][best_axis] - lo) * scale) < best_plane;
+      });
+      mid = uint32_t(first_right - order.begin());
     } else if (count > kBvhMaxLeafSize) {
       // All centroids coincide (or the tree is too deep): split by count along the widest axis.
       int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
       mid = begin + count / 2;
-      std::nth_element(bvh.prim_order.begin() + begin, bvh.prim_order.begin() + mid,
-                       bvh.prim_order.begin() + end,
+      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
                        [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
     } else {
       node.left_first = begin;
       node.prim_count = count;
-      bvh.leaf_count++;
-      bvh.max_leaf_size = std::max(bvh.max_leaf_size, count);
-      bvh.sah_cost += kIntersectionCost * count * area / root_area;
       return;
     }
-    bvh.sah_cost += kTraversalCost * area / root_area;
-    uint32_t left = uint32_t(bvh.nodes.size());
-    bvh.nodes.emplace_back();
-    build(left, begin, mid, depth + 1);
-    uint32_t right = uint32_t(bvh.nodes.size());
-    bvh.nodes.emplace_back();
-    build(right, mid, end, depth + 1);
-    bvh.nodes[index].left_first = right;  // `node` may dangle after the children grew the vector
-    bvh.nodes[index].prim_count = 0;
+    uint32_t right;
+    const uint32_t left = uint32_t(nodes.size());
+    nodes.emplace_back();
+    if (count >= kParallelSubtree) {
+      // The left subtree goes on in `nodes` (it follows its parent there); the right one, built meanwhile into
+      // an array of its own, is appended after it.
+      std::vector<BvhNode> right_nodes(1);
+      tbb::parallel_invoke([&] { build(nodes, left, begin, mid, depth + 1); },
+                           [&] { build(right_nodes, 0, mid, end, depth + 1); });
+      right = uint32_t(nodes.size());
+      append(nodes, right_nodes);
+    } else {
+      build(nodes, left, begin, mid, depth + 1);
+      right = uint32_t(nodes.size());
+      nodes.emplace_back();
+      build(nodes, right, mid, end, depth + 1);
+    }
+    nodes[index].left_first = right;  // `node` may dangle after the children grew the vector
+    nodes[index].prim_count = 0;
+  }
+
+  // Appends a subtree built into a node array of its own, moving its interior nodes' child indices.
+  static void append(std::vector<BvhNode>& nodes, const std::vector<BvhNode>& subtree) {
+    const uint32_t offset = uint32_t(nodes.size());
+    for (BvhNode n : subtree) {
+      if (n.prim_count == 0) n.left_first += offset;
+      nodes.push_back(n);
+    }
   }
 };
+
+// Depth, leaves and SAH cost of the finished tree, in node order: that is the order in which a serial
+// depth-first build meets them, so the cost's double sum is the same for any number of threads.
+void tree_stats(Bvh& bvh, float root_area) {
+  std::vector<uint32_t> depth(bvh.nodes.size(), 1);
+  for (uint32_t i = 0; i < bvh.nodes.size(); ++i) {
+    const BvhNode& n = bvh.nodes[i];
+    bvh.depth = std::max(bvh.depth, depth[i]);
+    float area = Aabb{{n.lo[0], n.lo[1], n.lo[2]}, {n.hi[0], n.hi[1], n.hi[2]}}.half_area();
+    if (n.prim_count > 0) {
+      bvh.leaf_count++;
+      bvh.max_leaf_size = std::max(bvh.max_leaf_size, n.prim_count);
+      bvh.sah_cost += kIntersectionCost * n.prim_count * area / root_area;
+    } else {
+      depth[i + 1] = depth[n.left_first] = depth[i] + 1;
+      bvh.sah_cost += kTraversalCost * area / root_area;
+    }
+  }
+}
 
 }  // namespace
 
@@ -159,15 +252,14 @@ Bvh build_bvh(const std::vector<Aabb>& prim_boxes) {
     bvh.depth = 1;
     bvh.leaf_count = 1;
   } else {
-    Builder builder{prim_boxes, {}, bvh};
-    builder.centroids.resize(n);
-    Aabb root;
-    for (uint32_t i = 0; i < n; ++i) {
-      builder.centroids[i] = (prim_boxes[i].lo + prim_boxes[i].hi) * 0.5f;
-      root.grow(prim_boxes[i]);
-    }
-    builder.root_area = std::max(root.half_area(), 1e-30f);
-    builder.build(0, 0, n, 0);
+    Builder builder{prim_boxes, std::vector<glm::vec3>(n), bvh.prim_order};
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i) builder.centroids[i] = (prim_boxes[i].lo + prim_boxes[i].hi) * 0.5f;
+    });
+    builder.build(bvh.nodes, 0, 0, n, 0);
+    Aabb root{{bvh.nodes[0].lo[0], bvh.nodes[0].lo[1], bvh.nodes[0].lo[2]},
+              {bvh.nodes[0].hi[0], bvh.nodes[0].hi[1], bvh.nodes[0].hi[2]}};
+    tree_stats(bvh, std::max(root.half_area(), 1e-30f));
   }
   bvh.node_count = uint32_t(bvh.nodes.size());
   bvh.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

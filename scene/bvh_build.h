@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 #include "kernels/shared/types.h"
@@ -13,8 +14,15 @@
 
 struct Aabb {
   glm::vec3 lo{1e30f}, hi{-1e30f};
-  void grow(const glm::vec3& p);
-  void grow(const Aabb& b);
+  // Inline: the BVH build calls them for every primitive at every level.
+  void grow(const glm::vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void grow(const Aabb& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
   float half_area() const;  // surface area / 2; 0 for an empty box
 };
 

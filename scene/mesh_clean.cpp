@@ -10,10 +10,16 @@
 // throws CGAL::Failure_exception. Both are avoided by checking the preconditions we know of first (see
 // the orientation step), and any CGAL failure that still happens becomes a SceneError.
 //
+// Merging duplicate points and duplicate faces are CGAL's merge_duplicate_points_in_polygon_soup and
+// merge_duplicate_polygons_in_polygon_soup (CGAL 5.5) done by parallel sorts instead of CGAL's std::map and
+// hash set, with the same result: the first occurrence of a point or of a face's vertex set is kept. They
+// were a third of the clean-up's time on a million triangles. Every parallel step gives the same bits for
+// any number of threads (tests/parallel_build_test.cpp): sorts are by total orders (ties broken by index),
+// and no floating-point sum depends on the split.
+//
 // Two orders matter to the renderer and CGAL does not keep them by itself:
-//   * triangle order (the renderer reports primitive indices): merge_duplicate_polygons_in_polygon_soup
-//     moves removed polygons to the back by swapping, so we tag every triangle with its position and
-//     sort the survivors back afterwards;
+//   * triangle order (the renderer reports primitive indices): duplicate faces are removed in place,
+//     keeping the order of the survivors;
 //   * vertex order (kept as the input's, after merging): remove_isolated_points_in_polygon_soup fills
 //     the holes with points from the back, so we run it on a range of original vertex ids instead of
 //     the points themselves, and put the ids back in ascending order afterwards.
@@ -28,7 +34,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -46,6 +51,9 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/assertions.h>
 #include <CGAL/boost/graph/helpers.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "scene/mesh_normals.h"
 #include "scene/scene_error.h"
@@ -60,12 +68,72 @@ using Vector = Kernel::Vector_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 using Polygon = std::vector<std::size_t>;
 
-// A triangle that remembers its position in the triangle list, so that the order can be restored after
-// a CGAL function that reorders polygons. CGAL only needs a random-access range of indices per polygon;
-// the extra member travels along when CGAL swaps polygons.
-struct TaggedTriangle : std::array<std::size_t, 3> {
-  std::size_t order = 0;
-};
+// Merges points at the same coordinates (-0 and +0 alike, as CGAL's lexicographic order has them) into
+// the first of them, numbers the points left in their input order and renumbers the polygons; returns how
+// many points were merged away. CGAL's merge_duplicate_points_in_polygon_soup does the same with a
+// std::map; a parallel sort by (point, index) finds each point's first occurrence faster.
+std::size_t merge_duplicate_points(std::vector<Point>& points, std::vector<Polygon>& polygons) {
+  const std::size_t n = points.size();
+  std::vector<std::size_t> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = i;
+  tbb::parallel_sort(sorted.begin(), sorted.end(), [&](std::size_t a, std::size_t b) {
+    const Point &p = points[a], &q = points[b];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  });
+  std::vector<std::size_t> first(n);  // per point: the first point at its coordinates
+  for (std::size_t k = 0; k < n;) {
+    std::size_t end = k + 1;
+    while (end < n && points[sorted[end]] == points[sorted[k]]) ++end;
+    for (std::size_t j = k; j < end; ++j) first[sorted[j]] = sorted[k];
+    k = end;
+  }
+  std::vector<std::size_t> id(n);
+  std::vector<Point> unique;
+  unique.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (first[i] == i) {
+      id[i] = unique.size();
+      unique.push_back(points[i]);
+    } else {
+      id[i] = id[first[i]];  // first[i] < i
+    }
+  }
+  if (unique.size() == n) return 0;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, polygons.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p < r.end(); ++p)
+      for (std::size_t& v : polygons[p]) v = id[v];
+  });
+  points = std::move(unique);
+  return n - points.size();
+}
+
+// Marks each triangle with the same vertex set (in either orientation) as an earlier one: what CGAL's
+// merge_duplicate_polygons_in_polygon_soup (erase_all_duplicates and require_same_orientation false)
+// removes, by a parallel sort instead of its hash set. Needs merged points (the same point, the same
+// index) and triangles of three distinct vertices. Returns the number marked.
+std::size_t mark_duplicate_triangles(const std::vector<std::array<std::size_t, 3>>& triangles,
+                                     std::vector<char>& duplicate) {
+  const std::size_t n = triangles.size();
+  std::vector<std::array<std::size_t, 3>> key(n);
+  std::vector<std::size_t> sorted(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t < r.end(); ++t) {
+      key[t] = triangles[t];
+      std::sort(key[t].begin(), key[t].end());
+      sorted[t] = t;
+    }
+  });
+  tbb::parallel_sort(sorted.begin(), sorted.end(),
+                     [&](std::size_t a, std::size_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
+  duplicate.assign(n, 0);
+  std::size_t count = 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if (key[sorted[k]] == key[sorted[k - 1]]) duplicate[sorted[k]] = 1, ++count;
+  return count;
+}
 
 // Newell normal of a polygon (not normalized): robust for non-convex and slightly non-planar polygons.
 Vector newell_normal(const std::vector<Point>& pts) {
@@ -200,16 +268,21 @@ std::array<std::size_t, 3> follow_corners(const std::vector<Point>& points, cons
   return result;
 }
 
+// Whether every undirected edge is used by exactly two triangles: the sorted list of edges has runs of two.
 bool is_closed_soup(const std::vector<Polygon>& triangles) {
-  std::map<std::pair<std::size_t, std::size_t>, int> edge_use;
-  for (const Polygon& t : triangles)
-    for (std::size_t i = 0; i < 3; ++i) {
-      std::size_t a = t[i], b = t[(i + 1) % 3];
-      if (a > b) std::swap(a, b);
-      ++edge_use[{a, b}];
-    }
-  for (const auto& [edge, count] : edge_use)
-    if (count != 2) return false;
+  // An edge as one 64-bit key (the output's vertex indices are 32-bit): half the memory of a pair.
+  std::vector<uint64_t> edges(3 * triangles.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t < r.end(); ++t)
+      for (std::size_t i = 0; i < 3; ++i) {
+        const uint64_t a = triangles[t][i], b = triangles[t][(i + 1) % 3];
+        edges[3 * t + i] = std::min(a, b) << 32 | std::max(a, b);
+      }
+  });
+  tbb::parallel_sort(edges.begin(), edges.end());
+  for (std::size_t k = 0; k < edges.size(); k += 2)
+    if (k + 1 == edges.size() || edges[k + 1] != edges[k] || (k + 2 < edges.size() && edges[k + 2] == edges[k]))
+      return false;
   return true;
 }
 
@@ -292,7 +365,7 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
 
   // 2. Merge duplicate points (keeps the first occurrence, in input order). Polygons left with fewer
   // than 3 distinct vertices are dropped in the loop below.
-  report.merged_vertices = PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
+  report.merged_vertices = merge_duplicate_points(points, polygons);
 
   // 3. Triangulate, keeping the polygon order: a polygon's triangles replace it in place.
   std::vector<std::array<std::size_t, 3>> triangles;
@@ -321,38 +394,42 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
     }
   }
 
+  polygons = {};  // one allocation per polygon: freed early (see below)
+
   // 4. Degenerate triangles: exact collinearity test on the coordinates as given (also catches a
   // repeated vertex).
-  std::vector<TaggedTriangle> tagged;
-  std::vector<Source> tagged_sources;  // by order tag
-  tagged.reserve(triangles.size());
+  std::vector<std::array<std::size_t, 3>> kept;
+  std::vector<Source> kept_sources;
+  kept.reserve(triangles.size());
+  kept_sources.reserve(triangles.size());
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     const auto& t = triangles[i];
     if (CGAL::collinear(points[t[0]], points[t[1]], points[t[2]])) {
       ++report.degenerate_faces;
       continue;
     }
-    TaggedTriangle tt;
-    static_cast<std::array<std::size_t, 3>&>(tt) = t;
-    tt.order = tagged.size();
-    tagged.push_back(tt);
-    tagged_sources.push_back(sources[i]);
+    kept.push_back(t);
+    kept_sources.push_back(sources[i]);
   }
+  // Freed as soon as they are dead, here, above and below: on a million triangles each of these arrays is
+  // tens of megabytes, and the peak memory of loading is reached in the clean-up.
+  triangles = {};
+  sources = {};
 
-  // 5. Duplicate faces, in either orientation. CGAL keeps one face of each group (in 5.5 the earliest:
-  // it is the one found first in its hash set) and reorders the list; the tags restore the order.
-  report.duplicate_faces = PMP::merge_duplicate_polygons_in_polygon_soup(
-      points, tagged, CGAL::parameters::erase_all_duplicates(false).require_same_orientation(false));
-  std::sort(tagged.begin(), tagged.end(),
-            [](const TaggedTriangle& a, const TaggedTriangle& b) { return a.order < b.order; });
-
+  // 5. Duplicate faces, in either orientation: the first of each group stays.
+  std::vector<char> duplicate;
+  report.duplicate_faces = mark_duplicate_triangles(kept, duplicate);
   std::vector<Polygon> tris;
-  tris.reserve(tagged.size());
-  sources.clear();
-  for (const auto& t : tagged) {
-    tris.push_back({t[0], t[1], t[2]});
-    sources.push_back(tagged_sources[t.order]);
+  tris.reserve(kept.size() - report.duplicate_faces);
+  sources.reserve(kept.size() - report.duplicate_faces);
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    if (duplicate[i]) continue;
+    tris.push_back({kept[i][0], kept[i][1], kept[i][2]});
+    sources.push_back(kept_sources[i]);
   }
+  kept = {};
+  kept_sources = {};
+  duplicate = {};
 
   // 6. Isolated points. Run on the vertex ids rather than the points: CGAL only moves the range's
   // elements around and renumbers the polygons, so afterwards ids[k] is the old index of new vertex k.

@@ -9,11 +9,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
+#include <string_view>
 
+#include <tbb/parallel_invoke.h>
 #include <tiny_obj_loader.h>
 
 #include "scene/input_file.h"
@@ -103,53 +106,60 @@ struct LineIndex {
   size_t short_faces = 0, first_short_face = 0, first_short_corners = 0;  // faces with 1 or 2 corners
 };
 
-// The words of a line as tinyobjloader separates them: by spaces and tabs.
-std::vector<std::string> split_words(const std::string& line) {
-  std::vector<std::string> words;
-  for (size_t a = line.find_first_not_of(" \t"); a != std::string::npos; a = line.find_first_not_of(" \t", a)) {
-    size_t b = std::min(line.find_first_of(" \t", a), line.size());
-    words.push_back(line.substr(a, b - a));
+// The words of a line as tinyobjloader separates them: by spaces and tabs. Views into `line`, into a
+// vector reused from line to line: the scan reads every line of the file, and allocating a string per
+// word was most of its time.
+void split_words(const std::string& line, std::vector<std::string_view>& words) {
+  words.clear();
+  const std::string_view view(line);
+  for (size_t a = view.find_first_not_of(" \t"); a != std::string_view::npos; a = view.find_first_not_of(" \t", a)) {
+    size_t b = std::min(view.find_first_of(" \t", a), view.size());
+    words.push_back(view.substr(a, b - a));
     a = b;
   }
-  return words;
 }
 
 // Checks that the first `min` of `words` after the keyword are finite numbers, and the words after them up
 // to `max` too if present (tinyobjloader would silently read a bad one as zero); more are not looked at.
-void check_coordinates(const std::string& where, const std::string& line, const std::vector<std::string>& words,
+// (`where` is made only for a message: building it for every line cost as much as the checks.)
+template <class Where>
+void check_coordinates(const Where& where, const std::string& line, const std::vector<std::string_view>& words,
                        size_t min, size_t max, const char* what) {
   size_t count = 0;
   for (; count < max && count + 1 < words.size(); ++count) {
+    // The word ends at a space, a tab or the end of the line (its terminating NUL), where strtof stops.
+    const std::string_view word = words[count + 1];
     char* end = nullptr;
-    float value = std::strtof(words[count + 1].c_str(), &end);
-    if (*end != '\0' || !std::isfinite(value)) break;
+    float value = std::strtof(word.data(), &end);
+    if (end != word.data() + word.size() || !std::isfinite(value)) break;
   }
   if (count < std::min(max, words.size() - 1) || count < min)
-    throw SceneError(where + ": expected " + what + ", got \"" + line + "\"");
+    throw SceneError(where() + ": expected " + what + ", got \"" + line + "\"");
 }
 
 // A non-zero integer that fits an int, as tinyobjloader's atoi reads OBJ indices ("" and "0" are not).
-bool is_index(const std::string& text) {
+bool is_index(std::string_view text) {
   size_t digits = text.find_first_not_of('-') == 1 ? 1 : 0;
-  if (text.size() <= digits || text.find_first_not_of("0123456789", digits) != std::string::npos) return false;
-  long long value = text.size() - digits > 10 ? 0 : std::stoll(text);
+  if (text.size() <= digits || text.find_first_not_of("0123456789", digits) != std::string_view::npos) return false;
+  long long value = text.size() - digits > 10 ? 0 : std::stoll(std::string(text));
   return value != 0 && value >= -2147483647 && value <= 2147483647;
 }
 
 // Checks the corners of an f, l or p statement: v, v/vt, v//vn or v/vt/vn. tinyobjloader gives up on the
 // first bad one with a message of its own ("Failed parse 'f' line(e.g. zero value for face index. ...").
-void check_corners(const std::string& where, const std::vector<std::string>& words) {
+template <class Where>
+void check_corners(const Where& where, const std::vector<std::string_view>& words) {
   for (size_t k = 1; k < words.size(); ++k) {
-    const std::string& w = words[k];
-    size_t a = w.find('/'), b = a == std::string::npos ? a : w.find('/', a + 1);
+    const std::string_view w = words[k];
+    size_t a = w.find('/'), b = a == std::string_view::npos ? a : w.find('/', a + 1);
     bool ok = is_index(w.substr(0, a));
-    if (ok && a != std::string::npos) {
-      std::string vt = w.substr(a + 1, b == std::string::npos ? b : b - a - 1);
-      ok = (vt.empty() ? b != std::string::npos : is_index(vt)) &&
-           (b == std::string::npos || is_index(w.substr(b + 1)));
+    if (ok && a != std::string_view::npos) {
+      std::string_view vt = w.substr(a + 1, b == std::string_view::npos ? b : b - a - 1);
+      ok = (vt.empty() ? b != std::string_view::npos : is_index(vt)) &&
+           (b == std::string_view::npos || is_index(w.substr(b + 1)));
     }
     if (!ok)
-      throw SceneError(where + ": bad vertex reference \"" + w + "\" in \"" + words[0] +
+      throw SceneError(where() + ": bad vertex reference \"" + std::string(w) + "\" in \"" + std::string(words[0]) +
                        "\" (expected v, v/vt, v//vn or v/vt/vn: non-zero integers, 1 for the first vertex)");
   }
 }
@@ -180,19 +190,20 @@ std::vector<std::string> mtllib_names(const std::string& line) {
 LineIndex scan_obj_lines(const std::string& path, std::istream& in) {
   LineIndex index;
   std::string line, material;
+  std::vector<std::string_view> words;
   size_t material_line = 0;
   for (size_t number = 1; read_line(in, line); ++number) {
-    const std::vector<std::string> words = split_words(line);
+    split_words(line, words);
     if (words.empty()) continue;
-    const std::string& keyword = words[0];
-    const std::string where = path + ":" + std::to_string(number);
+    const std::string_view keyword = words[0];
+    const auto where = [&] { return path + ":" + std::to_string(number); };
     if (keyword == "f" || keyword == "l" || keyword == "p") check_corners(where, words);
     if (keyword == "f") {
       size_t corners = words.size() - 1;
       // tinyobjloader drops faces of fewer than 3 corners (with a warning we would not see) and stores
       // corner counts in a byte: a face of 300 became one of 44, shifting every face after it.
       if (corners > 255)
-        throw SceneError(where + ": a face with " + std::to_string(corners) +
+        throw SceneError(where() + ": a face with " + std::to_string(corners) +
                          " vertices, more than the 255 the OBJ reader supports (split it)");
       if (corners < 3) {
         if (index.short_faces++ == 0) {
@@ -268,22 +279,43 @@ void warn_about_used_materials(const std::vector<MtlMaterial>& materials, const 
 ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<std::string>& warnings) {
   check_obj_extension(path);
   check_obj_content(path, read_input_file(path, kMeshInput, 512));
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the mesh file");
-  LineIndex lines = scan_obj_lines(path, in);
-  in.clear();
-  in.seekg(0);
+  if (!std::ifstream(path)) throw SceneError(path + ": cannot open the mesh file");
+
+  // The scan and tinyobjloader's parse read the file side by side, each through a stream of its own (they
+  // took about as long as each other). The scan's errors come first, as if it had run alone before the
+  // parse; an exception of the parse (bad_alloc) only after them.
+  LineIndex lines;
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  bool ok = false;
+  std::exception_ptr scan_error, parse_error;
+  tbb::parallel_invoke(
+      [&] {
+        try {
+          std::ifstream in(path);
+          lines = scan_obj_lines(path, in);
+        } catch (...) {
+          scan_error = std::current_exception();
+        }
+      },
+      [&] {
+        try {
+          std::ifstream in(path);
+          // No material reader: the scan resolves mtllib and usemtl.
+          ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr, /*triangulate=*/false);
+        } catch (...) {
+          parse_error = std::current_exception();
+        }
+      });
+  if (scan_error) std::rethrow_exception(scan_error);
 
   ObjFile obj;
   std::map<std::string, uint32_t> material_ids;
   if (with_materials) material_ids = read_mtllibs(path, lines, obj.materials, warnings);
 
-  tinyobj::attrib_t attrib;
-  std::vector<tinyobj::shape_t> shapes;
-  std::vector<tinyobj::material_t> materials;
-  std::string warn, err;
-  // No material reader: the scan above resolved mtllib and usemtl.
-  bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr, /*triangulate=*/false);
+  if (parse_error) std::rethrow_exception(parse_error);
   if (!ok) {
     // What the scan does not check (tinyobjloader's own "vw" statement): only its line number is worth
     // passing on.
@@ -307,7 +339,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
     size_t offset = 0;
     for (unsigned char arity : shape.mesh.num_face_vertices) {
       size_t line = face < lines.face_lines.size() ? lines.face_lines[face] : 0;
-      std::string where = path + ":" + (line ? std::to_string(line) : "?");
+      const auto where = [&] { return path + ":" + (line ? std::to_string(line) : "?"); };
       std::vector<uint32_t> polygon;
       std::vector<glm::vec2> uvs;
       std::vector<glm::vec3> normals;
@@ -315,27 +347,27 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
         const tinyobj::index_t& corner = shape.mesh.indices[offset + k];
         int index = corner.vertex_index;
         if (index < 0 || size_t(index) >= vertex_count)
-          throw SceneError(where + ": face index " + std::to_string(index + 1) + " out of range (" +
+          throw SceneError(where() + ": face index " + std::to_string(index + 1) + " out of range (" +
                            std::to_string(vertex_count) + " vertices)");
         polygon.push_back(uint32_t(index));
         int t = corner.texcoord_index;
         if (t >= 0 && size_t(t) >= uv_count)
-          throw SceneError(where + ": texture coordinate index " + std::to_string(t + 1) + " out of range (" +
+          throw SceneError(where() + ": texture coordinate index " + std::to_string(t + 1) + " out of range (" +
                            std::to_string(uv_count) + " texture coordinates)");
         if (t >= 0) uvs.push_back({attrib.texcoords[2 * t], attrib.texcoords[2 * t + 1]});
         int n = corner.normal_index;
         if (n >= 0 && size_t(n) >= normal_count)
-          throw SceneError(where + ": normal index " + std::to_string(n + 1) + " out of range (" +
+          throw SceneError(where() + ": normal index " + std::to_string(n + 1) + " out of range (" +
                            std::to_string(normal_count) + " normals)");
         if (n >= 0) normals.push_back({attrib.normals[3 * n], attrib.normals[3 * n + 1], attrib.normals[3 * n + 2]});
       }
       if (!uvs.empty() && uvs.size() != arity)
-        throw SceneError(where + ": a face needs texture coordinates at all of its corners or at none");
+        throw SceneError(where() + ": a face needs texture coordinates at all of its corners or at none");
       if (!normals.empty() && normals.size() != arity)
-        throw SceneError(where + ": a face needs normals at all of its corners or at none");
+        throw SceneError(where() + ": a face needs normals at all of its corners or at none");
       if (with_materials) {
         const std::string& name = face < lines.face_material.size() ? lines.face_material[face] : "";
-        if (name.empty()) throw SceneError(where + ": face without a material (no usemtl before it)");
+        if (name.empty()) throw SceneError(where() + ": face without a material (no usemtl before it)");
         auto it = material_ids.find(name);
         if (it == material_ids.end()) {
           std::string at = path + ":" + std::to_string(lines.face_material_line[face]);
