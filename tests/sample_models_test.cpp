@@ -231,14 +231,16 @@ TEST(SampleModels, PlyAsciiAndBinaryGiveTheFilesVerticesFacesNormalsAndUvs) {
     const PlyFile ply = read_ply_file(model(file));
     std::vector<size_t> corners;
     for (const auto& face : ply.items.at("face")) corners.push_back(face[size_t(ply.property("face", {"vertex_indices", "vertex_index"}))].size());
-    const ShapeDesc& s = load_model(file).shapes.at(0);
+    const SceneDescription s_scene = load_model(file);
+    const ShapeDesc& s = s_scene.shapes.at(0);
     EXPECT_EQ(s.clean.input_vertices, ply.element("vertex")->count);
     EXPECT_EQ(s.clean.input_polygons, ply.element("face")->count);
     EXPECT_EQ(s.mesh.triangles.size(), fan_triangles(corners) - s.clean.degenerate_faces - s.clean.duplicate_faces);
   }
   // The cubes are closed boxes of 12 triangles whatever their files' layouts.
   for (const char* file : {"PLY/cube.ply", "PLY/cube_binary.ply"}) {
-    const ShapeDesc& s = load_model(file, R"(, "orient": true)").shapes.at(0);
+    const SceneDescription s_scene = load_model(file, R"(, "orient": true)");
+    const ShapeDesc& s = s_scene.shapes.at(0);
     EXPECT_EQ(s.mesh.triangles.size(), 12u) << file;
     EXPECT_TRUE(s.clean.closed) << file;
   }
@@ -343,11 +345,13 @@ TEST(SampleModels, OffGivesTheFilesVerticesAndFaces) {
     const PolygonSoup soup = load_ply_stl_off(model(file), warnings);
     EXPECT_EQ(soup.positions, vertices);
     EXPECT_EQ(soup.polygons, faces);
-    const ShapeDesc& s = load_model(file).shapes.at(0);
+    const SceneDescription s_scene = load_model(file);
+    const ShapeDesc& s = s_scene.shapes.at(0);
     EXPECT_EQ(s.mesh.triangles.size(), fan_triangles(corners) - s.clean.degenerate_faces - s.clean.duplicate_faces);
   }
   // Cube.off: the 6 quads of a closed cube.
-  const ShapeDesc& cube = load_model("OFF/Cube.off", R"(, "orient": true)").shapes.at(0);
+  const SceneDescription cube_scene = load_model("OFF/Cube.off", R"(, "orient": true)");
+  const ShapeDesc& cube = cube_scene.shapes.at(0);
   EXPECT_EQ(cube.mesh.triangles.size(), 12u);
   EXPECT_TRUE(cube.clean.closed);
   // invalid.off says 4 faces and gives none: truncated.
