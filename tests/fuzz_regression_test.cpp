@@ -40,12 +40,11 @@ std::vector<std::string> files_ending(const std::string& extension) {
   return files;
 }
 
-// "" if the scene loads and flattens, the SceneError message if it is rejected; fails the test on any
-// other exception.
-std::string scene_outcome(const std::string& path) {
+// "" if load() returns, the SceneError message if it throws one; fails the test on any other exception.
+template <class Load>
+std::string load_outcome(const std::string& path, Load load) {
   try {
-    DeviceScene scene = build_device_scene(load_scene(path));
-    EXPECT_LE(scene.bvh.depth, kBvhMaxDepth) << path;
+    load();
   } catch (const SceneError& e) {
     return e.what();
   } catch (const std::exception& e) {
@@ -53,6 +52,14 @@ std::string scene_outcome(const std::string& path) {
     return "unexpected";
   }
   return "";
+}
+
+// The outcome of loading and flattening a scene file.
+std::string scene_outcome(const std::string& path) {
+  return load_outcome(path, [&] {
+    DeviceScene scene = build_device_scene(load_scene(path));
+    EXPECT_LE(scene.bvh.depth, kBvhMaxDepth) << path;
+  });
 }
 
 // A fuzz_render input, unpacked, loaded and rendered tiny as fuzz_render does: "rendered" if the film is
@@ -79,35 +86,22 @@ std::string render_outcome(const std::string& path) {
   }
 }
 
-// "" if the glTF file loads, the SceneError message if it is rejected; fails the test on any other exception.
+// The outcome of loading a glTF file.
 std::string gltf_outcome(const std::string& path) {
-  try {
+  return load_outcome(path, [&] {
     std::vector<std::string> warnings;
     load_gltf(path, warnings);
-  } catch (const SceneError& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << path << ": unexpected exception: " << e.what();
-    return "unexpected";
-  }
-  return "";
+  });
 }
 
-// The same for an image file, read from the file and (as an image embedded in glTF) decoded from its bytes:
-// the two messages, or "" for an image that loads.
+// The outcome of an image file, read from the file or (as an image embedded in glTF) decoded from its bytes.
 std::string texture_outcome(const std::string& path, bool in_memory) {
-  try {
+  return load_outcome(path, [&] {
     if (in_memory)
       decode_texture_image(path, read_text_file(path));
     else
       load_texture_image(path);
-  } catch (const SceneError& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << path << ": unexpected exception: " << e.what();
-    return "unexpected";
-  }
-  return "";
+  });
 }
 
 }  // namespace
