@@ -498,8 +498,9 @@ inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, co
   }
   mesh_ray.skip_prim = ray->skip_instance == k ? ray->skip_prim : PC_INVALID;
 #ifdef PC_HAS_CUTOUTS
-  /* The copies of a cut-out surface along one ray decide independently. */
-  if (k != 0u) mesh_ray.cutout_seed = hash4(ray->cutout_seed, k, 0x510e527fu, 0x9b05688cu);
+  /* The copies of a cut-out surface along one ray decide independently; the rest of the scene keeps the
+   * ray's own seed, as without instances. */
+  if (!(inst->flags & PC_INSTANCE_IDENTITY)) mesh_ray.cutout_seed = hash4(ray->cutout_seed, k, 0x510e527fu, 0x9b05688cu);
 #endif
   Hit h;
   h.t = hit->t;
