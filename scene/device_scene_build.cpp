@@ -339,7 +339,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   }
   const uint32_t world_prims = uint32_t(prims.size());
   // Each instanced mesh that a shape places: its triangles once, in the mesh's own coordinates.
-  std::vector<uint32_t> mesh_first(scene.instanced_meshes.size() + 1, PC_INVALID);
+  std::vector<uint32_t> mesh_first(scene.instanced_meshes.size(), PC_INVALID);
   std::vector<uint32_t> mesh_used;
   for (const ShapeDesc* p : placements) {
     if (mesh_first[p->instance_of] != PC_INVALID) continue;

@@ -1,6 +1,7 @@
 // Placing meshes by transforms after clean-up: instances flattened into world geometry.
 #include <utility>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
@@ -38,6 +39,14 @@ ShapeDesc flattened_shape(const SceneDescription& scene, const ShapeDesc& s) {
   out.clean = m.clean;
   out.triangle_materials = m.triangle_materials;
   return out;
+}
+
+void set_bounds(InstancedMesh& m) {
+  m.lo = m.hi = m.mesh.positions.empty() ? glm::dvec3(0) : m.mesh.positions[0];
+  for (const glm::dvec3& p : m.mesh.positions) {
+    m.lo = glm::min(m.lo, p);
+    m.hi = glm::max(m.hi, p);
+  }
 }
 
 size_t shape_triangle_count(const SceneDescription& scene, const ShapeDesc& s) {

@@ -107,7 +107,11 @@ struct InstancedMesh {
   CleanReport clean;
   // Per triangle the material index ("material": "from_mtl"); empty when all have the shapes' material.
   std::vector<uint32_t> triangle_materials;
+  glm::dvec3 lo{0}, hi{0};  // the box of mesh.positions (set_bounds), which each placement is checked by
 };
+
+// Sets m.lo and m.hi from its mesh's positions (both 0 for none).
+void set_bounds(InstancedMesh& m);
 
 // One shape after loading: a cleaned triangle mesh or an analytic sphere, in world space, or a
 // placement of an InstancedMesh.

@@ -581,14 +581,9 @@ void place_soup(PolygonSoup& soup, const glm::dmat4& transform, const Node& n) {
 }
 
 // An instance's placement: the corners of its mesh's bounding box (which contain every placed vertex)
-// within float range.
-void check_placement(const TriangleMesh& mesh, const glm::dmat4& transform, const Node& n) {
-  if (mesh.positions.empty()) return;
-  glm::dvec3 lo = mesh.positions[0], hi = lo;
-  for (const glm::dvec3& p : mesh.positions) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
+// within float range. The box is the mesh's own (set_bounds), computed once for all its placements.
+void check_placement(const InstancedMesh& m, const glm::dmat4& transform, const Node& n) {
+  const glm::dvec3 &lo = m.lo, &hi = m.hi;
   for (int corner = 0; corner < 8; ++corner) {
     glm::dvec3 c(corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z);
     if (!within_float_range(glm::dvec3(transform * glm::dvec4(c, 1.0))))
@@ -851,11 +846,12 @@ void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescr
         } catch (const SceneError& e) {
           n.fail(g.where + ": " + e.what());
         }
+        set_bounds(m);
         instance_of[source] = uint32_t(scene.instanced_meshes.size());
         scene.instanced_meshes.push_back(std::move(m));
       }
       s.instance_of = instance_of[source];
-      check_placement(scene.instanced_meshes[s.instance_of].mesh, s.transform, n);
+      check_placement(scene.instanced_meshes[s.instance_of], s.transform, n);
       scene.shapes.push_back(std::move(s));
       continue;
     }
@@ -1061,16 +1057,17 @@ SceneDescription load_scene(const std::string& path) {
       ShapeDesc shape = found->second;
       shape.label = s.path + (s.has("file") ? " (" + s.at("file").string() + ")" : "");
       shape.transform = s.has("transform") ? read_transform(s.at("transform")) : glm::dmat4(1.0);
-      check_placement(scene.instanced_meshes[shape.instance_of].mesh, shape.transform, s);
+      check_placement(scene.instanced_meshes[shape.instance_of], shape.transform, s);
       scene.shapes.push_back(std::move(shape));
       continue;
     }
     bool own_coordinates = false;
     ShapeDesc shape = read_shape(s, dir, by_name, scene, key.empty() ? 1 : placements[key], &own_coordinates);
     if (own_coordinates) {
-      check_placement(shape.mesh, shape.transform, s);
       shape.instance_of = uint32_t(scene.instanced_meshes.size());
       scene.instanced_meshes.push_back({shape.label, std::move(shape.mesh), shape.clean, std::move(shape.triangle_materials)});
+      set_bounds(scene.instanced_meshes.back());
+      check_placement(scene.instanced_meshes.back(), shape.transform, s);
       shape.mesh = TriangleMesh{};
       shape.clean = CleanReport{};
       shape.triangle_materials.clear();
