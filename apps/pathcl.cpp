@@ -395,11 +395,11 @@ int run_info(const std::string& path, const std::string& dump_obj) {
                 c.input_vertices, c.input_polygons, mesh.positions.size(), mesh.triangles.size(),
                 shape_emits(shape) ? ", emitter" : "");
     std::printf("    merged %zu duplicate vertices, removed %zu isolated vertices, %zu degenerate faces, %zu duplicate "
-                "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s\n",
+                "faces; triangulated %zu polygons into %zu triangles; flipped %zu faces; %s%s%s\n",
                 c.merged_vertices, c.removed_isolated_vertices, c.degenerate_faces, c.duplicate_faces,
                 c.polygons_triangulated, c.triangles_from_polygons, c.faces_flipped,
                 c.self_intersecting ? "closed, self-intersecting" : c.closed ? "closed" : "open",
-                mesh.normals.empty() ? "" : ", shading normals");
+                mesh.normals.empty() ? "" : ", shading normals", mesh.colors.empty() ? "" : ", vertex colours");
   }
   const DeviceScene& v = s.device;
   size_t by_type[5] = {};

@@ -39,12 +39,20 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
 #endif
 
 /* The material at a surface point; a textured colour is the texture's value times the material's
- * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). */
+ * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). Vertex
+ * colours, interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x
+ * COLOR_0); a sphere's are white. */
 inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
   Material m = sc->materials[material];
 #ifdef PC_HAS_TEXTURES
   if (m.color_texture != PC_INVALID)
     m.color.xyz *= texture_lookup(sc->textures, sc->texels, m.color_texture, surface_uv(sc, s, hit));
+#endif
+#ifdef PC_HAS_VERTEX_COLORS
+  if (sc->shading[s->prim].flags & PC_FLAG_VERTEX_COLORS) {
+    __global const float4* c = sc->colors + 3 * s->prim;
+    m.color.xyz *= ((1.0f - hit->u - hit->v) * c[0].xyz + hit->u * c[1].xyz) + hit->v * c[2].xyz;
+  }
 #endif
   return m;
 }

@@ -30,7 +30,8 @@ enum : uint32_t {
   kFeatureEnvironmentMap = 1u << 15,
   kFeatureCutouts = 1u << 16,  // a material with opacity below 1 or an opacity texture
   kFeatureInstances = 1u << 17,  // a mesh placed more than once, stored once (two-level BVH)
-  kFeatureAll = (1u << 18) - 1,
+  kFeatureVertexColors = 1u << 18,  // a mesh with vertex colours
+  kFeatureAll = (1u << 19) - 1,
 };
 
 // Whether meshes that several shapes place stay instances (stored once, with a BVH of their own under the
@@ -62,6 +63,8 @@ struct BvhStats {
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes
 //   uvs        2 per primitive in scene order (kernels/scene.cl), only with textures
+//   colors     3 per primitive in scene order (its corners' linear vertex colours; white for primitives
+//              without), only when some mesh has vertex colours
 //   materials
 //   lights     area lights first (in primitive order), then point and spot lights (these are the light
 //              BVH's, [0, header.tree_light_count)), then directional and environment lights

@@ -249,14 +249,21 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       if (has_normals)
         for (const glm::vec3& n : mesh.normals[ti]) smooth = smooth || glm::dot(n, n) > 0;
       if (smooth) out.features |= kFeatureSmoothNormals;
+      const uint32_t colored = mesh.colors.empty() ? 0 : PC_FLAG_VERTEX_COLORS;
       out.shading.push_back(
-          {material_of(ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0), PC_PRIM_TRIANGLE});
+          {material_of(ti), PC_INVALID, flags | (smooth ? PC_FLAG_SMOOTH : 0) | colored, PC_PRIM_TRIANGLE});
       if (textures) {
         // (u0, v0, u1, v1), (u2, v2, 0, 0); a mesh without uvs has no textured material (scene_load.cpp).
         std::array<glm::vec2, 3> uv{};
         if (!mesh.uvs.empty()) uv = mesh.uvs[ti];
         out.uvs.push_back({uv[0].x, uv[0].y, uv[1].x, uv[1].y});
         out.uvs.push_back({uv[2].x, uv[2].y, 0, 0});
+      }
+      if (mesh.colors.empty()) {
+        out.colors.insert(out.colors.end(), 3, pc_float4{1, 1, 1, 1});
+      } else {
+        for (const glm::vec3& c : mesh.colors[ti]) out.colors.push_back(f4(c, 1.0f));
+        out.features |= kFeatureVertexColors;
       }
       if (smooth) {
         // A corner without a normal (zero: a zero normal in the file, or generated normals that cancel,
@@ -313,6 +320,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
       out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});  // 3 per primitive, as for triangles
+      out.colors.insert(out.colors.end(), 3, pc_float4{1, 1, 1, 1});
       if (textures) {
         // The sphere's own frame for its lat-long uvs (kernels/integrator.cl, surface_uv): x axis and
         // handedness, y axis (the pole).
@@ -350,6 +358,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     add_triangles(*p, m.mesh, positions, m.triangle_materials);
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
+  if (!(out.features & kFeatureVertexColors)) out.colors.clear();
 
   if (boxes.size() >= PC_BVH4_MAX_LEAF_FIRST)
     throw SceneError(scene.path + ": " + std::to_string(boxes.size()) + " primitives; at most " +

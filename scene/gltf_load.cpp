@@ -357,12 +357,28 @@ void read_primitive(Reader& r, const tinygltf::Primitive& p, const glm::dmat4& g
       uvs.push_back(glm::vec2(float(u), float(1 - v)));  // glTF's v runs down the image, pathcl's up
     }
   }
+  // COLOR_0 multiplies the base colour (glTF 2.0, 3.9.2), linear; VEC4's alpha is not read (pathcl's
+  // cut-outs take alpha from the material).
+  std::vector<glm::vec3> colors;
+  if (attribute("COLOR_0") >= 0) {
+    const int index = attribute("COLOR_0");
+    const bool rgba = index < int(r.model.accessors.size()) && r.model.accessors[size_t(index)].type == TINYGLTF_TYPE_VEC4;
+    AccessorData d = read_accessor(r, index, "COLOR_0 of " + where, rgba ? 4 : 3);
+    if (d.count != positions.count) r.fail(where + ": COLOR_0 has " + std::to_string(d.count) + " elements, POSITION " + std::to_string(positions.count));
+    for (size_t i = 0; i < d.count; ++i) {
+      glm::vec3 c(float(d.get(i, 0)), float(d.get(i, 1)), float(d.get(i, 2)));
+      for (int k = 0; k < 3; ++k)
+        if (!(c[k] >= 0 && c[k] <= 1)) r.fail(where + ": COLOR_0 " + std::to_string(i) + " is not in [0, 1]");
+      colors.push_back(c);
+    }
+  }
   // (A mirroring node transform turns counter-clockwise into clockwise, glTF 2.0, 3.7.2.1: placing the
   // mesh swaps the winding then, placed_mesh.)
   for (std::array<uint32_t, 3> t : triangles) {
     soup.polygons.push_back({t[0], t[1], t[2]});
     if (!normals.empty()) soup.normals.push_back({normals[t[0]], normals[t[1]], normals[t[2]]});
     if (!uvs.empty()) soup.uvs.push_back({uvs[t[0]], uvs[t[1]], uvs[t[2]]});
+    if (!colors.empty()) soup.colors.push_back({colors[t[0]], colors[t[1]], colors[t[2]]});
   }
   if (!p.targets.empty()) r.warn(where + ": morph targets are not supported: the base shape is rendered");
   if (p.material < 0) {

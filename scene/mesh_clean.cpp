@@ -359,6 +359,7 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
   }
   check_corner_attributes(soup, soup.uvs, "texture coordinates", "texture coordinate");
   check_corner_attributes(soup, soup.normals, "normals", "normal");
+  check_corner_attributes(soup, soup.colors, "colours", "colour");
   if (!soup.materials.empty() && soup.materials.size() != soup.polygons.size())
     throw SceneError(std::to_string(soup.materials.size()) + " material ids for " +
                      std::to_string(soup.polygons.size()) + " polygons");
@@ -510,6 +511,13 @@ TriangleMesh clean_soup(const PolygonSoup& soup, const CleanOptions& options, Cl
       if (!uvs.empty())
         for (int k = 0; k < 3; ++k) corner_uvs[k] = uvs[s.corners[k]];
       result.uvs.push_back(corner_uvs);
+    }
+    if (!soup.colors.empty()) {
+      const std::vector<glm::vec3>& colors = soup.colors[s.polygon];
+      std::array<glm::vec3, 3> corner_colors{glm::vec3(1), glm::vec3(1), glm::vec3(1)};
+      if (!colors.empty())
+        for (int k = 0; k < 3; ++k) corner_colors[k] = colors[s.corners[k]];
+      result.colors.push_back(corner_colors);
     }
     if (!soup.materials.empty()) result.materials.push_back(soup.materials[s.polygon]);
   }

@@ -25,6 +25,10 @@ struct PolygonSoup {
   // polygon one normal per corner or nothing. A zero normal is a corner without one (it takes the face
   // normal); they need not be unit length (they are normalized after the transform).
   std::vector<std::vector<glm::vec3>> normals;
+  // Vertex colours (PLY red/green/blue, glTF COLOR_0, OBJ "v x y z r g b"), linear RGB in [0, 1], laid out
+  // like uvs: empty, or per polygon one colour per corner or nothing (that polygon is white). They
+  // multiply the material's colour.
+  std::vector<std::vector<glm::vec3>> colors;
   // Material ids in the caller's numbering: empty, or one per polygon.
   std::vector<uint32_t> materials;
 };
@@ -72,8 +76,10 @@ struct TriangleMesh {
   std::vector<std::array<uint32_t, 3>> source_corners;
   // The soup's attributes carried through by those sources: per triangle, the uvs of its three
   // vertices when the soup has uvs ((0, 0) for a polygon without), and the material id when the soup
-  // has material ids. (The soup's normals go into `normals` above.)
+  // has material ids, and likewise the colours. (The soup's normals go into `normals` above.)
   std::vector<std::array<glm::vec2, 3>> uvs;
+  // The vertex colours of each triangle's corners when the soup has colours (white for a polygon without).
+  std::vector<std::array<glm::vec3, 3>> colors;
   std::vector<uint32_t> materials;
 };
 

@@ -23,6 +23,7 @@ TriangleMesh placed_mesh(TriangleMesh mesh, const glm::dmat4& transform) {
       std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
       if (!mesh.normals.empty()) std::swap(mesh.normals[t][1], mesh.normals[t][2]);
       if (!mesh.uvs.empty()) std::swap(mesh.uvs[t][1], mesh.uvs[t][2]);
+      if (!mesh.colors.empty()) std::swap(mesh.colors[t][1], mesh.colors[t][2]);
       if (!mesh.source_corners.empty()) std::swap(mesh.source_corners[t][1], mesh.source_corners[t][2]);
     }
   }

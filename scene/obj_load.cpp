@@ -22,6 +22,7 @@
 #include "scene/input_file.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
+#include "scene/texture_load.h"
 
 namespace {
 
@@ -304,7 +305,9 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
         try {
           std::ifstream in(path);
           // No material reader: the scan resolves mtllib and usemtl.
-          ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr, /*triangulate=*/false);
+          // Vertex colours ("v x y z r g b") only when every vertex has them (no white fallback).
+          ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr, /*triangulate=*/false,
+                                /*default_vcols_fallback=*/false);
         } catch (...) {
           parse_error = std::current_exception();
         }
@@ -333,6 +336,8 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
   size_t normal_count = attrib.normals.size() / 3;
   for (size_t i = 0; i < vertex_count; ++i)
     soup.positions.push_back({attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]});
+  // The colour extension's values are display values in [0, 1], sRGB-encoded as in PLY files.
+  const bool colored = vertex_count > 0 && attrib.colors.size() == 3 * vertex_count;
   bool any_uvs = false, any_normals = false;
   size_t face = 0;
   for (const tinyobj::shape_t& shape : shapes) {
@@ -342,7 +347,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
       const auto where = [&] { return path + ":" + (line ? std::to_string(line) : "?"); };
       std::vector<uint32_t> polygon;
       std::vector<glm::vec2> uvs;
-      std::vector<glm::vec3> normals;
+      std::vector<glm::vec3> normals, colors;
       for (size_t k = 0; k < arity; ++k) {
         const tinyobj::index_t& corner = shape.mesh.indices[offset + k];
         int index = corner.vertex_index;
@@ -350,6 +355,9 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
           throw SceneError(where() + ": face index " + std::to_string(index + 1) + " out of range (" +
                            std::to_string(vertex_count) + " vertices)");
         polygon.push_back(uint32_t(index));
+        if (colored)
+          colors.push_back({srgb_to_linear(attrib.colors[3 * index]), srgb_to_linear(attrib.colors[3 * index + 1]),
+                            srgb_to_linear(attrib.colors[3 * index + 2])});
         int t = corner.texcoord_index;
         if (t >= 0 && size_t(t) >= uv_count)
           throw SceneError(where() + ": texture coordinate index " + std::to_string(t + 1) + " out of range (" +
@@ -381,6 +389,7 @@ ObjFile load_obj_file(const std::string& path, bool with_materials, std::vector<
       soup.polygons.push_back(std::move(polygon));
       soup.uvs.push_back(std::move(uvs));
       soup.normals.push_back(std::move(normals));
+      if (colored) soup.colors.push_back(std::move(colors));
       obj.face_lines.push_back(line);
       offset += arity;
       ++face;

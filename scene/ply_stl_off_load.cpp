@@ -29,6 +29,7 @@
 
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
+#include "scene/texture_load.h"
 
 namespace {
 
@@ -64,6 +65,32 @@ bool has_number(PlyElement& element, const char* tag) {
   return element.has_property<double>(tag) || element.has_property<int8_t>(tag) || element.has_property<uint8_t>(tag) ||
          element.has_property<int16_t>(tag) || element.has_property<uint16_t>(tag) ||
          element.has_property<int32_t>(tag) || element.has_property<uint32_t>(tag);
+}
+
+// The colour properties of a PLY element: red, green, blue (or r, g, b, or diffuse_red, ...); null when
+// it has none.
+const char* const* ply_color_tags(PlyElement& element) {
+  static const char* const tags[][3] = {
+      {"red", "green", "blue"}, {"r", "g", "b"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}};
+  for (const auto& t : tags)
+    if (has_number(element, t[0]) && has_number(element, t[1]) && has_number(element, t[2])) return t;
+  return nullptr;
+}
+
+// The colour of the item just read, linear: integers over their type's range (8-bit as 0 to 255, 16-bit
+// as 0 to 65535), floats as they are; all taken as sRGB-encoded display values, the convention of
+// scanners and MeshLab, as 8-bit images are.
+glm::vec3 ply_color(PlyElement& element, const char* const* tags) {
+  glm::vec3 color;
+  for (int c = 0; c < 3; ++c) {
+    double value = 0;
+    ply_number(element, tags[c], value);
+    const double range = element.has_property<double>(tags[c])                                             ? 1.0
+                         : element.has_property<int16_t>(tags[c]) || element.has_property<uint16_t>(tags[c]) ? 65535.0
+                                                                                                              : 255.0;
+    color[c] = srgb_to_linear(value / range);
+  }
+  return color;
 }
 
 // Reads every property of the next item of `element` (CGAL buffers them for assign); false when the
@@ -122,7 +149,7 @@ void check_ply_properties_follow_an_element(const std::string& path) {
   }
 }
 
-PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings) {
+PolygonSoup load_ply(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot open the mesh file");
   check_ply_properties_follow_an_element(path);
@@ -144,7 +171,8 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
   PolygonSoup soup;
   std::vector<glm::vec3> vertex_normals;
   std::vector<glm::vec2> vertex_uvs;
-  bool have_faces = false, colours = false;
+  std::vector<glm::vec3> vertex_colors;
+  bool have_faces = false;
   for (std::size_t e = 0; e < reader.number_of_elements(); ++e) {
     PlyElement& element = reader.element(e);
     const std::string& name = element.name();
@@ -158,7 +186,7 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
       const char** uv = nullptr;
       for (auto& tags : uv_tags)
         if (!uv && has_number(element, tags[0]) && has_number(element, tags[1])) uv = tags;
-      colours = colours || has_number(element, "red") || has_number(element, "r");
+      const char* const* color = ply_color_tags(element);
       for (std::size_t j = 0; j < element.number_of_items(); ++j) {
         if (!read_ply_item(in, element))
           throw SceneError(path + ": truncated or garbled PLY file: cannot read vertex " + std::to_string(j) +
@@ -181,6 +209,7 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
             throw SceneError(path + ": vertex " + std::to_string(j) + ": texture coordinate is not finite");
           vertex_uvs.push_back({float(u), float(v)});
         }
+        if (color) vertex_colors.push_back(ply_color(element, color));
       }
     } else if (name == "face" || name == "faces") {
       have_faces = true;
@@ -191,7 +220,7 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
       if (!signed_indices && !element.has_property<std::vector<uint32_t>>(tag))
         throw SceneError(path + ": the PLY faces have no vertex_indices list of int or uint");
       const bool corner_uvs = element.has_property<std::vector<float>>("texcoord");
-      colours = colours || has_number(element, "red") || has_number(element, "r");
+      const char* const* color = ply_color_tags(element);
       for (std::size_t j = 0; j < element.number_of_items(); ++j) {
         const std::string where = path + ": face " + std::to_string(j);
         if (!read_ply_item(in, element))
@@ -229,6 +258,7 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
           soup.uvs.resize(soup.polygons.size());
           soup.uvs.push_back(std::move(corners));
         }
+        if (color) soup.colors.push_back(std::vector<glm::vec3>(polygon.size(), ply_color(element, color)));
         soup.polygons.push_back(std::move(polygon));
       }
     } else {
@@ -256,7 +286,14 @@ PolygonSoup load_ply(const std::string& path, std::vector<std::string>& warnings
       std::vector<glm::vec2>& corners = soup.uvs.emplace_back();
       for (uint32_t v : polygon) corners.push_back(vertex_uvs[v]);
     }
-  if (colours) warnings.push_back(path + ": vertex or face colours ignored (pathcl takes the shape's material)");
+  // Vertex colours win over face colours where a file has both (they are the finer of the two).
+  if (!vertex_colors.empty()) {
+    soup.colors.clear();
+    for (const std::vector<uint32_t>& polygon : soup.polygons) {
+      std::vector<glm::vec3>& corners = soup.colors.emplace_back();
+      for (uint32_t v : polygon) corners.push_back(vertex_colors[v]);
+    }
+  }
   return soup;
 }
 
@@ -493,8 +530,17 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
     }
   }
   if (soup.polygons.empty()) throw SceneError(path + ": no faces");
-  if (!vertex_colours.empty() || !face_colours.empty())
-    warnings.push_back(path + ": vertex or face colours ignored (pathcl takes the shape's material)");
+  // Face colours (the optional colour after a face's indices; CGAL reads them as 8-bit), sRGB-encoded
+  // as PLY's. Vertex colours need the C prefix, refused above, so none reach here.
+  if (face_colours.size() == soup.polygons.size())
+    for (std::size_t f = 0; f < soup.polygons.size(); ++f) {
+      const CGAL::IO::Color& c = face_colours[f];
+      const glm::vec3 color(srgb_to_linear(c.r() / 255.0), srgb_to_linear(c.g() / 255.0), srgb_to_linear(c.b() / 255.0));
+      soup.colors.emplace_back(soup.polygons[f].size(), color);
+    }
+  else if (!face_colours.empty())
+    warnings.push_back(path + ": colours on only some faces ignored (" + std::to_string(face_colours.size()) + " of " +
+                       std::to_string(soup.polygons.size()) + ")");
   return soup;
 }
 
@@ -510,7 +556,7 @@ PolygonSoup load_ply_stl_off(const std::string& path, std::vector<std::string>& 
   const std::string head = read_input_file(path, kMeshInput, 512);
   const std::string ext = lower_extension(path);
   try {
-    if (ext == ".ply") return load_ply(path, warnings);
+    if (ext == ".ply") return load_ply(path);
     if (ext == ".stl") return load_stl(path, head);
     return load_off(path, warnings);
   } catch (const CGAL::Failure_exception& e) {

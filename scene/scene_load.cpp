@@ -522,8 +522,10 @@ CameraDesc read_gltf_camera(const Node& n, const std::filesystem::path& dir, std
 }
 
 // Validates the soup's indices and coordinates (OBJ files are checked line by line in load_obj). `uvs`
-// (optional): one [u, v] per position, which every corner at that position gets.
-void check_inline_triangles(const Node& positions, const Node& indices, const Node* uvs, PolygonSoup& soup) {
+// and `colors` (optional): one [u, v] / linear [r, g, b] in [0, 1] per position, which every corner at that
+// position gets.
+void check_inline_triangles(const Node& positions, const Node& indices, const Node* uvs, const Node* colors,
+                            PolygonSoup& soup) {
   for (const Node& p : positions.array()) soup.positions.push_back(p.dvec3());
   std::vector<glm::vec2> vertex_uvs;
   if (uvs) {
@@ -534,6 +536,17 @@ void check_inline_triangles(const Node& positions, const Node& indices, const No
     if (vertex_uvs.size() != soup.positions.size())
       uvs->fail("expected one [u, v] per position (" + std::to_string(soup.positions.size()) + "), got " +
                 std::to_string(vertex_uvs.size()));
+  }
+  std::vector<glm::vec3> vertex_colors;
+  if (colors) {
+    for (const Node& c : colors->array()) {
+      glm::vec3 color = c.color();
+      if (color.x > 1 || color.y > 1 || color.z > 1) c.fail("expected values in [0, 1] (a colour multiplies the material's)");
+      vertex_colors.push_back(color);
+    }
+    if (vertex_colors.size() != soup.positions.size())
+      colors->fail("expected one [r, g, b] per position (" + std::to_string(soup.positions.size()) + "), got " +
+                   std::to_string(vertex_colors.size()));
   }
   for (const Node& f : indices.array()) {
     if (!f.value.is_array() || f.value.size() != 3) f.fail("expected 3 vertex indices");
@@ -548,6 +561,7 @@ void check_inline_triangles(const Node& positions, const Node& indices, const No
       poly.push_back(uint32_t(i.value.get<uint64_t>()));
     }
     if (uvs) soup.uvs.push_back({vertex_uvs[poly[0]], vertex_uvs[poly[1]], vertex_uvs[poly[2]]});
+    if (colors) soup.colors.push_back({vertex_colors[poly[0]], vertex_colors[poly[1]], vertex_colors[poly[2]]});
     soup.polygons.push_back(poly);
   }
 }
@@ -577,6 +591,7 @@ void place_soup(PolygonSoup& soup, const glm::dmat4& transform, const Node& n) {
     for (auto& poly : soup.polygons) std::reverse(poly.begin(), poly.end());
     for (auto& uvs : soup.uvs) std::reverse(uvs.begin(), uvs.end());
     for (auto& normals : soup.normals) std::reverse(normals.begin(), normals.end());
+    for (auto& colors : soup.colors) std::reverse(colors.begin(), colors.end());
   }
 }
 
@@ -638,11 +653,11 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
   ShapeDesc s;
   if (type == "mesh")
     n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth",
-                     "smooth_angle_degrees", "instance"},
+                     "smooth_angle_degrees", "instance", "vertex_colors"},
                     {"file", "material"});
   else if (type == "triangles")
-    n.expect_object({"type", "positions", "indices", "uvs", "material", "emission", "two_sided", "transform",
-                     "orient", "smooth", "smooth_angle_degrees", "instance"},
+    n.expect_object({"type", "positions", "indices", "uvs", "colors", "material", "emission", "two_sided",
+                     "transform", "orient", "smooth", "smooth_angle_degrees", "instance", "vertex_colors"},
                     {"positions", "indices", "material"});
   else if (type == "sphere")
     n.expect_object({"type", "center", "radius", "material", "emission", "two_sided", "transform",
@@ -708,9 +723,12 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
       obj = load_obj_file(file.string(), from_mtl, scene.warnings);
     }
   } else {
-    Node uvs = n.has("uvs") ? n.at("uvs") : n;
-    check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr, soup);
+    Node uvs = n.has("uvs") ? n.at("uvs") : n, colors = n.has("colors") ? n.at("colors") : n;
+    check_inline_triangles(n.at("positions"), n.at("indices"), n.has("uvs") ? &uvs : nullptr,
+                           n.has("colors") ? &colors : nullptr, soup);
   }
+  // "vertex_colors": false renders the shape in its material's colour alone, whatever colours its file has.
+  if (n.has("vertex_colors") && !n.at("vertex_colors").boolean()) soup.colors.clear();
   bool emits_mtl = false;  // an MTL material with Ke on some face
   for (uint32_t id : soup.materials) emits_mtl = emits_mtl || obj.materials[id].emission != glm::vec3(0);
   if (n.has("instance") && n.at("instance").boolean() && emits_mtl)
@@ -781,7 +799,7 @@ void check_light_reach(const SceneDescription& scene, const LightDesc& light, co
 // primitive that a node places (nodes sharing a mesh give copies), its materials and textures added to
 // the scene's, its KHR_lights_punctual lights to the scene's lights.
 void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescription& scene) {
-  n.expect_object({"type", "file", "transform", "instance"}, {"file"});
+  n.expect_object({"type", "file", "transform", "instance", "vertex_colors"}, {"file"});
   const std::string file = (dir / n.at("file").string()).string();
   GltfScene gltf;
   try {
@@ -790,6 +808,15 @@ void read_gltf_shape(const Node& n, const std::filesystem::path& dir, SceneDescr
     n.at("file").fail(e.what());
   }
   const glm::dmat4 transform = n.has("transform") ? read_transform(n.at("transform")) : glm::dmat4(1.0);
+  if (n.has("vertex_colors") && !n.at("vertex_colors").boolean())
+    for (GltfPrimitive& p : gltf.primitives) p.soup.colors.clear();
+  // A file that places no triangle (tinygltf reads some malformed files as empty) renders nothing of it.
+  size_t placed_polygons = 0;
+  for (const GltfPrimitive& p : gltf.primitives)
+    placed_polygons += gltf.primitives[p.same_as == PC_INVALID ? &p - gltf.primitives.data() : p.same_as].soup.polygons.size();
+  if (placed_polygons == 0)
+    scene.warnings.push_back(file + ": the glTF scene places no triangles (" + std::to_string(gltf.primitives.size()) +
+                             " primitives placed, " + std::to_string(gltf.lights.size()) + " lights)");
   // Materials are added when a primitive uses them, so that unused ones load no textures.
   std::vector<uint32_t> scene_material(gltf.materials.size(), PC_INVALID);
   std::vector<std::optional<TextureImage>> emission_images(gltf.images.size());

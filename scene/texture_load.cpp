@@ -371,6 +371,11 @@ glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv) {
   return texel_linear(image, size_t(y) * image.width + x);
 }
 
+float srgb_to_linear(double encoded) {
+  const double c = encoded > 0 ? std::min(encoded, 1.0) : 0.0;  // NaN too becomes 0
+  return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+}
+
 size_t clamp_texels_to_one(TextureImage& image) {
   if (image.format == PC_TEXELS_SRGB8) return 0;
   size_t clamped = 0;

@@ -26,6 +26,10 @@ glm::vec3 texel_linear(const TextureImage& image, size_t i);
 // Linear RGB of the texel nearest to (u, v) (v = 0 the bottom row), wrapped by image.wrap.
 glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv);
 
+// The linear value of an sRGB-encoded value in [0, 1] (IEC 61966-2-1), clamped to [0, 1] (NaN to 0); for vertex
+// colours, which files store as display values like 8-bit images.
+float srgb_to_linear(double encoded);
+
 // Clamps every channel above 1 to 1 (an 8-bit texel never is above 1); returns the number of texels
 // that changed.
 size_t clamp_texels_to_one(TextureImage& image);

@@ -473,3 +473,53 @@ TEST(Gltf, AlphaModesBecomeCutOuts) {
   DeviceScene d = build_device_scene(scene);
   EXPECT_TRUE(d.features & kFeatureCutouts);
 }
+
+// COLOR_0 (normalized unsigned bytes, VEC4) multiplies the base colour: each corner keeps its vertex's
+// colour, linear as glTF says (no sRGB decoding), the alpha not read; "vertex_colors": false drops it.
+TEST(Gltf, VertexColorsFollowTheirVertices) {
+  QuadBuffer q = quad_buffer();
+  std::string c;
+  const std::vector<uint8_t> rgba = {255, 0, 0, 10, 0, 255, 0, 20, 0, 0, 255, 30, 51, 102, 204, 40};
+  append(c, rgba);
+  q.views.push_back({{"buffer", 0}, {"byteOffset", q.bytes.size()}, {"byteLength", c.size()}});
+  q.accessors.push_back({{"bufferView", q.views.size() - 1}, {"componentType", 5121}, {"normalized", true}, {"count", 4}, {"type", "VEC4"}});
+  q.bytes += c;
+  json doc = gltf_document(q);
+  json primitive = quad_primitive(-1);
+  primitive["attributes"]["COLOR_0"] = 4;
+  doc["meshes"] = json::array({{{"primitives", json::array({primitive})}}});
+  doc["nodes"] = json::array({{{"mesh", 0}}});
+  doc["scenes"] = json::array({{{"nodes", {0}}}});
+  const std::string file = write_temp_file("colors.gltf", doc.dump());
+  const glm::dvec3 corners[4] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  SceneDescription d = load_scene(write_temp_file("colors.json", scene_json(R"({"type": "gltf", "file": ")" + file + R"("})")));
+  const TriangleMesh& mesh = d.shapes.at(0).mesh;
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  ASSERT_EQ(mesh.colors.size(), 2u);
+  for (size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 p = mesh.positions[mesh.triangles[t][k]];
+      int v = 0;
+      while (v < 4 && glm::length(corners[v] - p) > 1e-9) ++v;
+      ASSERT_LT(v, 4);
+      for (int ch = 0; ch < 3; ++ch) EXPECT_FLOAT_EQ(mesh.colors[t][k][ch], rgba[4 * v + ch] / 255.0f) << t << " " << k;
+    }
+  DeviceScene device = build_device_scene(d);
+  EXPECT_TRUE(device.features & kFeatureVertexColors);
+  SceneDescription plain = load_scene(write_temp_file(
+      "plain.json", scene_json(R"({"type": "gltf", "file": ")" + file + R"(", "vertex_colors": false})")));
+  EXPECT_TRUE(plain.shapes.at(0).mesh.colors.empty());
+  EXPECT_FALSE(build_device_scene(plain).features & kFeatureVertexColors);
+}
+
+// A file that places no triangles says so (tinygltf reads some malformed files as an empty scene).
+TEST(Gltf, AFileThatPlacesNoTrianglesWarns) {
+  json doc = {{"asset", {{"version", "2.0"}}}, {"scenes", json::array({json::object()})}};
+  const std::string file = write_temp_file("empty.gltf", doc.dump());
+  SceneDescription d = load_scene(write_temp_file(
+      "empty.json", R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "width": 8, "height": 8}, "materials": {"m": {"type": "diffuse"}},
+                       "shapes": [{"type": "gltf", "file": ")" + file + R"("}, {"type": "sphere", "radius": 1, "material": "m", "emission": [1, 1, 1]}]})"));
+  bool warned = false;
+  for (const std::string& w : d.warnings) warned = warned || w.find("places no triangles") != std::string::npos;
+  EXPECT_TRUE(warned);
+}

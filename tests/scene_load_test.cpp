@@ -1275,9 +1275,10 @@ TEST(SceneLoadMeshFormats, PlyInAsciiAndBothBinaryOrdersWithNormalsAndUvs) {
     std::string path = write_temp_file(std::string("meshes/") + name, text);
     SceneDescription scene = load_mesh(path);
     expect_square(scene, true);
-    // The colours are named as ignored.
-    EXPECT_EQ(std::count(scene.warnings.begin(), scene.warnings.end(),
-                         path + ": vertex or face colours ignored (pathcl takes the shape's material)"), 1);
+    // The 8-bit colours (128, sRGB-encoded) are read in every encoding, at every corner.
+    ASSERT_EQ(scene.shapes[0].mesh.colors.size(), 3u);
+    for (const auto& corners : scene.shapes[0].mesh.colors)
+      for (const glm::vec3& c : corners) EXPECT_EQ(c, glm::vec3(srgb_to_linear(128 / 255.0)));
   }
 }
 

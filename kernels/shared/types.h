@@ -59,6 +59,7 @@ typedef uint32_t pc_uint;
 #define PC_FLAG_TWO_SIDED 1u   /* emits from both sides */
 #define PC_FLAG_FLIP_NORMAL 2u /* sphere: normal points to the centre */
 #define PC_FLAG_SMOOTH 4u      /* shading normals in the normals array */
+#define PC_FLAG_VERTEX_COLORS 8u /* corner colours in the colors array */
 
 /* The device's BVH, in the layout chosen for the device (runtime/device.h, bvh_width): 4-wide (GPUs) or
  * 8-wide (CPUs), collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened depth-first.
@@ -292,7 +293,7 @@ typedef struct {
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
   X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading)  \
-  X(pc_float4, normals) X(pc_float4, uvs) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
+  X(pc_float4, normals) X(pc_float4, uvs) X(pc_float4, colors) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
   X(Texture, textures) X(pc_uint, texels)                                                                      \
   X(float, env_dist) X(Instance, instances) X(BvhNode, instance_bvh)
 
