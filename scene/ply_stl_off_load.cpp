@@ -399,11 +399,12 @@ void check_binary_off_faces(const std::string& path, const std::string& keyword,
   }
 }
 
-// The counts of an ASCII OFF header, checked before CGAL reads them: its header reader converts
+// The counts of an ASCII OFF header, checked before CGAL reads them; true when some face has a colour
+// after its indices, which CGAL 5.5 reads past without returning it: its header reader converts
 // (vertices + faces) * 2.1 to int with no range check (UBSan in File_header_OFF_impl.h, found by
 // fuzz_obj_clean with a count of -2147483). Every vertex and face takes at least 2 bytes ("0\n"), every
 // edge at least one. Binary headers are left to CGAL.
-void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
+bool check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
   auto next = [&](std::string& token) {
     while (in >> token) {
@@ -424,21 +425,21 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   };
   char c = 0;
   while (in >> c && c == '#') line_end();
-  if (!in) return;
+  if (!in) return false;
   const std::string keyword = word(c).first;
-  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return false;
   while (in >> c && c == '#') line_end();
-  if (!in) return;
+  if (!in) return false;
   if (!std::isdigit(static_cast<unsigned char>(c))) {
     const auto [binary, after] = word(c);
-    if (binary != "BINARY") return;  // CGAL refuses it
+    if (binary != "BINARY") return false;  // CGAL refuses it
     if (after != '\n') line_end();
     check_binary_off_faces(path, keyword, in);
-    return;
+    return false;
   }
   in.putback(c);
   std::string token;
-  if (!next(token)) return;
+  if (!next(token)) return false;
   // CGAL 5.5's ASCII scanner reads texture coordinates and colours by indices it computes from each line
   // without checking them: for "ST" it uses uninitialised colour bookkeeping (ASan: SEGV in scan_texture),
   // and with "C" a short line reads out of bounds (fuzz_obj_clean, scan_color). Until a reader that
@@ -447,11 +448,11 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   if (prefix.find("ST") != std::string::npos || prefix.find('C') != std::string::npos)
     throw SceneError(path + ": " + keyword + ": texture coordinates and colours in ASCII OFF files are not "
                      "supported (CGAL's OFF reader misreads them); write the mesh as PLY or OBJ");
-  if (keyword.size() > 3 && keyword[keyword.size() - 4] == 'n' && !next(token)) return;  // nOFF: the dimension first
+  if (keyword.size() > 3 && keyword[keyword.size() - 4] == 'n' && !next(token)) return false;  // nOFF: the dimension first
   const char* names[] = {"vertices", "faces", "edges"};
   unsigned long long counts[3] = {};
   for (int i = 0; i < 3; ++i) {
-    if (i > 0 && !next(token)) return;
+    if (i > 0 && !next(token)) return false;
     bool digits = !token.empty() && token.size() <= 12 && token.find_first_not_of("0123456789") == std::string::npos;
     if (!digits || std::stoull(token) > (i < 2 ? size / 2 : size))
       throw SceneError(path + ": truncated or garbled OFF file: its header's count of " + names[i] + " is " + token +
@@ -461,6 +462,7 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
   // Each face's vertex count, which CGAL sizes the face by before reading it (a count of 10^15 asked for
   // petabytes; fuzz_obj_clean): at most 255, as for OBJ faces.
   std::string line;
+  bool colored = false;
   std::getline(in, line);  // the rest of the counts' line
   for (unsigned long long v = 0; v < counts[0] && std::getline(in, line);)
     if (line.find_first_not_of(" \t\r") != std::string::npos && line[line.find_first_not_of(" \t\r")] != '#') ++v;
@@ -470,12 +472,18 @@ void check_ascii_off_counts(const std::string& path, std::uintmax_t size) {
       throw SceneError(path + ": face " + std::to_string(f) + " has " + token +
                        " vertices, more than the 255 pathcl reads (or a garbled OFF file)");
     std::getline(in, line);  // the face's indices and colour
+    std::istringstream words(line);
+    unsigned long entries = 0;
+    for (std::string word; words >> word && word[0] != '#';) ++entries;
+    colored = colored || entries > std::stoul(token);
   }
+  return colored;
 }
 
 PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings) {
   const std::uintmax_t size = std::filesystem::file_size(path);
-  check_ascii_off_counts(path, size);
+  if (check_ascii_off_counts(path, size))
+    warnings.push_back(path + ": face colours ignored (CGAL's OFF reader does not return them; a PLY file keeps them)");
   {
     // CGAL sizes its arrays by the header's counts before reading them: a garbled count would ask for
     // any amount of memory. Every vertex and face takes at least 2 bytes (ASCII "0\n"; binary, 4 or more).
@@ -493,14 +501,11 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
   std::vector<std::vector<std::size_t>> polygons;
   std::vector<Kernel::Vector_3> normals;
   std::vector<Kernel::Point_2> uvs;
-  std::vector<CGAL::IO::Color> vertex_colours, face_colours;
   bool read = false;
   try {
     read = CGAL::IO::read_OFF(in, points, polygons,
                               CGAL::parameters::vertex_normal_output_iterator(std::back_inserter(normals))
                                   .vertex_texture_output_iterator(std::back_inserter(uvs))
-                                  .vertex_color_output_iterator(std::back_inserter(vertex_colours))
-                                  .face_color_output_iterator(std::back_inserter(face_colours))
                                   .verbose(false));
   } catch (const std::length_error&) {  // a face's vertex count of 10^40: CGAL resizes the face to it
   } catch (const std::bad_alloc&) {
@@ -530,17 +535,6 @@ PolygonSoup load_off(const std::string& path, std::vector<std::string>& warnings
     }
   }
   if (soup.polygons.empty()) throw SceneError(path + ": no faces");
-  // Face colours (the optional colour after a face's indices; CGAL reads them as 8-bit), sRGB-encoded
-  // as PLY's. Vertex colours need the C prefix, refused above, so none reach here.
-  if (face_colours.size() == soup.polygons.size())
-    for (std::size_t f = 0; f < soup.polygons.size(); ++f) {
-      const CGAL::IO::Color& c = face_colours[f];
-      const glm::vec3 color(srgb_to_linear(c.r() / 255.0), srgb_to_linear(c.g() / 255.0), srgb_to_linear(c.b() / 255.0));
-      soup.colors.emplace_back(soup.polygons[f].size(), color);
-    }
-  else if (!face_colours.empty())
-    warnings.push_back(path + ": colours on only some faces ignored (" + std::to_string(face_colours.size()) + " of " +
-                       std::to_string(soup.polygons.size()) + ")");
   return soup;
 }
 

@@ -1,6 +1,7 @@
 // Vertex colours (PLY red/green/blue, OBJ "v x y z r g b", inline "colors"; glTF COLOR_0 in gltf_test):
 // read with the right encoding, kept with their corners through clean-up, triangulation and mirroring,
 // and multiplying the material's colour on the device exactly as an analytic furnace predicts.
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -88,6 +89,20 @@ TEST(VertexColors, PlyColorsInEveryEncoding) {
       for (const glm::vec3& v : mesh.colors[t])
         EXPECT_EQ(v, mesh.source_polygon[t] == 0 ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)) << t;
   }
+}
+
+// OFF face colours: CGAL's reader reads past them without returning them, so they are named as ignored.
+TEST(VertexColors, OffFaceColorsAreNamedAsIgnored) {
+  const std::string off = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2 255 0 0\n3 0 2 3 0 128 0\n";
+  const std::string path = write_temp_file("faces.off", off);
+  SceneDescription d = load_shape(R"({"type": "mesh", "file": ")" + path + R"(", "material": "m"})");
+  EXPECT_EQ(d.shapes.at(0).mesh.triangles.size(), 2u);
+  EXPECT_EQ(std::count(d.warnings.begin(), d.warnings.end(),
+                       path + ": face colours ignored (CGAL's OFF reader does not return them; a PLY file keeps them)"), 1);
+  SceneDescription plain = load_shape(R"({"type": "mesh", "file": ")" +
+                                      write_temp_file("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n") +
+                                      R"(", "material": "m"})");
+  for (const std::string& w : plain.warnings) EXPECT_EQ(w.find("colours"), std::string::npos) << w;
 }
 
 // OBJ's colour extension (sRGB display values, as MeshLab writes them); a file where only some vertices
