@@ -100,7 +100,7 @@ void print_progress(uint64_t done, uint64_t total, double seconds, size_t pixels
 }
 
 struct RenderArgs {
-  std::string scene, out, png, stats, device, sampler, reference, convergence, checkpoint, resume;
+  std::string scene, out, png, stats, device, sampler, integrator, reference, convergence, checkpoint, resume;
   double checkpoint_every = 60;
   std::optional<int64_t> spp, seed, max_depth;
   std::optional<double> time_budget, target_error;
@@ -208,6 +208,13 @@ int run_render(const RenderArgs& a) {
   opt.pass_spp = count_option("--pass-spp", a.pass_spp, 0, kMaxSpp);
   if (!a.sampler.empty() && !sampler_from_name(a.sampler, &opt.sampler))
     throw UsageError("--sampler " + a.sampler + ": expected independent, stratified, sobol or halton");
+  bool integrator_given = !a.integrator.empty();
+  if (integrator_given) {
+    bool implemented;
+    if (!integrator_from_name(a.integrator, &opt.integrator, &implemented))
+      throw UsageError("--integrator " + a.integrator + ": expected path or light");
+    if (!implemented) throw UsageError("--integrator " + a.integrator + ": not yet implemented (expected path or light)");
+  }
   if (a.time_budget) opt.time_budget = positive_option("--time", *a.time_budget, false, "a finite number of seconds > 0");
   if (a.target_error) opt.target_error = positive_option("--target-error", *a.target_error, false, "a finite relMSE > 0");
   opt.checkpoint_every = positive_option("--checkpoint-every", a.checkpoint_every, true, "a finite number of seconds >= 0");
@@ -224,6 +231,16 @@ int run_render(const RenderArgs& a) {
   if (!a.seed) opt.seed = s.description.render.seed;
   if (!a.max_depth) opt.max_depth = s.description.render.max_depth;
   if (a.sampler.empty()) opt.sampler = s.description.render.sampler;
+  if (!integrator_given) opt.integrator = s.description.render.integrator;
+  // Options an integrator does not take are refused, naming where the integrator was chosen.
+  if (opt.integrator == PC_INTEGRATOR_LIGHT) {
+    std::string chosen = integrator_given ? "--integrator light" : a.scene + ": render.integrator \"light\"";
+    for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--checkpoint", &a.checkpoint},
+                                        {"--resume", &a.resume}})
+      if (!value->empty())
+        throw UsageError(std::string(option) + ": the light integrator (" + chosen +
+                         ") does not take it yet: its splat film is not in the checkpoint format");
+  }
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
   opt.power_of_two_horizons = !a.convergence.empty();
@@ -268,7 +285,8 @@ int run_render(const RenderArgs& a) {
 
   Image image = ConvergenceLog::film_image(r.film);
   if (a.variance) image.variance = r.film.variance;
-  image.attributes = {{"renderer", "pathcl"}, {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
+  image.attributes = {{"renderer", "pathcl"}, {"integrator", integrator_name(opt.integrator)},
+                      {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
                       {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
                       {"stop_reason", r.stop_reason}, {"determinism", r.determinism}};
   write_image(out, image);
@@ -287,6 +305,7 @@ int run_render(const RenderArgs& a) {
               {"seed", opt.seed},
               {"max_depth", opt.max_depth},
               {"sampler", sampler_name(opt.sampler)},
+              {"integrator", integrator_name(opt.integrator)},
               {"stop_reason", r.stop_reason},
               {"relmse_estimate", estimated_rel_mse(r.film)},
               {"kernel_build_ms", r.kernel_build_ms},
@@ -303,7 +322,8 @@ int run_render(const RenderArgs& a) {
               {"rays_per_second", double(r.rays) / r.render_seconds},
               {"nan_samples", r.nan_samples},
               {"inf_samples", r.inf_samples},
-              {"negative_samples", r.negative_samples}});
+              {"negative_samples", r.negative_samples},
+              {"splat_overflows", r.splat_overflows}});
     write_json(a.stats, j);
   }
   if (!a.quiet)
@@ -314,6 +334,9 @@ int run_render(const RenderArgs& a) {
     std::fprintf(stderr, "warning: discarded %llu NaN, %llu infinite and %llu negative samples\n",
                  (unsigned long long)r.nan_samples, (unsigned long long)r.inf_samples,
                  (unsigned long long)r.negative_samples);
+  if (r.splat_overflows > 0)
+    std::fprintf(stderr, "warning: %llu fixed-point splat overflows (a bug: the splat scale is too fine for this scene)\n",
+                 (unsigned long long)r.splat_overflows);
   if (int signal = *stop_signal()) {
     std::fprintf(stderr, "interrupted after %u spp, wrote %s%s\n", r.film.spp, out.c_str(),
                  a.checkpoint.empty() ? "" : ("; resume with --resume " + a.checkpoint).c_str());
@@ -507,6 +530,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
+  render_cmd->add_option("--integrator", ra.integrator, "path (the default) or light (overrides the scene's render.integrator)");
   render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");
   render_cmd->add_option("--reference", ra.reference, "reference EXR for the error columns of --convergence");
   render_cmd->add_option("--convergence", ra.convergence, "write time, spp and error at every power of two spp (CSV)");

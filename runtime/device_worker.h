@@ -10,6 +10,7 @@
 
 #include "runtime/device.h"
 #include "runtime/kernel_program.h"
+#include "runtime/light_transport.h"
 #include "runtime/render_schedule.h"
 #include "runtime/scene_buffers.h"
 
@@ -21,9 +22,12 @@ struct DeviceFault {
 };
 
 // What a unit gives back: its statistics and timings; the accumulators of its pixels (3 per pixel) are in
-// the worker's read-back buffer (DeviceWorker::result), valid until its next unit.
+// the worker's read-back buffer (DeviceWorker::result), valid until its next unit. With the light
+// integrator a unit's tiles are light path indices, not pixels: its splats land anywhere, so it gives back
+// the whole splat film of the unit (DeviceWorker::splats), cleared before each unit.
 struct UnitOutput {
   UnitStats stats{};
+  uint64_t splat_overflows = 0;  // light integrator: splats too large for the fixed-point scale (a hazard)
   double seconds = 0;    // the unit's wall time on this device: upload, launch, read-back
   double kernel_ms = 0;  // the launch alone, from profiling events
 };
@@ -32,6 +36,9 @@ struct WorkerSettings {
   std::string build_options;  // kernel_options(features) and debug flags
   size_t work_group = 0;      // 0: 64, or the kernel's limit if lower
   DeviceFault fault;
+  uint32_t integrator = PC_INTEGRATOR_PATH;
+  const LightTransportSetup* light = nullptr;  // light integrator: its header and emission distribution
+  bool splat_pairs = false;   // splat with 32-bit word pairs even where 64-bit atomics exist (tests)
 };
 
 class DeviceWorker {
@@ -51,6 +58,9 @@ class DeviceWorker {
   // The accumulators of the last unit's pixels. One buffer reused by every unit: no allocation, and no
   // page faults, per unit.
   const std::vector<pc_float4>& result() const { return result_; }
+  // Light integrator: the last unit's splat film, PC_SPLAT_WORDS sums per pixel of the whole image.
+  const std::vector<uint64_t>& splats() const { return splats_; }
+  bool light() const { return integrator_ == PC_INTEGRATOR_LIGHT; }
 
   const KernelProgram& program() const { return *program_; }
   size_t work_group() const { return work_group_; }
@@ -59,14 +69,17 @@ class DeviceWorker {
   double launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
                 uint32_t sample_count);
   void clear_film();
+  void read_splats();
 
   std::unique_ptr<ClContext> owned_;
   ClContext* cl_;
   std::optional<KernelProgram> program_;
   std::unique_ptr<SceneBuffers> scene_;
   std::unique_ptr<ClKernel> kernel_;
-  ClBuffer film_, stats_;
+  ClBuffer film_, stats_, light_header_, emission_cdf_;
   std::vector<pc_float4> result_;
+  std::vector<uint64_t> splats_;
+  uint32_t integrator_ = PC_INTEGRATOR_PATH;
   uint32_t pixels_ = 0;
   size_t work_group_ = 0;
   cl_uint first_unit_arg_ = 0;

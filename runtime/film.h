@@ -13,6 +13,9 @@ struct Film {
   std::vector<float> even_mean, odd_mean;  // means of the even- and odd-numbered samples
   // The device's accumulators, 3 per pixel: even-sample sum (w: count), odd-sample sum, sum of squares.
   std::vector<pc_float4> accumulators;
+  // Light-transport integrators instead (runtime/light_transport.h): PC_SPLAT_WORDS fixed-point sums per
+  // pixel, added exactly from any number of devices and units; accumulators is then empty.
+  std::vector<uint64_t> splats;
 };
 
 // Derives the means and variances from accumulators (3 per pixel).

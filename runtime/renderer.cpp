@@ -185,9 +185,19 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   const size_t n = workers.size();
 
   uint32_t start_spp = options.resume ? options.resume->spp : 0;
-  if (options.resume && options.resume->accumulators.size() != 3 * size_t(pixels))
-    throw RuntimeFailure("the film to resume from has " + std::to_string(options.resume->accumulators.size() / 3) +
-                         " pixels, the render " + std::to_string(pixels));
+  const bool light = options.integrator == PC_INTEGRATOR_LIGHT;
+  if (light && !options.checkpoint.empty())
+    throw UsageError("the light integrator does not write checkpoints yet (its splat film is not in the checkpoint format)");
+  const size_t film_words = light ? PC_SPLAT_WORDS : 3;
+  if (options.resume && (light ? options.resume->splats.size() : options.resume->accumulators.size()) != film_words * size_t(pixels))
+    throw RuntimeFailure("the film to resume from has " +
+                         std::to_string((light ? options.resume->splats.size() : options.resume->accumulators.size()) / film_words) +
+                         " pixels of the " + integrator_name(options.integrator) + " integrator, the render " + std::to_string(pixels));
+  // Light tracing: the light paths of a sample are numbered like the pixels (one per pixel), and the
+  // schedule's tiles are runs of path indices; each unit's splats come back as a whole integer image.
+  LightTransportSetup light_setup;
+  if (light) light_setup = light_transport_setup(scene, options.spp);
+  result.light = light_setup.header;
 
   // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices
   // the probe that tells their arithmetic classes apart.
@@ -210,6 +220,9 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
+    setup.settings.integrator = options.integrator;
+    setup.settings.light = &light_setup;
+    setup.settings.splat_pairs = options.debug_splat_pairs;
     if (d < options.faults.size()) setup.settings.fault = options.faults[d];
     threads.push_back(std::make_unique<WorkerThread>(workers[d].make, uint32_t(d), events, setup));
   }
@@ -242,8 +255,13 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   }
   // The host's film only now: a film too large for every device has been refused without the seconds
   // that allocating and clearing gigabytes on the host take.
-  std::vector<pc_float4> film = options.resume ? options.resume->accumulators
-                                               : std::vector<pc_float4>(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
+  std::vector<pc_float4> film;
+  std::vector<uint64_t> splat_film;
+  if (light)
+    splat_film = options.resume ? options.resume->splats : std::vector<uint64_t>(PC_SPLAT_WORDS * size_t(pixels), 0);
+  else
+    film = options.resume ? options.resume->accumulators
+                          : std::vector<pc_float4>(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
   result.kernel_from_cache = true;
   for (size_t d = 0; d < n; ++d) {
     if (!ready[d]) continue;
@@ -293,6 +311,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   };
   schedule.set_horizon(next_horizon(start_spp));
   std::map<uint64_t, std::vector<pc_float4>> kept;  // committed results whose copies still run
+  std::map<uint64_t, std::vector<uint64_t>> kept_splats;  // the same for the light integrator
   std::vector<bool> busy(n, false);
   double last_checkpoint = 0;
   bool closing = false;
@@ -300,7 +319,14 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   auto checkpoint_due = [&] { return !options.checkpoint.empty() && now() - last_checkpoint >= options.checkpoint_every; };
   auto interrupted = [&] { return options.interrupt && *options.interrupt; };
   auto time_is_up = [&] { return options.time_budget > 0 && now() >= options.time_budget; };
-  auto make_film = [&] { return film_from_accumulators(header.width, header.height, film); };
+  uint64_t sum_overflows = 0;  // splat sums that wrapped past 2^64 on the host
+  auto make_film = [&] {
+    if (!light) return film_from_accumulators(header.width, header.height, film);
+    uint64_t top_bit = 0;  // sums at or above 2^63
+    Film f = film_from_splats(header.width, header.height, schedule.lowest_level(), light_setup.header, splat_film, &top_bit);
+    result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
+    return f;
+  };
   auto write_checkpoint_now = [&](const Film& f) {
     write_checkpoint(options.checkpoint, options.checkpoint_key, f);
     last_checkpoint = now();
@@ -324,29 +350,50 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     result.launches++;
     // The worker's read-back buffer stays valid until its next unit, which is given only after this.
     const std::vector<pc_float4>& accumulators = threads[e.device]->worker().result();
+    const std::vector<uint64_t>& splats = threads[e.device]->worker().splats();
+    if (f.outcome == UnitOutcome::committed && light) {
+      // Integer addition: exact, and the same total in any order of units and devices.
+      for (size_t i = 0; i < splat_film.size(); ++i) {
+        uint64_t sum = splat_film[i] + splats[i];
+        sum_overflows += sum < splat_film[i];
+        splat_film[i] = sum;
+      }
+      result.splat_overflows += e.output.splat_overflows;
+    }
     if (f.outcome == UnitOutcome::committed) {
-      std::copy(accumulators.begin(), accumulators.end(), film.begin() + 3 * size_t(unit.pixel_begin));
+      if (!light) std::copy(accumulators.begin(), accumulators.end(), film.begin() + 3 * size_t(unit.pixel_begin));
       const UnitStats& s = e.output.stats;
       result.rays += uint64_t(s.rays_hi) << 32 | s.rays_lo;
       result.nan_samples += s.nan_samples;
       result.inf_samples += s.inf_samples;
       result.negative_samples += s.negative_samples;
-      if (f.twin != 0) kept[e.unit] = accumulators;
+      if (f.twin != 0) {
+        if (light) kept_splats[e.unit] = splats;
+        else kept[e.unit] = accumulators;
+      }
       if (callbacks.progress) callbacks.progress(schedule.samples_done(), samples_total, now());
     } else if (f.outcome == UnitOutcome::compare) {
-      auto twin = kept.find(f.twin);
-      const std::vector<pc_float4>& a = twin->second;
-      const std::vector<pc_float4>& b = accumulators;
-      if (a.size() != b.size() || std::memcmp(a.data(), b.data(), a.size() * sizeof(pc_float4)) != 0)
+      bool same;
+      if (light) {
+        auto twin = kept_splats.find(f.twin);
+        same = twin->second == splats;
+        kept_splats.erase(twin);
+      } else {
+        auto twin = kept.find(f.twin);
+        same = twin->second.size() == accumulators.size() &&
+               std::memcmp(twin->second.data(), accumulators.data(), accumulators.size() * sizeof(pc_float4)) == 0;
+        kept.erase(twin);
+      }
+      if (!same)
         throw RuntimeFailure(report.name + " and another device of the same arithmetic class computed different bits "
                              "for pixels " + std::to_string(unit.pixel_begin) + "-" +
                              std::to_string(unit.pixel_begin + unit.pixel_count - 1) + ", samples " +
                              std::to_string(unit.sample_begin) + "-" +
                              std::to_string(unit.sample_begin + unit.sample_count - 1) + ": a determinism bug");
-      kept.erase(twin);
       result.duplicate_checks++;
     } else if (f.twin != 0) {
       kept.erase(f.twin);
+      kept_splats.erase(f.twin);
     }
   };
 
@@ -356,7 +403,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       std::optional<WorkUnit> u = schedule.next_unit(uint32_t(d), now());
       if (!u) continue;
       std::vector<pc_float4> input;
-      if (u->upload)
+      if (u->upload && !light)  // light units start from a cleared splat film
         input.assign(film.begin() + 3 * size_t(u->pixel_begin), film.begin() + 3 * size_t(u->pixel_begin + u->pixel_count));
       busy[d] = true;
       threads[d]->submit(*u, std::move(input));

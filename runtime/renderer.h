@@ -14,6 +14,7 @@
 #include "runtime/device.h"
 #include "runtime/device_worker.h"
 #include "runtime/film.h"
+#include "runtime/light_transport.h"
 #include "scene/device_scene.h"
 
 struct RenderOptions {
@@ -24,6 +25,7 @@ struct RenderOptions {
   // Independent samples here, so that a film's per-pixel variance is an unbiased estimate of its error
   // (the statistical tests rely on it); a scene file's default is sobol (scene/scene_description.h).
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
+  uint32_t integrator = PC_INTEGRATOR_PATH;  // PC_INTEGRATOR_* (kernels/shared/light_types.h)
   bool all_features = false;   // build the unspecialised kernel
   const Film* resume = nullptr; // continue from this film (its accumulators and spp), e.g. a checkpoint
 
@@ -47,6 +49,7 @@ struct RenderOptions {
   // Tests only.
   bool debug_inject_hazards = false;   // make some samples NaN, infinite or negative
   bool debug_bias_diffuse = false;     // diffuse reflectance 1 % too high (the bench gate's test)
+  bool debug_splat_pairs = false;      // light: 32-bit word pairs instead of 64-bit atomics (same bits)
   // Non-zero: -DPC_BUILD_NONCE=N, a kernel no driver or cache has seen, so its first build is a cold
   // one (`pathcl bench`); the code is the same.
   uint64_t build_nonce = 0;
@@ -72,6 +75,8 @@ struct DeviceReport {
 struct RenderResult {
   Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;
+  uint64_t splat_overflows = 0;  // light: fixed-point overflows (a hazard: above zero is a bug)
+  LightTransportHeader light{};  // light: the bounds and fixed-point scales the film was made with
   double kernel_build_ms = 0;  // the slowest device's build (they build at once)
   bool kernel_from_cache = false;  // every device loaded its kernel from the cache
   std::string kernel_options;      // the first device's

@@ -12,6 +12,7 @@
 #include <glm/vec4.hpp>
 
 #include "kernels/shared/types.h"
+#include "kernels/shared/light_types.h"
 #include "scene/mesh_clean.h"
 
 // Positions are world coordinates in double until build_device_scene makes them camera-relative floats.
@@ -82,11 +83,16 @@ struct RenderSettings {
   uint32_t max_depth = 8;
   uint32_t seed = 1;
   uint32_t sampler = PC_SAMPLER_SOBOL;  // PC_SAMPLER_* of kernels/shared/types.h
+  uint32_t integrator = PC_INTEGRATOR_PATH;  // PC_INTEGRATOR_* of kernels/shared/light_types.h
 };
 
 // "independent", "stratified", "sobol", "halton" -> PC_SAMPLER_*; false for an unknown name.
 bool sampler_from_name(const std::string& name, uint32_t* sampler);
 const char* sampler_name(uint32_t sampler);
+// "path", "light" -> PC_INTEGRATOR_*; false for any other name. "bdpt" is a known name without an
+// integrator yet: true with *implemented false.
+bool integrator_from_name(const std::string& name, uint32_t* integrator, bool* implemented);
+const char* integrator_name(uint32_t integrator);
 
 // The largest distance from the camera (in scene units, per axis) that geometry may reach, and so the
 // largest sphere radius. The kernels work in camera-relative floats and square distances across the

@@ -79,6 +79,9 @@ std::vector<Case> cases() {
           {"cornell box, independent", cornell, "--sampler independent"},
           {"cornell box, stratified", cornell, "--sampler stratified"},
           {"cornell box, halton", cornell, "--sampler halton"},
+          // The light integrator's splat film: integer atomics from every work item into any pixel.
+          {"cornell box, light tracing", cornell, "--integrator light"},
+          {"every light type, light tracing, thin lens, gaussian filter", resized("materials", 16, 12, 2), "--integrator light"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
           {"glass and metal", resized("glass-metal", 16, 12, 2), ""},
           {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},

@@ -1,0 +1,58 @@
+/* Structs of light transport (the `light` integrator, and later BDPT and photon merging) shared byte for
+ * byte by the host and the kernels, under the rules of types.h. They live apart from types.h so that the
+ * path integrator's kernel source does not change because these exist (its build is the same bytes). */
+#ifndef PATHCL_SHARED_LIGHT_TYPES_H
+#define PATHCL_SHARED_LIGHT_TYPES_H
+
+/* Needs shared/types.h first (pc_float4, pc_uint); the kernel source assembler finds files by their name
+ * under kernels/, the host by its include path, so neither includes it from here. */
+
+/* Integrators (RenderOptions::integrator, render.integrator of the scene file). */
+#define PC_INTEGRATOR_PATH 0u
+#define PC_INTEGRATOR_LIGHT 1u
+
+/* The splat film: per pixel PC_SPLAT_WORDS unsigned 64-bit fixed-point sums (each two uint words, low
+ * word first), added with integer atomics in any order to the same bits:
+ *   [0, 3)  RGB of the even-numbered samples' splats, in units of 1 / splat_scale
+ *   [3, 6)  RGB of the odd-numbered samples' splats
+ *   [6, 9)  RGB sums of the squared splats, in units of 1 / square_scale (the variance channels)
+ * A sum is kept below 2^63; reaching it counts an overflow (SplatStats.overflows, a hazard). */
+#define PC_SPLAT_WORDS 9u
+
+/* What the light-transport kernels need beside the SceneHeader: the scene's bounding sphere (directional
+ * and environment light paths start on a disk of its radius), the fixed-point scales of the splat film and
+ * the number of lights in the emission distribution.
+ * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + pad (4) = 32 bytes. */
+typedef struct {
+  pc_float4 bounds;   /* xyz: centre of the scene's bounding sphere (device coordinates), w: its radius */
+  float splat_scale;  /* fixed-point units per unit of pixel value (a power of two) */
+  float square_scale; /* the same for the squared splats (a power of two) */
+  pc_uint light_count;
+  pc_uint pad;
+} LightTransportHeader;
+
+/* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
+ * splats dropped for being NaN, infinite or negative, and fixed-point overflows (a splat too large for
+ * the scale, or a sum that reached 2^63). rays_lo .. overflows (6 x 4) + pad (8) = 32 bytes. */
+typedef struct {
+  pc_uint rays_lo;
+  pc_uint rays_hi;
+  pc_uint nan_splats;
+  pc_uint inf_splats;
+  pc_uint negative_splats;
+  pc_uint overflows;
+  pc_uint pad[2];
+} SplatStats;
+
+#define PC_LIGHT_LAYOUT_STRUCTS(X) X(LightTransportHeader) X(SplatStats)
+#define PC_LIGHT_LAYOUT_FIELDS(X)                                                                           \
+  X(LightTransportHeader, bounds) X(LightTransportHeader, splat_scale) X(LightTransportHeader, square_scale) \
+  X(LightTransportHeader, light_count) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
+  X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
+
+#ifndef __OPENCL_VERSION__
+static_assert(sizeof(LightTransportHeader) == 32, "LightTransportHeader is 32 bytes");
+static_assert(sizeof(SplatStats) == 32, "SplatStats is 32 bytes");
+#endif
+
+#endif

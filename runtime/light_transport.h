@@ -1,0 +1,33 @@
+// What the light-transport integrators (`light`; later BDPT and photon merging) need on the device beside
+// the scene: the scene's bounding sphere, the distribution that chooses a light to emit from (by power),
+// and the fixed-point scales of the splat film (kernels/shared/light_types.h).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kernels/shared/types.h"
+#include "kernels/shared/light_types.h"
+#include "scene/device_scene.h"
+#include "scene/scene_description.h"  // integrator_name
+
+struct LightTransportSetup {
+  LightTransportHeader header{};
+  std::vector<float> emission_cdf;  // light_count + 1 entries, [0] = 0, last = 1
+  std::vector<double> power;        // per light, the luminance power the choice is proportional to (W)
+};
+
+// The power of each light (luminance): area pi A L (twice for two-sided emitters), point 4 pi I, spot
+// 2 pi I (1 - (cos_inner + cos_outer) / 2) (pbrt-v4's), directional pi R^2 E and environment
+// pi R^2 4 E_env (E_env its irradiance estimate of scene/device_scene_build.cpp), R the scene's bounding
+// radius. The splat scale is the power of two that puts a pixel 2^20 times brighter than the scene's
+// typical radiance, Phi / (4 pi^2 R^2), summed over `spp` samples, at 2^62 units; the squares' scale the
+// same for its square.
+LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp);
+
+// The splat film (PC_SPLAT_WORDS sums per pixel) as a Film's means, variances and half images: mean =
+// (even + odd) / (scale spp); variance of the mean from the squares (kernels/light_integrator.cl).
+// overflows: sums at or above 2^63 (a hazard) are counted there.
+struct Film;
+Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, const LightTransportHeader& lt,
+                      std::vector<uint64_t> splats, uint64_t* overflows);

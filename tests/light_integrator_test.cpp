@@ -1,0 +1,215 @@
+// The light-tracing integrator (`light`, kernels/light_integrator.cl): exact values where it can see
+// them, agreement with the path integrator on the pixels it reaches, darkness where it cannot see, a
+// caustic that path tracing misses entirely, and the splat film's determinism (work-group size, unit
+// split, resume, 64-bit atomics against 32-bit word pairs). Tolerances are in standard errors, from
+// independent seeds.
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+namespace {
+
+struct Options {
+  uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
+  uint32_t integrator = PC_INTEGRATOR_LIGHT;
+  size_t work_group = 0;
+  bool pairs = false;
+  const Film* resume = nullptr;
+};
+
+RenderResult render_with(const DeviceScene& scene, const Options& o) {
+  RenderOptions opt;
+  opt.spp = o.spp;
+  opt.max_depth = o.max_depth;
+  opt.seed = o.seed;
+  opt.integrator = o.integrator;
+  opt.pass_spp = o.pass_spp;
+  opt.tile_pixels = o.tile_pixels;
+  opt.work_group = o.work_group;
+  opt.debug_splat_pairs = o.pairs;
+  opt.resume = o.resume;
+  RenderResult r = render(test_device(), scene, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+  EXPECT_EQ(r.splat_overflows, 0u);
+  return r;
+}
+
+double image_mean(const Film& f) {
+  double sum = 0;
+  for (float v : f.mean) sum += v;
+  return sum / f.mean.size();
+}
+
+// Mean and standard error of the image mean over `seeds` independent renders.
+MeanStd seeded_mean(const DeviceScene& scene, Options o, int seeds) {
+  std::vector<double> means;
+  for (int s = 0; s < seeds; ++s) {
+    o.seed = 1000 + s;
+    means.push_back(image_mean(render_with(scene, o).film));
+  }
+  return mean_and_error(means);
+}
+
+DeviceScene scene_from(const std::string& name, const std::string& json) {
+  return load_device_scene(write_temp_file(name, json));
+}
+
+}  // namespace
+
+// The Szirmay-Kalos sphere (scripts/make-cap-sphere): every wall pixel is f Le rho (1 - rho^n) / (1 - rho)
+// after n reflections. Light tracing sees it all (the camera sees only the wall).
+TEST(LightIntegrator, CapSphereWithinFourStandardErrors) {
+  std::string dir = temp_dir() + "/light-cap";
+  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir +
+                    " --level 5 --size 16 >/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  DeviceScene scene = load_device_scene(dir + "/scene.json");
+  std::vector<double> exact = nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"];
+  for (uint32_t depth : {1u, 4u}) {
+    Options o;
+    o.spp = 64;
+    o.max_depth = depth;
+    MeanStd m = seeded_mean(scene, o, 6);
+    // The icosphere's tessellation bias is about 0.1 % (docs/accuracy.md): added to the tolerance.
+    EXPECT_NEAR(m.mean, exact[depth], 4 * m.std_error + 2e-3 * exact[depth]) << "max_depth " << depth << ", error " << m.std_error;
+    EXPECT_LT(m.std_error, 0.02 * exact[depth]) << "too noisy for the test to mean anything";
+  }
+}
+
+// A diffuse sphere of radius R = 5 and reflectance rho lit by a point light of intensity I at its centre,
+// enclosed in a glass ball of radius 0.5: every ray leaves the ball radially (normal incidence; reflected
+// rays cross the centre and leave on the other side) and no flux is absorbed but by the wall, so by
+// symmetry the wall has uniform direct irradiance E0 = I / R^2 and all the light the wall reflects comes
+// back to the wall: radiance L = rho E0 / (pi (1 - rho)) (up to the depth limit, which at rho = 0.5 and
+// 20 events is far below the noise). Path tracing sees nothing: the glass blocks every shadow ray.
+TEST(LightIntegrator, PointLightInGlassBallLightsTheEnclosureExactly) {
+  const double rho = 0.5, intensity = 10, radius = 5;
+  std::string json = R"({"camera": {"position": [0, 0, 2], "look_at": [0, 0, 5], "fov_y_degrees": 30, "width": 16, "height": 16},
+    "materials": {"wall": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}, "glass": {"type": "dielectric", "ior": 1.5}},
+    "shapes": [{"type": "sphere", "radius": 5, "flip_normals": true, "material": "wall"},
+               {"type": "sphere", "radius": 0.5, "material": "glass"}],
+    "lights": [{"type": "point", "position": [0, 0, 0], "intensity": [10, 10, 10]}]})";
+  DeviceScene scene = scene_from("glass-ball.json", json);
+  const double exact = rho * intensity / (radius * radius) / (M_PI * (1 - rho));
+  Options o;
+  o.spp = 96;
+  o.max_depth = 20;  // the light beyond 20 events is below rho^18 = 4e-6 of it
+  MeanStd m = seeded_mean(scene, o, 6);
+  EXPECT_NEAR(m.mean, exact, 4 * m.std_error) << "error " << m.std_error;
+  EXPECT_LT(m.std_error, 0.02 * exact);
+  o.integrator = PC_INTEGRATOR_PATH;
+  o.spp = 4;
+  Film path = render_with(scene, o).film;
+  for (float v : path.mean) ASSERT_EQ(v, 0.0f) << "path tracing cannot reach a point light through glass";
+}
+
+// What light tracing cannot see: an emitter seen directly, and anything seen through a mirror. A camera
+// looking only at a lamp (black, emitting) gets black, and so does one looking at a mirror that shows a
+// lit diffuse wall, while the path integrator sees both.
+TEST(LightIntegrator, DirectlySeenLightsAndMirrorImagesAreOutOfReach) {
+  std::string lamp = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y_degrees": 10, "width": 8, "height": 8},
+    "materials": {"black": {"type": "diffuse", "reflectance": [0, 0, 0]}, "white": {"type": "diffuse", "reflectance": [0.8, 0.8, 0.8]}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "black", "emission": [1, 1, 1]},
+               {"type": "sphere", "radius": 10, "flip_normals": true, "material": "white"}]})";
+  std::string mirror = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y_degrees": 10, "width": 8, "height": 8},
+    "materials": {"m": {"type": "mirror", "reflectance": [1, 1, 1]}, "white": {"type": "diffuse", "reflectance": [0.8, 0.8, 0.8]}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "m"},
+               {"type": "sphere", "radius": 10, "flip_normals": true, "material": "white"}],
+    "lights": [{"type": "point", "position": [0, 5, 0], "intensity": [50, 50, 50]}]})";
+  for (const auto& [name, json] : {std::pair<const char*, std::string>{"lamp.json", lamp}, {"mirror.json", mirror}}) {
+    DeviceScene scene = scene_from(name, json);
+    Options o;
+    o.spp = 8;
+    Film light = render_with(scene, o).film;
+    for (float v : light.mean) ASSERT_EQ(v, 0.0f) << name;
+    o.integrator = PC_INTEGRATOR_PATH;
+    EXPECT_GT(image_mean(render_with(scene, o).film), 0.01) << name;
+  }
+}
+
+// The Cornell box at 32 x 32: light tracing and path tracing estimate the same pixels, except where the
+// lamp is seen directly (path tracing at max_depth 0 shows those; they are left out).
+TEST(LightIntegrator, AgreesWithPathTracingPerPixelOnTheCornellBox) {
+  DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
+  scene.header.width = 32;
+  scene.header.height = 32;
+  Options o;
+  o.max_depth = 3;
+  o.integrator = PC_INTEGRATOR_PATH;
+  o.spp = 64;  // enough to find the pixels the lamp covers only in part
+  o.max_depth = 0;
+  Film direct = render_with(scene, o).film;
+  o.max_depth = 3;
+  o.spp = 256;
+  Film path = render_with(scene, o).film;
+  o.integrator = PC_INTEGRATOR_LIGHT;
+  o.spp = 256;
+  Film light = render_with(scene, o).film;
+  size_t compared = 0, failed = 0;
+  double sum_path = 0, sum_light = 0;
+  for (size_t i = 0; i < path.mean.size(); ++i) {
+    if (direct.mean[i - i % 3] > 0 || direct.mean[i - i % 3 + 1] > 0 || direct.mean[i - i % 3 + 2] > 0) continue;
+    double var = double(path.variance[i]) + light.variance[i];
+    double d = double(light.mean[i]) - path.mean[i];
+    ++compared;
+    sum_path += path.mean[i];
+    sum_light += light.mean[i];
+    if (var <= 0 ? d != 0 : std::fabs(d) / std::sqrt(var) > 4) ++failed;
+  }
+  ASSERT_GT(compared, path.mean.size() * 8 / 10);
+  // |z| > 4 has probability 6e-5 per pixel for correct estimators; heavier tails of a few pixels allowed.
+  EXPECT_LE(failed, compared / 200) << failed << " of " << compared;
+  EXPECT_NEAR(sum_light / sum_path, 1.0, 0.01);
+}
+
+// The image is a pure function of scene, settings and seed: the same bits for any work-group size, any
+// split into units, a resumed render, and with 32-bit word pairs instead of 64-bit atomics.
+TEST(LightIntegrator, SplatFilmIsBitwiseDeterministic) {
+  DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
+  scene.header.width = 24;
+  scene.header.height = 20;
+  Options o;
+  o.spp = 8;
+  o.max_depth = 4;
+  Film reference = render_with(scene, o).film;
+  ASSERT_GT(image_mean(reference), 0.0);
+  auto same = [&](const Film& f, const char* what) {
+    EXPECT_EQ(f.splats, reference.splats) << what;
+    EXPECT_EQ(f.mean, reference.mean) << what;
+  };
+  Options w = o;
+  w.work_group = 16;
+  same(render_with(scene, w).film, "work group 16");
+  Options split = o;
+  split.pass_spp = 3;
+  split.tile_pixels = 37;
+  same(render_with(scene, split).film, "units of 3 spp over 37 paths");
+  Options pairs = o;
+  pairs.pairs = true;
+  same(render_with(scene, pairs).film, "32-bit word pairs");
+  RenderOptions partial;
+  partial.max_depth = o.max_depth;
+  partial.seed = o.seed;
+  partial.integrator = PC_INTEGRATOR_LIGHT;
+  Film start;
+  {
+    // Render 8 spp with a horizon at 4 and keep the 4-spp film from the horizon callback.
+    RenderOptions p = partial;
+    p.spp = 8;
+    p.power_of_two_horizons = true;
+    RenderCallbacks cb;
+    cb.horizon = [&](const Film& f, double, double) {
+      if (f.spp == 4) start = f;
+    };
+    render(test_device(), scene, p, cb);
+  }
+  ASSERT_EQ(start.spp, 4u);
+  Options resumed = o;
+  resumed.resume = &start;
+  same(render_with(scene, resumed).film, "resumed from 4 spp");
+}
