@@ -3,21 +3,6 @@
 #ifndef PATHCL_RNG_CL
 #define PATHCL_RNG_CL
 
-/* pcg4d (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020). */
-inline uint4 pcg4d(uint4 v) {
-  v = v * 1664525u + 1013904223u;
-  v.x += v.y * v.w;
-  v.y += v.z * v.x;
-  v.z += v.x * v.y;
-  v.w += v.y * v.z;
-  v ^= v >> 16u;
-  v.x += v.y * v.w;
-  v.y += v.z * v.x;
-  v.z += v.x * v.y;
-  v.w += v.y * v.z;
-  return v;
-}
-
 typedef struct {
   uint pixel;
   uint sample;

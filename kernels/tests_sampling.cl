@@ -199,6 +199,40 @@ __kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
   for (uint d = 1u; d <= 3u; ++d) out[3u * i + d - 1u] = sobol_bits(index[i], d);
 }
 
+/* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys
+ * pixel/sample/group[16 i .. 16 i + 15] and writes, per lane, its four numbers at 16 lanes, at 8 lanes
+ * (two halves) and at one lane, as bits, at out[((3 i + w) 16 + lane) 4 + k] for w = 0 (16 lanes), 1 (8)
+ * and 2 (one). */
+__kernel void sampler_lanes_test(__constant const SceneHeader* h, __global const uint* pixel, __global const uint* sample,
+                                 __global const uint* group, uint seed, __global uint* out) {
+  uint i = get_global_id(0);
+  uint16 p = vload16(i, pixel), s = vload16(i, sample), g = vload16(i, group);
+  __global uint* o = out + i * 3u * 64u;
+  float16 a[4];
+  sample4_lanes(h, p, s, seed, g, &a[0], &a[1], &a[2], &a[3]);
+  float8 lo[4], hi[4];
+  sample4_lanes(h, p.lo, s.lo, seed, g.lo, &lo[0], &lo[1], &lo[2], &lo[3]);
+  sample4_lanes(h, p.hi, s.hi, seed, g.hi, &hi[0], &hi[1], &hi[2], &hi[3]);
+  for (uint k = 0u; k < 4u; ++k) {
+    float v16[16], v8[16];
+    vstore16(a[k], 0, v16);
+    vstore8(lo[k], 0, v8);
+    vstore8(hi[k], 1, v8);
+    for (uint lane = 0u; lane < 16u; ++lane) {
+      o[lane * 4u + k] = as_uint(v16[lane]);
+      o[64u + lane * 4u + k] = as_uint(v8[lane]);
+    }
+  }
+  for (uint lane = 0u; lane < 16u; ++lane) {
+    float x, y, z, w;
+    sample4_lanes(h, pixel[16u * i + lane], sample[16u * i + lane], seed, group[16u * i + lane], &x, &y, &z, &w);
+    o[128u + lane * 4u] = as_uint(x);
+    o[128u + lane * 4u + 1u] = as_uint(y);
+    o[128u + lane * 4u + 2u] = as_uint(z);
+    o[128u + lane * 4u + 3u] = as_uint(w);
+  }
+}
+
 /* ---- Camera ---- */
 
 /* sample_filter_1d per item, u from the hash. */

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -124,6 +125,54 @@ TEST(Sampler, SobolTablesMatchTheDirectionNumbersOfTheirPolynomials) {
         if ((index[i] >> b) & 1u) expected ^= dirs[d][b];
       ASSERT_EQ(bits[3 * i + d], expected) << "dimension " << d + 1 << " index " << index[i];
     }
+}
+
+// Every sampler gives the same bits at 16, 8 and one lane per work item (sampler.cl, sample4_lanes, the
+// building block of issue 15's lane-generic kernel): lanes hold different pixels, samples and dimension
+// groups, as lanes that restart their paths independently do, so per-lane loop counts (Halton digits,
+// cycle walking) and the Halton-or-independent choice (dimensions past 64) differ within a vector.
+TEST(Sampler, LanesGiveTheOneLaneBits) {
+  const size_t items = 64, keys = 16 * items;
+  std::vector<uint32_t> pixel(keys), sample(keys), group(keys);
+  uint32_t x = 12345;
+  auto next = [&] { return x = x * 1664525u + 1013904223u; };
+  for (size_t i = 0; i < keys; ++i) {
+    pixel[i] = next() % 100000;
+    sample[i] = i % 5 == 0 ? next() : next() % 4096;  // some beyond any spp, as resumed renders reach
+    group[i] = next() % 24;                           // Halton covers groups 0-15
+  }
+  ClContext& cl = test_device();
+  ClBuffer pixels = upload(cl, pixel), samples = upload(cl, sample), groups = upload(cl, group);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, items * 3 * 64 * sizeof(uint32_t));
+  for (uint32_t sampler : {PC_SAMPLER_INDEPENDENT, PC_SAMPLER_STRATIFIED, PC_SAMPLER_SOBOL, PC_SAMPLER_HALTON}) {
+    for (uint32_t spp : {1u, 7u, 64u}) {
+      SceneHeader h{};
+      h.sampler = sampler;
+      h.spp = spp;
+      ClBuffer header = upload(cl, std::vector<SceneHeader>{h});
+      ClKernel k(sampling_test_program().kernel("sampler_lanes_test"));
+      k.arg(0, header.mem);
+      k.arg(1, pixels.mem);
+      k.arg(2, samples.mem);
+      k.arg(3, groups.mem);
+      k.arg(4, cl_uint(99));
+      k.arg(5, out.mem);
+      run_kernel(cl, k.k, items);
+      std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 64);
+      size_t differing = 0, in_range = 0;
+      for (size_t i = 0; i < items; ++i)
+        for (size_t j = 0; j < 64; ++j) {
+          const uint32_t one = bits[(3 * i + 2) * 64 + j];
+          differing += bits[(3 * i + 0) * 64 + j] != one;
+          differing += bits[(3 * i + 1) * 64 + j] != one;
+          float f;
+          std::memcpy(&f, &one, 4);
+          in_range += f >= 0 && f < 1;
+        }
+      EXPECT_EQ(differing, 0u) << "sampler " << sampler << " spp " << spp;
+      EXPECT_EQ(in_range, items * 64) << "sampler " << sampler << " spp " << spp;
+    }
+  }
 }
 
 TEST(Sampler, SobolSamplesOfAPixelAreStratifiedNets) {
