@@ -466,4 +466,82 @@ PC_EM_GEOMETRIC(float2, uint2, 2)
 PC_EM_GEOMETRIC(float3, uint3, 3)
 PC_EM_GEOMETRIC(float4, uint4, 4)
 
+
+/* ---- The same over lanes: 3-vectors stored by component (x, y, z each a float, float8 or float16 of the
+ * lanes' values), for issue 15's lane-generic kernel. Every lane does exactly the operations of the
+ * float3 function above (the same products, sums and their order, the same flushes); its branches are
+ * selects per lane. So lane j of pc_normalize(lane3f8 v) is pc_normalize of lane j's float3, bit for bit
+ * (tests/exact_math_test.cpp, LaneGeometryGivesTheFloat3Bits). */
+typedef struct { float x, y, z; } lane3f;
+typedef struct { float8 x, y, z; } lane3f8;
+typedef struct { float16 x, y, z; } lane3f16;
+
+#define PC_EM_LANES3(V3, F, I, U, N)                                                                      \
+  inline PC_OVL V3 lane3(F x, F y, F z) {                                                                 \
+    V3 v;                                                                                                 \
+    v.x = x;                                                                                              \
+    v.y = y;                                                                                              \
+    v.z = z;                                                                                              \
+    return v;                                                                                             \
+  }                                                                                                       \
+  inline PC_OVL F pc_dot(V3 a, V3 b) {                                                                    \
+    F px = pc_flush_product_(pc_flush_(a.x) * pc_flush_(b.x));                                            \
+    F py = pc_flush_product_(pc_flush_(a.y) * pc_flush_(b.y));                                            \
+    F pz = pc_flush_product_(pc_flush_(a.z) * pc_flush_(b.z));                                            \
+    return pc_flush_(pc_flush_(px + py) + pz);                                                            \
+  }                                                                                                       \
+  inline PC_OVL V3 pc_cross(V3 a, V3 b) {                                                                 \
+    F ax = pc_flush_(a.x), ay = pc_flush_(a.y), az = pc_flush_(a.z);                                      \
+    F bx = pc_flush_(b.x), by = pc_flush_(b.y), bz = pc_flush_(b.z);                                      \
+    return lane3(pc_flush_(pc_flush_product_(ay * bz) - pc_flush_product_(az * by)),                      \
+                 pc_flush_(pc_flush_product_(az * bx) - pc_flush_product_(ax * bz)),                      \
+                 pc_flush_(pc_flush_product_(ax * by) - pc_flush_product_(ay * bx)));                     \
+  }                                                                                                       \
+  /* |component| bits with denormals as zeros, and the largest of them. */                               \
+  inline PC_OVL U pc_lane_abs_bits_(F x) {                                                                \
+    U a = as_uint##N(x) & 0x7fffffffu;                                                                    \
+    return select(a, (U)(0u), a < 0x00800000u);                                                           \
+  }                                                                                                       \
+  inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }               \
+  inline PC_OVL F pc_length(V3 v) {                                                                       \
+    U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
+    F vx = as_float##N(ax), vy = as_float##N(ay), vz = as_float##N(az);                                   \
+    U mb = max(max(ax, ay), az);                                                                          \
+    F s = as_float##N((255u - (mb >> 23u)) << 23u); /* max * s in [2, 4) */                               \
+    F direct = sqrt(pc_lane_sum_of_squares_(vx, vy, vz));                                                 \
+    F scaled = sqrt(pc_lane_sum_of_squares_(vx * s, vy * s, vz * s)) / s;                                 \
+    F r = select(scaled, direct, mb - 0x2b800000u < 0x28000000u); /* max in [2^-40, 2^40) */             \
+    r = select(r, (F)(0.0f), mb == 0u);                                                                   \
+    r = select(r, as_float##N((U)(PC_NAN_BITS)), mb > 0x7f800000u);                                       \
+    return select(r, (F)(INFINITY), mb == 0x7f800000u);                                                   \
+  }                                                                                                       \
+  inline PC_OVL V3 pc_normalize(V3 v) {                                                                   \
+    U bx = as_uint##N(v.x), by = as_uint##N(v.y), bz = as_uint##N(v.z);                                   \
+    U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
+    F v0x = as_float##N(ax | (bx & 0x80000000u)), v0y = as_float##N(ay | (by & 0x80000000u));             \
+    F v0z = as_float##N(az | (bz & 0x80000000u));                                                         \
+    U mb = max(max(ax, ay), az);                                                                          \
+    I zero = mb == 0u, nan = mb > 0x7f800000u, inf = mb == 0x7f800000u;                                   \
+    /* max outside [2^-40, 2^40), finite and not zero: scaled by a power of two to [2, 4) */              \
+    I far = (mb - 0x2b800000u >= 0x28000000u) & !zero & !nan & !inf;                                      \
+    F s = as_float##N((255u - (mb >> 23u)) << 23u);                                                       \
+    F sx = select(v0x, v0x * s, far), sy = select(v0y, v0y * s, far), sz = select(v0z, v0z * s, far);     \
+    /* infinite components become +-1, the others +-0 */                                                  \
+    sx = select(sx, select(copysign((F)(0.0f), v0x), copysign((F)(1.0f), v0x), ax == 0x7f800000u), inf);  \
+    sy = select(sy, select(copysign((F)(0.0f), v0y), copysign((F)(1.0f), v0y), ay == 0x7f800000u), inf);  \
+    sz = select(sz, select(copysign((F)(0.0f), v0z), copysign((F)(1.0f), v0z), az == 0x7f800000u), inf);  \
+    F den = sqrt(pc_lane_sum_of_squares_(sx, sy, sz)) * 0x1p-24f;                                         \
+    F qx = sx / den, qy = sy / den, qz = sz / den;                                                        \
+    F nan_value = as_float##N((U)(PC_NAN_BITS));                                                          \
+    qx = select(qx * 0x1p-24f, copysign((F)(0.0f), v0x), fabs(qx) < 0x1p-102f);                           \
+    qy = select(qy * 0x1p-24f, copysign((F)(0.0f), v0y), fabs(qy) < 0x1p-102f);                           \
+    qz = select(qz * 0x1p-24f, copysign((F)(0.0f), v0z), fabs(qz) < 0x1p-102f);                           \
+    return lane3(select(select(qx, v0x, zero), nan_value, nan), select(select(qy, v0y, zero), nan_value, nan), \
+                 select(select(qz, v0z, zero), nan_value, nan));                                          \
+  }
+PC_EM_LANES3(lane3f, float, int, uint, )
+PC_EM_LANES3(lane3f8, float8, int8, uint8, 8)
+PC_EM_LANES3(lane3f16, float16, int16, uint16, 16)
+#undef PC_EM_LANES3
+
 #endif

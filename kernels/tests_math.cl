@@ -87,6 +87,34 @@ __kernel void pc_cross_4(__global const float* a, __global const float* b, __glo
   vstore4(pc_cross(vload4(i, a), vload4(i, b)), i, out);
 }
 
+/* The lane geometry (lane3f, lane3f8, lane3f16) on float3s stored 3 floats apart, N per work item: per
+ * vector, out[8 v ..] = dot(a, b), cross(a, b), length(a), normalize(a). */
+#define PC_TEST_LANES3(V3, F, N)                                                                      \
+  __kernel void lane3_geometric_##N(__global const float* a, __global const float* b, __global float* out) { \
+    size_t i = get_global_id(0);                                                                      \
+    float ax[N], ay[N], az[N], bx[N], by[N], bz[N], r[8][N];                                          \
+    for (int j = 0; j < N; ++j) {                                                                     \
+      float3 u = vload3(N * i + j, a), w = vload3(N * i + j, b);                                      \
+      ax[j] = u.x, ay[j] = u.y, az[j] = u.z, bx[j] = w.x, by[j] = w.y, bz[j] = w.z;                   \
+    }                                                                                                 \
+    V3 va = lane3(PC_LOAD_##N(ax), PC_LOAD_##N(ay), PC_LOAD_##N(az));                                 \
+    V3 vb = lane3(PC_LOAD_##N(bx), PC_LOAD_##N(by), PC_LOAD_##N(bz));                                 \
+    V3 c = pc_cross(va, vb), n = pc_normalize(va);                                                    \
+    F v[8] = {pc_dot(va, vb), c.x, c.y, c.z, pc_length(va), n.x, n.y, n.z};                            \
+    for (int k = 0; k < 8; ++k) PC_STORE_##N(v[k], r[k]);                                             \
+    for (int j = 0; j < N; ++j)                                                                       \
+      for (int k = 0; k < 8; ++k) out[8 * (N * i + j) + k] = r[k][j];                                 \
+  }
+#define PC_LOAD_1(p) (p)[0]
+#define PC_LOAD_8(p) vload8(0, p)
+#define PC_LOAD_16(p) vload16(0, p)
+#define PC_STORE_1(x, p) (p)[0] = (x)
+#define PC_STORE_8(x, p) vstore8(x, 0, p)
+#define PC_STORE_16(x, p) vstore16(x, 0, p)
+PC_TEST_LANES3(lane3f, float, 1)
+PC_TEST_LANES3(lane3f8, float8, 8)
+PC_TEST_LANES3(lane3f16, float16, 16)
+
 /* Throughput (the disabled benchmark in tests/exact_math_test.cpp): each work item evaluates EXPR, the
  * exact function or the builtin, on `count` arguments x derived from its id, and writes their sum so that
  * nothing is optimised away. */

@@ -578,6 +578,46 @@ TEST(ExactMath, LengthNormalize) {
   }
 }
 
+// Lane geometry (exact_math.cl, lane3f / lane3f8 / lane3f16: 3-vectors stored by component, for issue
+// 15's lane-generic kernel) gives, in every lane, the bits of the float3 functions: random vectors and the
+// special ones of LengthNormalize (zeros, denormals, infinities, NaN, extremes), with lanes of different
+// kinds side by side so that every per-lane select is exercised.
+TEST(ExactMath, LaneGeometryGivesTheFloat3Bits) {
+  std::vector<float> a = random_vectors(3, 8000, 91), b = random_vectors(3, 8000, 92);
+  const float specials[][3] = {{0.0f, -0.0f, 0.0f},        {from_bits(1u), -0.0f, from_bits(0x807fffffu)},
+                               {INFINITY, 1.0f, 0.0f},      {-INFINITY, INFINITY, -0.0f},
+                               {kNaN, 1.0f, 0.0f},          {INFINITY, kNaN, 1.0f},
+                               {FLT_MAX, FLT_MAX, FLT_MAX}, {FLT_MIN, 0.0f, -FLT_MIN},
+                               {1.0f, 1e-30f, -1e-38f},     {3e38f, -3e38f, 1.0f},
+                               {1e30f, 1e-30f, 0.0f},       {from_bits(0x00800001u), from_bits(1u), 0.0f}};
+  for (int k = 0; k < 48; ++k)  // every special vector in several lane positions, beside random ones
+    for (int c = 0; c < 3; ++c) a[3 * (37 * k + 5) + c] = specials[k % 12][c];
+  const size_t count = a.size() / 3;  // a multiple of 16
+  ASSERT_EQ(count % 16, 0u);
+  std::vector<float> dot = run_vector("pc_dot_3", a, &b, count, 1), cross = run_vector("pc_cross_3", a, &b, count, 3);
+  std::vector<float> length = run_vector("pc_length_3", a, nullptr, count, 1);
+  std::vector<float> normal = run_vector("pc_normalize_3", a, nullptr, count, 3);
+  auto same = [](float x, float y) { return bits(x) == bits(y) || (std::isnan(x) && std::isnan(y)); };
+  for (int width : {1, 8, 16}) {
+    std::vector<float> lanes = run_vector("lane3_geometric_" + std::to_string(width), a, &b, count / width, 8 * width);
+    size_t wrong = 0;
+    for (size_t i = 0; i < count; ++i) {
+      const float* r = &lanes[8 * i];
+      const float expected[8] = {dot[i], cross[3 * i], cross[3 * i + 1], cross[3 * i + 2], length[i],
+                                 normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]};
+      for (int k = 0; k < 8; ++k) {
+        // length and normalize return the one NaN (exact_math.cl): bit for bit; dot and cross propagate
+        // their inputs' NaNs, any NaN.
+        const bool ok = k == 4 || k >= 5 ? bits(r[k]) == bits(expected[k]) : same(r[k], expected[k]);
+        if (!ok && wrong++ < 5)
+          ADD_FAILURE() << width << " lanes, vector " << i << vec_string(&a[3 * i], 3) << ", result " << k << ": "
+                        << hex(r[k]) << ", float3 " << hex(expected[k]);
+      }
+    }
+    EXPECT_EQ(wrong, 0u) << width << " lanes";
+  }
+}
+
 // ---- denormal flushing ----------------------------------------------------------------------------------
 
 // Built with -cl-denorms-are-zero (on PoCL the CPU then flushes denormal inputs and results), every function
