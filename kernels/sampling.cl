@@ -2,40 +2,67 @@
 #ifndef PATHCL_SAMPLING_CL
 #define PATHCL_SAMPLING_CL
 
-/* A point on the unit disk, area-preserving (Shirley and Chiu's concentric map). */
-inline float2 sample_concentric_disk(float2 u) {
-  float2 o = 2.0f * u - 1.0f;
-  if (o.x == 0.0f && o.y == 0.0f) return (float2)(0.0f);
-  float r, phi;
-  if (fabs(o.x) > fabs(o.y)) {
-    r = o.x;
-    phi = (PC_PI / 4.0f) * (o.y / o.x);
-  } else {
-    r = o.y;
-    phi = (PC_PI / 2.0f) - (PC_PI / 4.0f) * (o.x / o.y);
+/* The warps over lanes (F float for one lane, float8/float16 for a lane-generic kernel, issue 15): each
+ * written once, every lane doing the one-lane operations (branches as per-lane selects), so the points
+ * are the same bits at every lane width (tests/camera_sampling_test.cpp). The float2/float3 functions
+ * below are their one-lane instances. */
+#define PC_SAMPLING_LANES(F, I)                                                                           \
+  /* A point on the unit disk, area-preserving (Shirley and Chiu's concentric map). */                   \
+  inline PC_OVL void sample_concentric_disk_lanes(F ux, F uy, F* x, F* y) {                               \
+    F ox = 2.0f * ux - 1.0f, oy = 2.0f * uy - 1.0f;                                                       \
+    I centre = (ox == 0.0f) & (oy == 0.0f), x_major = fabs(ox) > fabs(oy);                                \
+    F r = select(oy, ox, x_major);                                                                        \
+    F phi = select((PC_PI / 2.0f) - (PC_PI / 4.0f) * (ox / oy), (PC_PI / 4.0f) * (oy / ox), x_major);     \
+    F c, s = pc_sincos(phi, &c);                                                                          \
+    *x = select(r * c, (F)(0.0f), centre);                                                                \
+    *y = select(r * s, (F)(0.0f), centre);                                                                \
+  }                                                                                                       \
+  /* Cosine-weighted direction about +z (Malley's method). */                                            \
+  inline PC_OVL void sample_cosine_hemisphere_lanes(F ux, F uy, F* x, F* y, F* z) {                       \
+    sample_concentric_disk_lanes(ux, uy, x, y);                                                           \
+    *z = sqrt(fmax(0.0f, 1.0f - *x * *x - *y * *y));                                                      \
+  }                                                                                                       \
+  inline PC_OVL void sample_uniform_sphere_lanes(F ux, F uy, F* x, F* y, F* z) {                          \
+    *z = 1.0f - 2.0f * ux;                                                                                \
+    F r = sqrt(fmax(0.0f, 1.0f - *z * *z));                                                               \
+    F phi = 2.0f * PC_PI * uy;                                                                            \
+    F c, s = pc_sincos(phi, &c);                                                                          \
+    *x = r * c;                                                                                           \
+    *y = r * s;                                                                                           \
+  }                                                                                                       \
+  /* Uniform barycentrics over a triangle: weights of vertices a, b (c gets the rest). */                \
+  inline PC_OVL void sample_uniform_triangle_lanes(F ux, F uy, F* a, F* b) {                              \
+    F su = sqrt(ux);                                                                                      \
+    *a = 1.0f - su;                                                                                       \
+    *b = uy * su;                                                                                         \
   }
-  float c, s = pc_sincos(phi, &c);
-  return (float2)(r * c, r * s);
+PC_SAMPLING_LANES(float, int)
+PC_SAMPLING_LANES(float8, int8)
+PC_SAMPLING_LANES(float16, int16)
+#undef PC_SAMPLING_LANES
+
+inline float2 sample_concentric_disk(float2 u) {
+  float x, y;
+  sample_concentric_disk_lanes(u.x, u.y, &x, &y);
+  return (float2)(x, y);
 }
 
-/* Cosine-weighted direction about +z (Malley's method). */
 inline float3 sample_cosine_hemisphere(float2 u) {
-  float2 d = sample_concentric_disk(u);
-  return (float3)(d.x, d.y, sqrt(fmax(0.0f, 1.0f - d.x * d.x - d.y * d.y)));
+  float x, y, z;
+  sample_cosine_hemisphere_lanes(u.x, u.y, &x, &y, &z);
+  return (float3)(x, y, z);
 }
 
 inline float3 sample_uniform_sphere(float2 u) {
-  float z = 1.0f - 2.0f * u.x;
-  float r = sqrt(fmax(0.0f, 1.0f - z * z));
-  float phi = 2.0f * PC_PI * u.y;
-  float c, s = pc_sincos(phi, &c);
-  return (float3)(r * c, r * s, z);
+  float x, y, z;
+  sample_uniform_sphere_lanes(u.x, u.y, &x, &y, &z);
+  return (float3)(x, y, z);
 }
 
-/* Uniform barycentrics over a triangle: weights of vertices a, b (c gets the rest). */
 inline float2 sample_uniform_triangle(float2 u) {
-  float su = sqrt(u.x);
-  return (float2)(1.0f - su, u.y * su);
+  float a, b;
+  sample_uniform_triangle_lanes(u.x, u.y, &a, &b);
+  return (float2)(a, b);
 }
 
 /* Index i with cdf[i] <= u < cdf[i + 1], over count intervals (binary search of a cdf). */

@@ -199,6 +199,52 @@ __kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
   for (uint d = 1u; d <= 3u; ++d) out[3u * i + d - 1u] = sobol_bits(index[i], d);
 }
 
+/* Camera rays and warps over 16 and 8 lanes against one lane (camera.cl, sampling.cl): item i takes the 16
+ * lanes px/py[16 i + lane], u[4 (16 i + lane) ..]; per lane and width w (0: 16 lanes, 1: 8, 2: one) it
+ * writes 16 results as bits at out[((3 i + w) 16 + lane) 16 + k]: ray origin (3) and direction (3) for
+ * (px, py, u), and from (u.x, u.y) the disk point (2), cosine (3) and sphere (3) directions and
+ * triangle barycentrics (2). */
+#define PC_CAMERA_LANES_TEST(F, U, V3, N, LOAD, STORE)                                                   \
+  inline void camera_lanes_write_##N(__constant const SceneHeader* h, U px, U py, F u0, F u1, F u2, F u3, \
+                                     __global uint* o) {                                                  \
+    V3 ro, rd;                                                                                            \
+    camera_ray_lanes(h, px, py, u0, u1, u2, u3, &ro, &rd);                                                \
+    F r[16];                                                                                              \
+    r[0] = ro.x, r[1] = ro.y, r[2] = ro.z, r[3] = rd.x, r[4] = rd.y, r[5] = rd.z;                         \
+    sample_concentric_disk_lanes(u0, u1, &r[6], &r[7]);                                                   \
+    sample_cosine_hemisphere_lanes(u0, u1, &r[8], &r[9], &r[10]);                                         \
+    sample_uniform_sphere_lanes(u0, u1, &r[11], &r[12], &r[13]);                                          \
+    sample_uniform_triangle_lanes(u0, u1, &r[14], &r[15]);                                                \
+    for (uint k = 0u; k < 16u; ++k) {                                                                     \
+      float v[N];                                                                                         \
+      STORE(r[k], v);                                                                                     \
+      for (uint lane = 0u; lane < N; ++lane) o[16u * lane + k] = as_uint(v[lane]);                        \
+    }                                                                                                     \
+  }
+#define PC_STORE_LANES_1(x, p) (p)[0] = (x)
+#define PC_STORE_LANES_8(x, p) vstore8(x, 0, p)
+#define PC_STORE_LANES_16(x, p) vstore16(x, 0, p)
+PC_CAMERA_LANES_TEST(float, uint, lane3f, 1, , PC_STORE_LANES_1)
+PC_CAMERA_LANES_TEST(float8, uint8, lane3f8, 8, , PC_STORE_LANES_8)
+PC_CAMERA_LANES_TEST(float16, uint16, lane3f16, 16, , PC_STORE_LANES_16)
+
+__kernel void camera_lanes_test(__constant const SceneHeader* h, __global const uint* px, __global const uint* py,
+                                __global const float* u, __global uint* out) {
+  uint i = get_global_id(0);
+  __global uint* o = out + i * 3u * 256u;
+  float uc[4][16];
+  for (uint lane = 0u; lane < 16u; ++lane)
+    for (uint k = 0u; k < 4u; ++k) uc[k][lane] = u[4u * (16u * i + lane) + k];
+  float16 a = vload16(0, uc[0]), b = vload16(0, uc[1]), c = vload16(0, uc[2]), d = vload16(0, uc[3]);
+  uint16 x = vload16(i, px), y = vload16(i, py);
+  camera_lanes_write_16(h, x, y, a, b, c, d, o);
+  camera_lanes_write_8(h, x.lo, y.lo, a.lo, b.lo, c.lo, d.lo, o + 256u);
+  camera_lanes_write_8(h, x.hi, y.hi, a.hi, b.hi, c.hi, d.hi, o + 256u + 128u);
+  for (uint lane = 0u; lane < 16u; ++lane)
+    camera_lanes_write_1(h, px[16u * i + lane], py[16u * i + lane], uc[0][lane], uc[1][lane], uc[2][lane], uc[3][lane],
+                         o + 512u + 16u * lane);
+}
+
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys
  * pixel/sample/group[16 i .. 16 i + 15] and writes, per lane, its four numbers at 16 lanes, at 8 lanes
  * (two halves) and at one lane, as bits, at out[((3 i + w) 16 + lane) 4 + k] for w = 0 (16 lanes), 1 (8)

@@ -2,6 +2,7 @@
 // against their own CDFs by chi-square, and the thin lens's geometry.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <functional>
 #include <string>
@@ -174,4 +175,62 @@ TEST(ThinLens, WithoutApertureEveryRayStartsAtTheCamera) {
   ASSERT_EQ(pinhole.lens_radius, 0.0f);
   Rays rays = camera_rays(pinhole, 5, 7, -1, -1, 3, 1000);  // pixel positions hashed too
   for (size_t i = 0; i < 1000; ++i) EXPECT_EQ(rays.o(i), vec(pinhole.cam_position));
+}
+
+// Camera rays and the warps give the same bits at 16, 8 and one lane (camera.cl, sampling.cl: written once
+// over lanes for issue 15's lane-generic kernel), for every filter, pinhole and thin lens, with lanes on
+// either side of every per-lane branch (tent halves, erf_inverse's two ranges, the disk's octants and
+// centre) side by side.
+TEST(CameraLanes, LanesGiveTheOneLaneBits) {
+  const size_t items = 32, lanes = 16 * items;
+  std::vector<uint32_t> px(lanes), py(lanes);
+  std::vector<float> u(4 * lanes);
+  uint32_t x = 777;
+  auto next = [&] { return x = x * 1664525u + 1013904223u; };
+  for (size_t i = 0; i < lanes; ++i) {
+    px[i] = next() % 640;
+    py[i] = next() % 480;
+    for (int k = 0; k < 4; ++k) u[4 * i + k] = float(next() >> 8) * 0x1.0p-24f;
+  }
+  // Edge values in some lanes: the disk's centre, 0, just below 1, the tent's and erf's switch points.
+  const float edges[] = {0.5f, 0.0f, 0x1.fffffep-1f, 0.49999997f, 0.99999f, 1e-7f};
+  for (size_t e = 0; e < 6; ++e)
+    for (int k = 0; k < 4; ++k) u[4 * (21 * e + 3) + k] = edges[(e + k) % 6];
+  ClContext& cl = test_device();
+  ClBuffer bx = upload(cl, px), by = upload(cl, py), bu = upload(cl, u);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, items * 3 * 256 * sizeof(uint32_t));
+  struct Case { const char* name; uint32_t filter; float radius, sigma, lens; };
+  for (const Case& c : {Case{"box pinhole", PC_FILTER_BOX, 0.5f, 0, 0}, Case{"tent thin lens", PC_FILTER_TENT, 1.5f, 0, 0.2f},
+                        Case{"gaussian pinhole", PC_FILTER_GAUSSIAN, 1.5f, 0.5f, 0},
+                        Case{"gaussian thin lens", PC_FILTER_GAUSSIAN, 2, 0.3f, 0.05f}}) {
+    SceneHeader h = filter_header(c.filter, c.radius, c.sigma);
+    h.width = 640;
+    h.height = 480;
+    h.cam_position = {1.5f, -2, 3, 0};
+    h.cam_forward = {0.1f, 0.2f, -1, 0};
+    h.cam_right = {0.55f, 0, 0.05f, 0};
+    h.cam_up = {0, 0.41f, 0.08f, 0};
+    h.lens_radius = c.lens;
+    h.focus_distance = 4.5f;
+    ClBuffer header = upload(cl, std::vector<SceneHeader>{h});
+    ClKernel k(sampling_test_program().kernel("camera_lanes_test"));
+    k.arg(0, header.mem);
+    k.arg(1, bx.mem);
+    k.arg(2, by.mem);
+    k.arg(3, bu.mem);
+    k.arg(4, out.mem);
+    run_kernel(cl, k.k, items);
+    std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 256);
+    size_t differing = 0, finite = 0;
+    for (size_t i = 0; i < items; ++i)
+      for (size_t j = 0; j < 256; ++j) {
+        const uint32_t one = bits[(3 * i + 2) * 256 + j];
+        differing += (bits[(3 * i) * 256 + j] != one) + (bits[(3 * i + 1) * 256 + j] != one);
+        float f;
+        std::memcpy(&f, &one, 4);
+        finite += std::isfinite(f);
+      }
+    EXPECT_EQ(differing, 0u) << c.name;
+    EXPECT_EQ(finite, items * 256) << c.name;
+  }
 }
