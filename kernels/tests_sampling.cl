@@ -245,6 +245,44 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
                          o + 512u + 16u * lane);
 }
 
+/* make_frame, offset_ray_origin and power_heuristic over 16, 8 and one lane (math.cl): lane j of item i
+ * reads 14 floats at in[14 (16 i + j)]: n (3), err (3), p (3), w (3), pdf_a, pdf_b, and writes 10 results
+ * as bits at out[((3 i + width) 16 + j) 10 + k] (width 0: 16 lanes, 1: 8, 2: one): t, b, the offset
+ * origin (3 each) and the weight. */
+#define PC_MATH_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
+  inline void math_lanes_write_##N(float in[14][16], uint first, __global uint* o) {                    \
+    F v[14];                                                                                              \
+    for (uint k = 0u; k < 14u; ++k) v[k] = LOAD(in[k] + first);                                           \
+    V3 t, b;                                                                                              \
+    make_frame(lane3(v[0], v[1], v[2]), &t, &b);                                                          \
+    V3 po = offset_ray_origin(lane3(v[6], v[7], v[8]), lane3(v[3], v[4], v[5]), lane3(v[0], v[1], v[2]),   \
+                              lane3(v[9], v[10], v[11]));                                                 \
+    F r[10] = {t.x, t.y, t.z, b.x, b.y, b.z, po.x, po.y, po.z, power_heuristic(v[12], v[13])};           \
+    for (uint k = 0u; k < 10u; ++k) {                                                                     \
+      float x[N];                                                                                         \
+      STORE(r[k], x);                                                                                     \
+      for (uint j = 0u; j < N; ++j) o[10u * j + k] = as_uint(x[j]);                                       \
+    }                                                                                                     \
+  }
+#define PC_LOAD_LANES_1(p) (p)[0]
+#define PC_LOAD_LANES_8(p) vload8(0, p)
+#define PC_LOAD_LANES_16(p) vload16(0, p)
+PC_MATH_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
+PC_MATH_LANES_TEST(lane3f8, float8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
+PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
+
+__kernel void math_lanes_test(__global const float* in, __global uint* out) {
+  uint i = get_global_id(0);
+  float v[14][16];
+  for (uint j = 0u; j < 16u; ++j)
+    for (uint k = 0u; k < 14u; ++k) v[k][j] = in[14u * (16u * i + j) + k];
+  __global uint* o = out + i * 3u * 160u;
+  math_lanes_write_16(v, 0u, o);
+  math_lanes_write_8(v, 0u, o + 160u);
+  math_lanes_write_8(v, 8u, o + 160u + 80u);
+  for (uint j = 0u; j < 16u; ++j) math_lanes_write_1(v, j, o + 320u + 10u * j);
+}
+
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys
  * pixel/sample/group[16 i .. 16 i + 15] and writes, per lane, its four numbers at 16 lanes, at 8 lanes
  * (two halves) and at one lane, as bits, at out[((3 i + w) 16 + lane) 4 + k] for w = 0 (16 lanes), 1 (8)

@@ -234,3 +234,42 @@ TEST(CameraLanes, LanesGiveTheOneLaneBits) {
     EXPECT_EQ(finite, items * 256) << c.name;
   }
 }
+
+// make_frame, offset_ray_origin and power_heuristic (math.cl, written once over lanes) give the one-lane
+// bits at 16 and 8 lanes: normals of both hemispheres, offsets to both sides and zero error bounds, pdfs
+// whose squares overflow or underflow and zero pdfs, side by side in one vector.
+TEST(CameraLanes, FrameOffsetAndMisWeightGiveTheOneLaneBits) {
+  const size_t items = 32, lanes = 16 * items;
+  std::vector<float> in(14 * lanes);
+  uint32_t x = 4242;
+  auto uniform = [&] { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; };
+  for (size_t j = 0; j < lanes; ++j) {
+    float* v = &in[14 * j];
+    float n[3] = {2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1};
+    float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k) v[k] = n[k] / len;
+    for (int k = 3; k < 6; ++k) v[k] = j % 7 == 0 ? 0.0f : uniform() * 1e-5f;
+    for (int k = 6; k < 12; ++k) v[k] = (2 * uniform() - 1) * 10;
+    const float pdfs[] = {0.0f, 1e-30f, 1e30f, 1.0f};
+    v[12] = j % 5 == 0 ? pdfs[j / 5 % 4] : uniform() * 4;
+    v[13] = j % 3 == 0 ? pdfs[j / 3 % 4] : uniform() * 4;
+  }
+  ClContext& cl = test_device();
+  ClBuffer bin = upload(cl, in), out(cl, CL_MEM_WRITE_ONLY, items * 3 * 160 * sizeof(uint32_t));
+  ClKernel k(sampling_test_program().kernel("math_lanes_test"));
+  k.arg(0, bin.mem);
+  k.arg(1, out.mem);
+  run_kernel(cl, k.k, items);
+  std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 160);
+  size_t differing = 0, finite = 0;
+  for (size_t i = 0; i < items; ++i)
+    for (size_t j = 0; j < 160; ++j) {
+      const uint32_t one = bits[(3 * i + 2) * 160 + j];
+      differing += (bits[(3 * i) * 160 + j] != one) + (bits[(3 * i + 1) * 160 + j] != one);
+      float f;
+      std::memcpy(&f, &one, 4);
+      finite += std::isfinite(f);
+    }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_EQ(finite, items * 160);
+}
