@@ -221,17 +221,9 @@ TEST(CameraLanes, LanesGiveTheOneLaneBits) {
     k.arg(4, out.mem);
     run_kernel(cl, k.k, items);
     std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 256);
-    size_t differing = 0, finite = 0;
-    for (size_t i = 0; i < items; ++i)
-      for (size_t j = 0; j < 256; ++j) {
-        const uint32_t one = bits[(3 * i + 2) * 256 + j];
-        differing += (bits[(3 * i) * 256 + j] != one) + (bits[(3 * i + 1) * 256 + j] != one);
-        float f;
-        std::memcpy(&f, &one, 4);
-        finite += std::isfinite(f);
-      }
-    EXPECT_EQ(differing, 0u) << c.name;
-    EXPECT_EQ(finite, items * 256) << c.name;
+    LaneComparison lc = compare_lanes(bits, items, 256, [](float f) { return bool(std::isfinite(f)); });
+    EXPECT_EQ(lc.differing, 0u) << c.name;
+    EXPECT_EQ(lc.valid, items * 256) << c.name;
   }
 }
 
@@ -261,15 +253,7 @@ TEST(CameraLanes, FrameOffsetAndMisWeightGiveTheOneLaneBits) {
   k.arg(1, out.mem);
   run_kernel(cl, k.k, items);
   std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 160);
-  size_t differing = 0, finite = 0;
-  for (size_t i = 0; i < items; ++i)
-    for (size_t j = 0; j < 160; ++j) {
-      const uint32_t one = bits[(3 * i + 2) * 160 + j];
-      differing += (bits[(3 * i) * 160 + j] != one) + (bits[(3 * i + 1) * 160 + j] != one);
-      float f;
-      std::memcpy(&f, &one, 4);
-      finite += std::isfinite(f);
-    }
-  EXPECT_EQ(differing, 0u);
-  EXPECT_EQ(finite, items * 160);
+  LaneComparison lc = compare_lanes(bits, items, 160, [](float f) { return bool(std::isfinite(f)); });
+  EXPECT_EQ(lc.differing, 0u);
+  EXPECT_EQ(lc.valid, items * 160);
 }

@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -159,18 +158,9 @@ TEST(Sampler, LanesGiveTheOneLaneBits) {
       k.arg(5, out.mem);
       run_kernel(cl, k.k, items);
       std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 64);
-      size_t differing = 0, in_range = 0;
-      for (size_t i = 0; i < items; ++i)
-        for (size_t j = 0; j < 64; ++j) {
-          const uint32_t one = bits[(3 * i + 2) * 64 + j];
-          differing += bits[(3 * i + 0) * 64 + j] != one;
-          differing += bits[(3 * i + 1) * 64 + j] != one;
-          float f;
-          std::memcpy(&f, &one, 4);
-          in_range += f >= 0 && f < 1;
-        }
-      EXPECT_EQ(differing, 0u) << "sampler " << sampler << " spp " << spp;
-      EXPECT_EQ(in_range, items * 64) << "sampler " << sampler << " spp " << spp;
+      LaneComparison c = compare_lanes(bits, items, 64, [](float f) { return f >= 0 && f < 1; });
+      EXPECT_EQ(c.differing, 0u) << "sampler " << sampler << " spp " << spp;
+      EXPECT_EQ(c.valid, items * 64) << "sampler " << sampler << " spp " << spp;
     }
   }
 }

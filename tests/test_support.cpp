@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -98,6 +99,19 @@ int run_pathcl(const std::string& args, std::string* err, std::string* out) {
   if (err) *err = read_text_file(err_file);
   if (out) *out = read_text_file(out_file);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+LaneComparison compare_lanes(const std::vector<uint32_t>& bits, size_t items, size_t stride, bool (*valid)(float)) {
+  LaneComparison c;
+  for (size_t i = 0; i < items; ++i)
+    for (size_t j = 0; j < stride; ++j) {
+      const uint32_t one = bits[(3 * i + 2) * stride + j];
+      c.differing += (bits[3 * i * stride + j] != one) + (bits[(3 * i + 1) * stride + j] != one);
+      float f;
+      std::memcpy(&f, &one, sizeof f);
+      c.valid += valid(f);
+    }
+  return c;
 }
 
 MeanStd mean_and_error(const std::vector<double>& values) {

@@ -62,6 +62,15 @@ std::string read_text_file(const std::string& path);
 // stdout in *out when given.
 int run_pathcl(const std::string& args, std::string* err = nullptr, std::string* out = nullptr);
 
+// What the lane tests' kernels write (kernels/tests_sampling.cl, *_lanes_test): per work item, `stride`
+// words of results at 16 lanes, then at 8 lanes, then at one lane. Counts the words where the 16- or
+// 8-lane results differ from the one-lane ones, and in *valid the one-lane words that, read as floats,
+// pass `valid`.
+struct LaneComparison {
+  size_t differing = 0, valid = 0;
+};
+LaneComparison compare_lanes(const std::vector<uint32_t>& bits, size_t items, size_t stride, bool (*valid)(float));
+
 // Mean and standard error of the mean of values.
 struct MeanStd {
   double mean = 0, std_error = 0;
