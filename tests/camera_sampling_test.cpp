@@ -2,7 +2,6 @@
 // against their own CDFs by chi-square, and the thin lens's geometry.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <cstdio>
 #include <functional>
 #include <string>
