@@ -6,6 +6,7 @@
  * t * phi_bins + p covers [t, t + 1) theta_max / theta_bins x [p, p + 1) 2 pi / phi_bins.
  * Random numbers: pcg4d of (item, seed, two constants), as the samplers hash. */
 #include "shared/types.h"
+#include "shared/light_types.h"
 #include "math.cl"
 #include "rng.cl"
 #include "sampler.cl"
@@ -17,6 +18,8 @@
 #include "bsdf.cl"
 #include "environment.cl"
 #include "lights.cl"
+#include "emission.cl"
+#include "camera_importance.cl"
 
 inline float4 test_random4(uint item, uint seed) {
   uint4 v = pcg4d((uint4)(item, seed, 0x9e3779b9u, 0x85ebca6bu));
@@ -373,4 +376,156 @@ __kernel void scene_hit_test(PC_SCENE_PARAMS, __global const RayRecord* rays, __
   vstore3(s.ns, 0, o + 7);
   o[10] = max_component(s.p_err);
   o[11] = (float)s.instance;
+}
+
+/* ---- Emission (emission.cl) and camera importance (camera_importance.cl) ---- */
+
+/* One sample_emission per item, its six numbers from two hashes. out: 16 floats per item: p (3), n (3),
+ * d (3), status (0 failed, 1 sampled), pdf_choice, pdf_pos, pdf_dir, light_emission_pdf(p, n, d) of the
+ * light it chose (pos, dir), the light's index. A failed sample writes zeros. */
+__kernel void emission_sample_test(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  SceneData sc = PC_SCENE_DATA;
+  float4 u = test_random4(i, seed), v = test_random4(i, seed ^ 0x5bd1e995u);
+  EmissionSample e;
+  bool ok = sample_emission(&sc, lt, emission_cdf, u.x, u.yzw, v.xy, &e);
+  __global float* o = out + 16 * i;
+  for (int k = 0; k < 16; ++k) o[k] = 0.0f;
+  if (!ok) return;
+  vstore3(e.p, 0, o);
+  vstore3(e.n, 0, o + 3);
+  vstore3(e.d, 0, o + 6);
+  o[9] = 1.0f;
+  o[10] = e.pdf_choice;
+  o[11] = e.pdf_pos;
+  o[12] = e.pdf_dir;
+  float pdf_pos, pdf_dir;
+  light_emission_pdf(&sc, lt, e.light, e.p, e.n, e.d, &pdf_pos, &pdf_dir);
+  o[13] = pdf_pos;
+  o[14] = pdf_dir;
+  o[15] = (float)e.light;
+}
+
+/* Integral over each listed bin of the directional density light_emission_pdf of light `index` at point
+ * p with normal n; out as bsdf_pdf_bins writes it. */
+__kernel void emission_pdf_bins(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, uint index, float4 p,
+                                float4 n, __global const float4* binning, __global const uint* bins, uint order,
+                                __global const float* gl_nodes, __global const float* gl_weights, __global float* out) {
+  uint b = get_global_id(0);
+  SceneData sc = PC_SCENE_DATA;
+  float sum = 0.0f;
+  uint zeros = 0;
+  for (uint i = 0; i < order; ++i) {
+    float row = 0.0f;
+    for (uint j = 0; j < order; ++j) {
+      float w, pdf_pos, pdf_dir;
+      float3 d = bin_node(binning, bins[b], gl_nodes, gl_weights, i, j, &w);
+      light_emission_pdf(&sc, lt, index, p.xyz, n.xyz, d, &pdf_pos, &pdf_dir);
+      zeros += pdf_dir == 0.0f;
+      row += w * pdf_dir;
+    }
+    sum += row;
+  }
+  out[2 * b] = sum;
+  out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
+}
+
+/* Camera rays with the image position uniform over the image (any filter: the pixel from the hash, the
+ * offset through the filter) and the lens point fixed at u_lens. out: 12 floats per item: o (3), d (3),
+ * the image position camera_ray drew (2, without the filter: pixel + 0.5 + offset), camera_raster of
+ * (o, d) (2), camera_pdf_we's pdf_dir, camera_we (We x cos^4 x lens area / (W H) = 1 / A is its shape). */
+__kernel void camera_we_test(__constant const SceneHeader* h, float2 u_lens, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  float4 u = test_random4(i, seed), v = test_random4(i, seed ^ 0x5bd1e995u);
+  uint px = min((uint)(u.x * (float)h->width), h->width - 1u), py = min((uint)(u.y * (float)h->height), h->height - 1u);
+  float3 o, d;
+  camera_ray(h, px, py, (float4)(v.x, v.y, u_lens.x, u_lens.y), &o, &d);
+  __global float* w = out + 12 * i;
+  vstore3(o, 0, w);
+  vstore3(d, 0, w + 3);
+  w[6] = (float)px + 0.5f + sample_filter_1d(h, v.x);
+  w[7] = (float)py + 0.5f + sample_filter_1d(h, v.y);
+  float2 raster;
+  float pdf_pos, pdf_dir;
+  w[11] = camera_we(h, o, d, &raster);
+  w[8] = raster.x;
+  w[9] = raster.y;
+  camera_pdf_we(h, o, d, &pdf_pos, &pdf_dir);
+  w[10] = pdf_dir;
+}
+
+/* Integral of camera_pdf_we's pdf_dir from lens point o over each listed bin; out as bsdf_pdf_bins. */
+__kernel void camera_we_pdf_bins(__constant const SceneHeader* h, float4 o, __global const float4* binning,
+                                 __global const uint* bins, uint order, __global const float* gl_nodes,
+                                 __global const float* gl_weights, __global float* out) {
+  uint b = get_global_id(0);
+  float sum = 0.0f;
+  uint zeros = 0;
+  for (uint i = 0; i < order; ++i) {
+    float row = 0.0f;
+    for (uint j = 0; j < order; ++j) {
+      float w, pdf_pos, pdf_dir;
+      float3 d = bin_node(binning, bins[b], gl_nodes, gl_weights, i, j, &w);
+      camera_pdf_we(h, o.xyz, d, &pdf_pos, &pdf_dir);
+      zeros += pdf_dir == 0.0f;
+      row += w * pdf_dir;
+    }
+    sum += row;
+  }
+  out[2 * b] = sum;
+  out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
+}
+
+/* The solid-angle density at x of the direction d towards the lens, as camera_sample_wi claims it: the
+ * lens point where the ray (x, d) meets the lens disk, its area density times dist^2 / cos at the lens;
+ * 0 where the ray misses the lens. */
+inline float camera_wi_density(__constant const SceneHeader* h, float3 x, float3 d) {
+  float3 fwd = h->cam_forward.xyz;
+  float c = -pc_dot(d, fwd);
+  if (!(c > 0.0f)) return 0.0f;
+  float t = pc_dot(x - h->cam_position.xyz, fwd) / c;
+  float3 p = x + t * d - h->cam_position.xyz;
+  if (!(t > 0.0f) || pc_dot(p, p) > h->lens_radius * h->lens_radius) return 0.0f;
+  return t * t / (c * PC_PI * h->lens_radius * h->lens_radius);
+}
+
+/* One camera_sample_wi from x per item. out: 12 floats per item: wi (3), status (0 failed, 1 sampled), pdf,
+ * camera_wi_density(x, wi), We, raster (2), the lens point (3). */
+__kernel void camera_wi_test(__constant const SceneHeader* h, float4 x, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  CameraWiSample s;
+  __global float* w = out + 12 * i;
+  for (int k = 0; k < 12; ++k) w[k] = 0.0f;
+  if (!camera_sample_wi(h, x.xyz, test_random4(i, seed).xy, &s)) return;
+  vstore3(s.wi, 0, w);
+  w[3] = 1.0f;
+  w[4] = s.pdf;
+  w[5] = h->lens_radius > 0.0f ? camera_wi_density(h, x.xyz, s.wi) : 0.0f;
+  w[6] = s.We;
+  w[7] = s.raster.x;
+  w[8] = s.raster.y;
+  vstore3(s.p, 0, w + 9);
+}
+
+/* Integral of camera_wi_density(x, .) over each listed bin; out as bsdf_pdf_bins. */
+__kernel void camera_wi_pdf_bins(__constant const SceneHeader* h, float4 x, __global const float4* binning,
+                                 __global const uint* bins, uint order, __global const float* gl_nodes,
+                                 __global const float* gl_weights, __global float* out) {
+  uint b = get_global_id(0);
+  float sum = 0.0f;
+  uint zeros = 0;
+  for (uint i = 0; i < order; ++i) {
+    float row = 0.0f;
+    for (uint j = 0; j < order; ++j) {
+      float w;
+      float3 d = bin_node(binning, bins[b], gl_nodes, gl_weights, i, j, &w);
+      float p = camera_wi_density(h, x.xyz, d);
+      zeros += p == 0.0f;
+      row += w * p;
+    }
+    sum += row;
+  }
+  out[2 * b] = sum;
+  out[2 * b + 1] = zeros > 0 && zeros < order * order ? 1.0f : 0.0f;
 }
