@@ -232,15 +232,6 @@ int run_render(const RenderArgs& a) {
   if (!a.max_depth) opt.max_depth = s.description.render.max_depth;
   if (a.sampler.empty()) opt.sampler = s.description.render.sampler;
   if (!integrator_given) opt.integrator = s.description.render.integrator;
-  // Options an integrator does not take are refused, naming where the integrator was chosen.
-  if (opt.integrator == PC_INTEGRATOR_LIGHT) {
-    std::string chosen = integrator_given ? "--integrator light" : a.scene + ": render.integrator \"light\"";
-    for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--checkpoint", &a.checkpoint},
-                                        {"--resume", &a.resume}})
-      if (!value->empty())
-        throw UsageError(std::string(option) + ": the light integrator (" + chosen +
-                         ") does not take it yet: its splat film is not in the checkpoint format");
-  }
   opt.work_group = a.work_group;
   opt.all_features = a.all_features;
   opt.power_of_two_horizons = !a.convergence.empty();
@@ -259,7 +250,7 @@ int run_render(const RenderArgs& a) {
   opt.checkpoint_key = render_key(s.device, opt);
   Film resumed;
   if (!a.resume.empty()) {
-    resumed = read_checkpoint(a.resume, opt.checkpoint_key, s.device.header.width, s.device.header.height);
+    resumed = read_checkpoint(a.resume, opt.checkpoint_key, s.device.header.width, s.device.header.height, opt.integrator);
     opt.resume = &resumed;
   }
 

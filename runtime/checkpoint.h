@@ -5,16 +5,19 @@
 #include <cstdint>
 #include <string>
 
-#include "runtime/renderer.h"
+#include "runtime/renderer.h"  // and through it kernels/shared/light_types.h
 
 // A hash of the scene content (the header and every device array: geometry, BVH, materials, lights,
 // textures, camera) and of the settings that change pixels (spp, max_depth, seed, Russian roulette depth,
-// sampler). The device set is not in it: a checkpoint written on some devices resumes on any others.
+// sampler, and the integrator where it is not `path`). The device set is not in it: a checkpoint written on some devices resumes on any others.
 uint64_t render_key(const DeviceScene& scene, const RenderOptions& options);
 
-// RuntimeFailure on I/O errors.
+// The film's accumulators, or its splat film (light integrator: Film::splats, exact integer sums) where
+// it has one. RuntimeFailure on I/O errors.
 void write_checkpoint(const std::string& path, uint64_t key, const Film& film);
 
 // UsageError naming the file when it is not a checkpoint, is damaged, or belongs to another scene,
-// other settings or another film size.
-Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height);
+// other settings, another integrator or another film size. A light checkpoint gives a Film with spp and
+// splats only (what RenderOptions::resume needs).
+Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height,
+                     uint32_t integrator = PC_INTEGRATOR_PATH);

@@ -186,8 +186,6 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
 
   uint32_t start_spp = options.resume ? options.resume->spp : 0;
   const bool light = options.integrator == PC_INTEGRATOR_LIGHT;
-  if (light && !options.checkpoint.empty())
-    throw UsageError("the light integrator does not write checkpoints yet (its splat film is not in the checkpoint format)");
   const size_t film_words = light ? PC_SPLAT_WORDS : 3;
   if (options.resume && (light ? options.resume->splats.size() : options.resume->accumulators.size()) != film_words * size_t(pixels))
     throw RuntimeFailure("the film to resume from has " +

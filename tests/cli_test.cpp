@@ -37,8 +37,6 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
       {scene("bad-integrator.json"), "render.integrator: unknown integrator \"lite\" (expected path or light)"},
       {scene("bad-integrator-bdpt.json"), "render.integrator: integrator \"bdpt\" is not yet implemented"},
       {scene("tiny.json") + " --integrator foo", "--integrator foo: expected path or light"},
-      {scene("tiny.json") + " --integrator light --checkpoint " + temp_dir() + "/light.ckpt",
-       "--checkpoint: the light integrator (--integrator light) does not take it yet"},
       {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
       {scene("tiny.json") + " --device 99", "no device with that index"},
       {scene("no-such-scene.json"), "cannot open the scene file"},

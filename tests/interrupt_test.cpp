@@ -1,5 +1,6 @@
 // Interrupt, checkpoint and resume: a stopped render writes what it has; a resumed render gives exactly
 // the pixels of an uninterrupted one; damaged or foreign checkpoints are refused.
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
@@ -64,6 +65,44 @@ TEST(Interrupt, SigintWritesTheImageSoFarAndResumeIsBitIdentical) {
   ASSERT_EQ(run_pathcl("render " + kScene + kSettings + " -o " + dir + "/whole.exr", &err), 0) << err;
   EXPECT_EQ(read_exr(dir + "/resumed.exr").spp, 1500);
   EXPECT_EQ(pixels_of(dir + "/resumed.exr"), pixels_of(dir + "/whole.exr"));
+}
+
+// The light integrator's checkpoint holds its integer splat film: interrupted, resumed, it gives the bits
+// of an uninterrupted render; a checkpoint of one integrator is refused by the other.
+TEST(Interrupt, LightIntegratorSigintAndResumeIsBitIdentical) {
+  std::string dir = temp_dir() + "/sigint-light", ck = dir + "/state.ck", path_ck = dir + "/path.ck";
+  fs::create_directories(dir);
+  const std::string light = kSettings + " --integrator light";
+  pid_t pid = start_pathcl("render " + kScene + light + " -o " + dir + "/part.exr --checkpoint " + ck +
+                           " --checkpoint-every 0");
+  ASSERT_TRUE(wait_for_file(ck));
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  Image part = read_exr(dir + "/part.exr");
+  EXPECT_EQ(part.attributes["stop_reason"], "interrupted");
+  EXPECT_EQ(part.attributes["integrator"], "light");
+  EXPECT_LT(part.spp, 1500);
+  EXPECT_GT(part.spp, 0);
+
+  std::string err;
+  ASSERT_EQ(run_pathcl("render " + kScene + light + " -o " + dir + "/resumed.exr --resume " + ck, &err), 0) << err;
+  ASSERT_EQ(run_pathcl("render " + kScene + light + " -o " + dir + "/whole.exr", &err), 0) << err;
+  Image resumed = read_exr(dir + "/resumed.exr"), whole = read_exr(dir + "/whole.exr");
+  EXPECT_EQ(resumed.spp, 1500);
+  EXPECT_EQ(resumed.rgb, whole.rgb);
+  EXPECT_GT(*std::max_element(whole.rgb.begin(), whole.rgb.end()), 0.0f);
+
+  // A light checkpoint does not resume a path render, nor a path checkpoint a light render.
+  EXPECT_EQ(run_pathcl("render " + kScene + kSettings + " -o " + dir + "/x.exr --resume " + ck, &err), 2);
+  EXPECT_NE(err.find("the checkpoint is of the light integrator, this render uses path"), std::string::npos) << err;
+  ASSERT_EQ(run_pathcl("render " + kScene + " --spp 2 --seed 7 --max-depth 4 --quiet -o " + dir + "/p.exr --checkpoint " +
+                           path_ck, &err), 0) << err;
+  EXPECT_EQ(run_pathcl("render " + kScene + " --spp 2 --seed 7 --max-depth 4 --quiet --integrator light -o " + dir +
+                           "/x.exr --resume " + path_ck, &err), 2);
+  EXPECT_NE(err.find("the checkpoint is of the path integrator, this render uses light"), std::string::npos) << err;
 }
 
 TEST(Interrupt, KillNineLosesAtMostOneIntervalAndResumes) {
