@@ -210,10 +210,8 @@ int run_render(const RenderArgs& a) {
     throw UsageError("--sampler " + a.sampler + ": expected independent, stratified, sobol or halton");
   bool integrator_given = !a.integrator.empty();
   if (integrator_given) {
-    bool implemented;
-    if (!integrator_from_name(a.integrator, &opt.integrator, &implemented))
-      throw UsageError("--integrator " + a.integrator + ": expected path or light");
-    if (!implemented) throw UsageError("--integrator " + a.integrator + ": not yet implemented (expected path or light)");
+    if (!integrator_from_name(a.integrator, &opt.integrator))
+      throw UsageError("--integrator " + a.integrator + ": expected path, light or bdpt");
   }
   if (a.time_budget) opt.time_budget = positive_option("--time", *a.time_budget, false, "a finite number of seconds > 0");
   if (a.target_error) opt.target_error = positive_option("--target-error", *a.target_error, false, "a finite relMSE > 0");
@@ -521,7 +519,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
-  render_cmd->add_option("--integrator", ra.integrator, "path (the default) or light (overrides the scene's render.integrator)");
+  render_cmd->add_option("--integrator", ra.integrator, "path (the default), light or bdpt (overrides the scene's render.integrator)");
   render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");
   render_cmd->add_option("--reference", ra.reference, "reference EXR for the error columns of --convergence");
   render_cmd->add_option("--convergence", ra.convergence, "write time, spp and error at every power of two spp (CSV)");

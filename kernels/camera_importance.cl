@@ -62,8 +62,15 @@ inline float camera_we(__constant const SceneHeader* h, float3 o, float3 d, floa
   return (float)h->width * (float)h->height / (camera_image_area(h) * c2 * c2 * lens_area);
 }
 
+/* The density per solid angle of camera ray direction d (unit) from any lens point, the image position
+ * uniform over the whole image plane extended past its border (filter excluded): 1 / (A cos^3 theta). */
+inline float camera_direction_pdf(__constant const SceneHeader* h, float3 d) {
+  float c = pc_dot(d, h->cam_forward.xyz);
+  return c > 0.0f ? 1.0f / (camera_image_area(h) * c * c * c) : 0.0f;
+}
+
 /* Densities of the camera ray (o, d): the lens point per area (1 for a pinhole: a delta) and the direction
- * per solid angle, pixel position uniform over the image: 1 / (A cos^3 theta). */
+ * per solid angle, pixel position uniform over the image: camera_direction_pdf inside it, 0 outside. */
 inline void camera_pdf_we(__constant const SceneHeader* h, float3 o, float3 d, float* pdf_pos, float* pdf_dir) {
   float2 raster;
   float c;
@@ -71,7 +78,7 @@ inline void camera_pdf_we(__constant const SceneHeader* h, float3 o, float3 d, f
   *pdf_dir = 0.0f;
   if (!camera_raster(h, o, d, &raster, &c)) return;
   if (raster.x < 0.0f || raster.y < 0.0f || raster.x >= (float)h->width || raster.y >= (float)h->height) return;
-  *pdf_dir = 1.0f / (camera_image_area(h) * c * c * c);
+  *pdf_dir = camera_direction_pdf(h, d);
 }
 
 typedef struct {

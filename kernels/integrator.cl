@@ -88,12 +88,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
       if (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
         Ray shadow;
         if (ls.infinite) {
-          shadow.o = offset_ray_origin(s.p, s.p_err, s.ng, ls.wi);
-          shadow.d = ls.wi;
-          shadow.tmin = 0.0f;
-          shadow.tmax = INFINITY;
-          shadow.skip_prim = s.prim;
-          shadow.skip_instance = s.instance;
+          shadow = spawn_ray(&s, ls.wi);
         } else {
           shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n);
         }
@@ -130,12 +125,7 @@ inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, u
       if (u_light.w >= q) break;
       throughput /= q;
     }
-    ray.o = offset_ray_origin(s.p, s.p_err, s.ng, wi);
-    ray.d = wi;
-    ray.tmin = 0.0f;
-    ray.tmax = INFINITY;
-    ray.skip_prim = s.prim;
-    ray.skip_instance = s.instance;
+    ray = spawn_ray(&s, wi);
 #ifdef PC_HAS_CUTOUTS
     ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
 #endif

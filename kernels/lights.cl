@@ -18,6 +18,7 @@ typedef struct {
                     the probability of having chosen it */
   bool delta;    /* point, spot, directional: no MIS, never hit by BSDF rays */
   bool infinite; /* directional, environment: the shadow ray runs to infinity */
+  uint light;    /* index into lights */
 } LightSample;
 
 /* Radiance from light point y with normal ny towards x. */
@@ -150,6 +151,7 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
   uint index;
   float choice = light_choice(sc, x, PC_INVALID, u.x, &index);
   Light light = sc->lights[index];
+  out->light = index;
   /* Every field is set: lights at infinity have no point, and a field left undefined is undefined
      behaviour that a vectorising compiler may exploit (Intel's CPU runtime did). */
   out->delta = false;

@@ -49,4 +49,14 @@ inline uint splat_pixel(__global uint* film, __constant const LightTransportHead
   return overflows;
 }
 
+/* BDPT: adds a camera subpath's colour c to its own pixel, as splat_pixel does and to the camera sums. */
+inline uint splat_camera(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
+  volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
+  uint overflows = splat_pixel(film, lt, pixel, parity, c);
+  float v[3] = {c.x, c.y, c.z};
+  for (uint k = 0; k < 3u; ++k)
+    if (v[k] > 0.0f && !splat_add(p + 2u * (9u + k), v[k], lt->splat_scale)) ++overflows;
+  return overflows;
+}
+
 #endif

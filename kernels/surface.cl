@@ -95,6 +95,20 @@ inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit
   return s;
 }
 
+/* The ray leaving surface point s in direction w (unit; a continuation, or a shadow ray towards a light
+ * at infinity): moved off the surface by its error bound to w's side, s's primitive skipped. The cut-out
+ * seed is the caller's. */
+inline Ray spawn_ray(const Surface* s, float3 w) {
+  Ray r;
+  r.o = offset_ray_origin(s->p, s->p_err, s->ng, w);
+  r.d = w;
+  r.tmin = 0.0f;
+  r.tmax = INFINITY;
+  r.skip_prim = s->prim;
+  r.skip_instance = s->instance;
+  return r;
+}
+
 /* Shadow rays stop this fraction short of their far end. */
 #define PC_SHADOW_EPSILON 1e-4f
 

@@ -10,6 +10,7 @@
 
 #include "runtime/atomic_file.h"
 #include "runtime/hash.h"
+#include "runtime/light_transport.h"  // uses_splat_film
 #include "scene/scene_description.h"  // integrator_name
 
 namespace {
@@ -61,7 +62,7 @@ void write_checkpoint(const std::string& path, uint64_t key, const Film& film) {
   header.width = film.width;
   header.height = film.height;
   header.spp = film.spp;
-  header.integrator = film.splats.empty() ? PC_INTEGRATOR_PATH : PC_INTEGRATOR_LIGHT;
+  header.integrator = film.integrator;
   const FilmBytes body = film_bytes(film);
   uint64_t checksum = fnv1a(&header, sizeof header);
   checksum = fnv1a(body.data, body.size, checksum);
@@ -81,7 +82,7 @@ Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint
   if (!in) throw UsageError(path + ": cannot open the checkpoint");
   std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   Header header;
-  const bool light = integrator == PC_INTEGRATOR_LIGHT;
+  const bool light = uses_splat_film(integrator);
   const size_t film_size = light ? PC_SPLAT_WORDS * size_t(width) * height * sizeof(uint64_t)
                                  : 3 * size_t(width) * height * sizeof(pc_float4);
   size_t expected = sizeof header + film_size + sizeof(uint64_t);
@@ -110,6 +111,7 @@ Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint
     film.width = width;
     film.height = height;
     film.spp = header.spp;
+    film.integrator = integrator;
     film.splats.resize(PC_SPLAT_WORDS * size_t(width) * height);
     std::memcpy(film.splats.data(), bytes.data() + sizeof header, film_size);
     return film;

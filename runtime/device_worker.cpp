@@ -30,7 +30,11 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   // Only the integrator in use is built: the path kernel's program is the same with or without the others.
   if (light() && !settings.splat_pairs && has_extension(cl.info, "cl_khr_int64_base_atomics"))
     options += " -DPC_SPLAT_ATOMIC64";
-  program_.emplace(build_kernel_program(cl, light() ? "light_integrator.cl" : "integrator.cl", options));
+  const bool bdpt = integrator_ == PC_INTEGRATOR_BDPT;
+  if (bdpt) {
+    options += " -DPC_BDPT_MAX_VERTICES=" + std::to_string(std::max<uint32_t>(settings.max_depth, 1));
+  }
+  program_.emplace(build_kernel_program(cl, bdpt ? "bdpt.cl" : light() ? "light_integrator.cl" : "integrator.cl", options));
   pixels_ = header.width * header.height;
 
   // Everything the render keeps on the device must fit in its memory.
@@ -44,7 +48,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   scene_ = std::make_unique<SceneBuffers>(cl, scene, header);
   film_ = ClBuffer(cl, CL_MEM_READ_WRITE, film_size);
   stats_ = ClBuffer(cl, CL_MEM_READ_WRITE, light() ? sizeof(SplatStats) : sizeof(UnitStats));
-  kernel_ = std::make_unique<ClKernel>(program_->kernel(light() ? "light_pass" : "render_pass"));
+  kernel_ = std::make_unique<ClKernel>(program_->kernel(bdpt ? "bdpt_pass" : light() ? "light_pass" : "render_pass"));
   first_unit_arg_ = scene_->bind(*kernel_);
   if (light()) {
     const LightTransportSetup& lt = *settings.light;

@@ -37,7 +37,8 @@ struct WorkerSettings {
   size_t work_group = 0;      // 0: 64, or the kernel's limit if lower
   DeviceFault fault;
   uint32_t integrator = PC_INTEGRATOR_PATH;
-  const LightTransportSetup* light = nullptr;  // light integrator: its header and emission distribution
+  const LightTransportSetup* light = nullptr;  // light, bdpt: the header and emission distribution
+  uint32_t max_depth = 0;     // bdpt: the light subpath's vertex array has this many (at least 1)
   bool splat_pairs = false;   // splat with 32-bit word pairs even where 64-bit atomics exist (tests)
 };
 
@@ -60,7 +61,7 @@ class DeviceWorker {
   const std::vector<pc_float4>& result() const { return result_; }
   // Light integrator: the last unit's splat film, PC_SPLAT_WORDS sums per pixel of the whole image.
   const std::vector<uint64_t>& splats() const { return splats_; }
-  bool light() const { return integrator_ == PC_INTEGRATOR_LIGHT; }
+  bool light() const { return uses_splat_film(integrator_); }  // light tracing or BDPT: the splat film
 
   const KernelProgram& program() const { return *program_; }
   size_t work_group() const { return work_group_; }

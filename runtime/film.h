@@ -16,6 +16,7 @@ struct Film {
   // Light-transport integrators instead (runtime/light_transport.h): PC_SPLAT_WORDS fixed-point sums per
   // pixel, added exactly from any number of devices and units; accumulators is then empty.
   std::vector<uint64_t> splats;
+  uint32_t integrator = 0;  // PC_INTEGRATOR_* (kernels/shared/light_types.h) of the film: path unless splats
 };
 
 // Derives the means and variances from accumulators (3 per pixel).

@@ -86,7 +86,7 @@ LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp
   return out;
 }
 
-Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, const LightTransportHeader& lt,
+Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, uint32_t integrator, const LightTransportHeader& lt,
                       std::vector<uint64_t> splats, uint64_t* overflows) {
   size_t pixels = size_t(width) * height;
   Film f;
@@ -102,17 +102,20 @@ Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, const Light
   for (size_t p = 0; p < pixels; ++p) {
     const uint64_t* s = &splats[PC_SPLAT_WORDS * p];
     for (int c = 0; c < 3; ++c) {
-      for (int k : {c, 3 + c, 6 + c})
+      for (int k : {c, 3 + c, 6 + c, 9 + c})
         if (s[k] >> 63) ++*overflows;
       double even = double(s[c]) * unit, odd = double(s[3 + c]) * unit, squares = double(s[6 + c]) * unit2;
       double mean = spp > 0 ? (even + odd) / spp : 0;
+      // BDPT's camera part (one sample per pixel and sample) and the light part (from `paths` paths).
+      double camera = spp > 0 ? double(s[9 + c]) * unit / spp : 0, light = mean - camera;
       f.mean[3 * p + c] = float(mean);
       f.even_mean[3 * p + c] = n_even > 0 ? float(even / n_even) : 0.0f;
       f.odd_mean[3 * p + c] = n_odd > 0 ? float(odd / n_odd) : 0.0f;
-      double per_sample = spp > 0 ? std::max(0.0, squares / spp - mean * mean / paths) : 0;
+      double per_sample = spp > 0 ? std::max(0.0, squares / spp - camera * camera - light * light / paths) : 0;
       f.variance[3 * p + c] = float(spp > 0 ? per_sample / spp : 0);
     }
   }
   f.splats = std::move(splats);
+  f.integrator = integrator;
   return f;
 }

@@ -11,6 +11,13 @@
 #include "scene/device_scene.h"
 #include "scene/scene_description.h"  // integrator_name
 
+// The integrators whose film is the splat film (light tracing, BDPT): every other is path tracing's.
+inline bool uses_splat_film(uint32_t integrator) { return integrator != PC_INTEGRATOR_PATH; }
+
+// BDPT keeps a light subpath of up to max_depth vertices in each work item's private memory
+// (kernels/light_path.cl's LightVertex, 112 bytes each): max_depth is bounded by this for it.
+constexpr uint32_t kBdptMaxDepth = 64;
+
 struct LightTransportSetup {
   LightTransportHeader header{};
   std::vector<float> emission_cdf;  // light_count + 1 entries, [0] = 0, last = 1
@@ -29,5 +36,5 @@ LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp
 // (even + odd) / (scale spp); variance of the mean from the squares (kernels/light_integrator.cl).
 // overflows: sums at or above 2^63 (a hazard) are counted there.
 struct Film;
-Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, const LightTransportHeader& lt,
+Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, uint32_t integrator, const LightTransportHeader& lt,
                       std::vector<uint64_t> splats, uint64_t* overflows);

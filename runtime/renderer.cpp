@@ -175,6 +175,9 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
                        const RenderOptions& options, const RenderCallbacks& callbacks) {
   RenderResult result;
   auto setup_start = Clock::now();
+  if (options.integrator == PC_INTEGRATOR_BDPT && options.max_depth > kBdptMaxDepth)
+    throw UsageError("max_depth " + std::to_string(options.max_depth) + ": bdpt keeps each light subpath in private memory and takes max_depth up to " +
+                     std::to_string(kBdptMaxDepth));
   SceneHeader header = scene.header;
   header.max_depth = options.max_depth;
   header.seed = options.seed;
@@ -185,7 +188,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   const size_t n = workers.size();
 
   uint32_t start_spp = options.resume ? options.resume->spp : 0;
-  const bool light = options.integrator == PC_INTEGRATOR_LIGHT;
+  const bool light = uses_splat_film(options.integrator);  // light tracing, BDPT
   const size_t film_words = light ? PC_SPLAT_WORDS : 3;
   if (options.resume && (light ? options.resume->splats.size() : options.resume->accumulators.size()) != film_words * size_t(pixels))
     throw RuntimeFailure("the film to resume from has " +
@@ -195,6 +198,9 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   // schedule's tiles are runs of path indices; each unit's splats come back as a whole integer image.
   LightTransportSetup light_setup;
   if (light) light_setup = light_transport_setup(scene, options.spp);
+  light_setup.header.only_strategy = options.debug_bdpt_strategy_s >= 0
+                                         ? uint32_t(options.debug_bdpt_strategy_s) | uint32_t(options.debug_bdpt_strategy_t) << 16
+                                         : PC_INVALID;
   result.light = light_setup.header;
 
   // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices
@@ -221,6 +227,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     setup.settings.integrator = options.integrator;
     setup.settings.light = &light_setup;
     setup.settings.splat_pairs = options.debug_splat_pairs;
+    setup.settings.max_depth = options.max_depth;
     if (d < options.faults.size()) setup.settings.fault = options.faults[d];
     threads.push_back(std::make_unique<WorkerThread>(workers[d].make, uint32_t(d), events, setup));
   }
@@ -321,7 +328,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   auto make_film = [&] {
     if (!light) return film_from_accumulators(header.width, header.height, film);
     uint64_t top_bit = 0;  // sums at or above 2^63
-    Film f = film_from_splats(header.width, header.height, schedule.lowest_level(), light_setup.header, splat_film, &top_bit);
+    Film f = film_from_splats(header.width, header.height, schedule.lowest_level(), options.integrator, light_setup.header, splat_film, &top_bit);
     result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
     return f;
   };

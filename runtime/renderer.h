@@ -49,7 +49,8 @@ struct RenderOptions {
   // Tests only.
   bool debug_inject_hazards = false;   // make some samples NaN, infinite or negative
   bool debug_bias_diffuse = false;     // diffuse reflectance 1 % too high (the bench gate's test)
-  bool debug_splat_pairs = false;      // light: 32-bit word pairs instead of 64-bit atomics (same bits)
+  bool debug_splat_pairs = false;      // light, bdpt: 32-bit word pairs instead of 64-bit atomics (same bits)
+  int debug_bdpt_strategy_s = -1, debug_bdpt_strategy_t = -1;  // >= 0: bdpt's strategy (s, t) alone, unweighted
   // Non-zero: -DPC_BUILD_NONCE=N, a kernel no driver or cache has seen, so its first build is a cold
   // one (`pathcl bench`); the code is the same.
   uint64_t build_nonce = 0;

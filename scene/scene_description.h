@@ -89,9 +89,8 @@ struct RenderSettings {
 // "independent", "stratified", "sobol", "halton" -> PC_SAMPLER_*; false for an unknown name.
 bool sampler_from_name(const std::string& name, uint32_t* sampler);
 const char* sampler_name(uint32_t sampler);
-// "path", "light" -> PC_INTEGRATOR_*; false for any other name. "bdpt" is a known name without an
-// integrator yet: true with *implemented false.
-bool integrator_from_name(const std::string& name, uint32_t* integrator, bool* implemented);
+// "path", "light", "bdpt" -> PC_INTEGRATOR_*; false for any other name.
+bool integrator_from_name(const std::string& name, uint32_t* integrator);
 const char* integrator_name(uint32_t integrator);
 
 // The largest distance from the camera (in scene units, per axis) that geometry may reach, and so the

@@ -1026,24 +1026,19 @@ bool sampler_from_name(const std::string& name, uint32_t* sampler) {
 const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
 
 namespace {
-const char* const kIntegratorNames[] = {"path", "light"};  // by PC_INTEGRATOR_*
+const char* const kIntegratorNames[] = {"path", "light", "bdpt"};  // by PC_INTEGRATOR_*
 }
 
-bool integrator_from_name(const std::string& name, uint32_t* integrator, bool* implemented) {
-  *implemented = true;
-  for (uint32_t i = 0; i < 2; ++i)
+bool integrator_from_name(const std::string& name, uint32_t* integrator) {
+  for (uint32_t i = 0; i < 3; ++i)
     if (name == kIntegratorNames[i]) {
       *integrator = i;
       return true;
     }
-  if (name == "bdpt") {  // issue 14's bidirectional path tracer: named, not built yet
-    *implemented = false;
-    return true;
-  }
   return false;
 }
 
-const char* integrator_name(uint32_t integrator) { return integrator < 2 ? kIntegratorNames[integrator] : "unknown"; }
+const char* integrator_name(uint32_t integrator) { return integrator < 3 ? kIntegratorNames[integrator] : "unknown"; }
 
 SceneDescription load_scene(const std::string& path) {
   const std::string text = read_input_file(path, kSceneInput);
@@ -1148,10 +1143,8 @@ SceneDescription load_scene(const std::string& path) {
                            "\" (expected independent, stratified, sobol or halton)");
     if (r.has("integrator")) {
       Node in = r.at("integrator");
-      bool implemented;
-      if (!integrator_from_name(in.string(), &scene.render.integrator, &implemented))
-        in.fail("unknown integrator \"" + in.string() + "\" (expected path or light)");
-      if (!implemented) in.fail("integrator \"" + in.string() + "\" is not yet implemented (expected path or light)");
+      if (!integrator_from_name(in.string(), &scene.render.integrator))
+        in.fail("unknown integrator \"" + in.string() + "\" (expected path, light or bdpt)");
     }
   }
   if (!has_light(scene))

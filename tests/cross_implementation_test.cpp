@@ -82,6 +82,9 @@ std::vector<Case> cases() {
           // The light integrator's splat film: integer atomics from every work item into any pixel.
           {"cornell box, light tracing", cornell, "--integrator light"},
           {"every light type, light tracing, thin lens, gaussian filter", resized("materials", 16, 12, 2), "--integrator light"},
+          // BDPT: light subpaths in private arrays, connections, splats and the camera sums.
+          {"cornell box, bdpt", cornell, "--integrator bdpt"},
+          {"every material and light type, bdpt, thin lens, gaussian filter", resized("materials", 8, 6, 1), "--integrator bdpt --max-depth 4"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
           {"glass and metal", resized("glass-metal", 16, 12, 2), ""},
           {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},

@@ -10,56 +10,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "test_support.h"
+#include "light_transport_support.h"
 
-namespace {
-
-struct Options {
-  uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
-  uint32_t integrator = PC_INTEGRATOR_LIGHT;
-  size_t work_group = 0;
-  bool pairs = false;
-  const Film* resume = nullptr;
-};
-
-RenderResult render_with(const DeviceScene& scene, const Options& o) {
-  RenderOptions opt;
-  opt.spp = o.spp;
-  opt.max_depth = o.max_depth;
-  opt.seed = o.seed;
-  opt.integrator = o.integrator;
-  opt.pass_spp = o.pass_spp;
-  opt.tile_pixels = o.tile_pixels;
-  opt.work_group = o.work_group;
-  opt.debug_splat_pairs = o.pairs;
-  opt.resume = o.resume;
-  RenderResult r = render(test_device(), scene, opt);
-  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
-  EXPECT_EQ(r.splat_overflows, 0u);
-  return r;
-}
-
-double image_mean(const Film& f) {
-  double sum = 0;
-  for (float v : f.mean) sum += v;
-  return sum / f.mean.size();
-}
-
-// Mean and standard error of the image mean over `seeds` independent renders.
-MeanStd seeded_mean(const DeviceScene& scene, Options o, int seeds) {
-  std::vector<double> means;
-  for (int s = 0; s < seeds; ++s) {
-    o.seed = 1000 + s;
-    means.push_back(image_mean(render_with(scene, o).film));
-  }
-  return mean_and_error(means);
-}
-
-DeviceScene scene_from(const std::string& name, const std::string& json) {
-  return load_device_scene(write_temp_file(name, json));
-}
-
-}  // namespace
+using namespace light_transport_test;
 
 // The Szirmay-Kalos sphere (scripts/make-cap-sphere): every wall pixel is f Le rho (1 - rho^n) / (1 - rho)
 // after n reflections. Light tracing sees it all (the camera sees only the wall).
@@ -150,21 +103,13 @@ TEST(LightIntegrator, AgreesWithPathTracingPerPixelOnTheCornellBox) {
   o.integrator = PC_INTEGRATOR_LIGHT;
   o.spp = 256;
   Film light = render_with(scene, o).film;
-  size_t compared = 0, failed = 0;
-  double sum_path = 0, sum_light = 0;
-  for (size_t i = 0; i < path.mean.size(); ++i) {
-    if (direct.mean[i - i % 3] > 0 || direct.mean[i - i % 3 + 1] > 0 || direct.mean[i - i % 3 + 2] > 0) continue;
-    double var = double(path.variance[i]) + light.variance[i];
-    double d = double(light.mean[i]) - path.mean[i];
-    ++compared;
-    sum_path += path.mean[i];
-    sum_light += light.mean[i];
-    if (var <= 0 ? d != 0 : std::fabs(d) / std::sqrt(var) > 4) ++failed;
-  }
-  ASSERT_GT(compared, path.mean.size() * 8 / 10);
+  PixelComparison c = compare_pixels(path, light, [&](size_t p) {
+    return direct.mean[3 * p] > 0 || direct.mean[3 * p + 1] > 0 || direct.mean[3 * p + 2] > 0;
+  });
+  ASSERT_GT(c.compared, path.mean.size() * 8 / 10);
   // |z| > 4 has probability 6e-5 per pixel for correct estimators; heavier tails of a few pixels allowed.
-  EXPECT_LE(failed, compared / 200) << failed << " of " << compared;
-  EXPECT_NEAR(sum_light / sum_path, 1.0, 0.01);
+  EXPECT_LE(c.failed, c.compared / 200) << c.failed << " of " << c.compared;
+  EXPECT_LE(c.sum_z(), 4.0) << "image sums " << c.sum_a << " and " << c.sum_b;
 }
 
 // The image is a pure function of scene, settings and seed: the same bits for any work-group size, any
@@ -176,40 +121,5 @@ TEST(LightIntegrator, SplatFilmIsBitwiseDeterministic) {
   Options o;
   o.spp = 8;
   o.max_depth = 4;
-  Film reference = render_with(scene, o).film;
-  ASSERT_GT(image_mean(reference), 0.0);
-  auto same = [&](const Film& f, const char* what) {
-    EXPECT_EQ(f.splats, reference.splats) << what;
-    EXPECT_EQ(f.mean, reference.mean) << what;
-  };
-  Options w = o;
-  w.work_group = 16;
-  same(render_with(scene, w).film, "work group 16");
-  Options split = o;
-  split.pass_spp = 3;
-  split.tile_pixels = 37;
-  same(render_with(scene, split).film, "units of 3 spp over 37 paths");
-  Options pairs = o;
-  pairs.pairs = true;
-  same(render_with(scene, pairs).film, "32-bit word pairs");
-  RenderOptions partial;
-  partial.max_depth = o.max_depth;
-  partial.seed = o.seed;
-  partial.integrator = PC_INTEGRATOR_LIGHT;
-  Film start;
-  {
-    // Render 8 spp with a horizon at 4 and keep the 4-spp film from the horizon callback.
-    RenderOptions p = partial;
-    p.spp = 8;
-    p.power_of_two_horizons = true;
-    RenderCallbacks cb;
-    cb.horizon = [&](const Film& f, double, double) {
-      if (f.spp == 4) start = f;
-    };
-    render(test_device(), scene, p, cb);
-  }
-  ASSERT_EQ(start.spp, 4u);
-  Options resumed = o;
-  resumed.resume = &start;
-  same(render_with(scene, resumed).film, "resumed from 4 spp");
+  expect_bitwise_deterministic(scene, o);
 }

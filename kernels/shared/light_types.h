@@ -10,25 +10,31 @@
 /* Integrators (RenderOptions::integrator, render.integrator of the scene file). */
 #define PC_INTEGRATOR_PATH 0u
 #define PC_INTEGRATOR_LIGHT 1u
+#define PC_INTEGRATOR_BDPT 2u
 
 /* The splat film: per pixel PC_SPLAT_WORDS unsigned 64-bit fixed-point sums (each two uint words, low
  * word first), added with integer atomics in any order to the same bits:
  *   [0, 3)  RGB of the even-numbered samples' splats, in units of 1 / splat_scale
  *   [3, 6)  RGB of the odd-numbered samples' splats
  *   [6, 9)  RGB sums of the squared splats, in units of 1 / square_scale (the variance channels)
+ *   [9, 12) RGB of the camera subpaths' contributions alone, both parities (BDPT; 0 for light tracing):
+ *           a pixel's camera contribution is one sample per sample, its light splats come from many
+ *           paths, and the variance needs the two means apart
  * A sum is kept below 2^63; reaching it counts an overflow (SplatStats.overflows, a hazard). */
-#define PC_SPLAT_WORDS 9u
+#define PC_SPLAT_WORDS 12u
 
 /* What the light-transport kernels need beside the SceneHeader: the scene's bounding sphere (directional
  * and environment light paths start on a disk of its radius), the fixed-point scales of the splat film and
  * the number of lights in the emission distribution.
- * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + pad (4) = 32 bytes. */
+ * only_strategy: PC_INVALID for BDPT's every strategy; else (tests) s + (t << 16) of the one strategy it
+ * takes, unweighted.
+ * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + only_strategy (4) = 32 bytes. */
 typedef struct {
   pc_float4 bounds;   /* xyz: centre of the scene's bounding sphere (device coordinates), w: its radius */
   float splat_scale;  /* fixed-point units per unit of pixel value (a power of two) */
   float square_scale; /* the same for the squared splats (a power of two) */
   pc_uint light_count;
-  pc_uint pad;
+  pc_uint only_strategy;
 } LightTransportHeader;
 
 /* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
@@ -47,7 +53,7 @@ typedef struct {
 #define PC_LIGHT_LAYOUT_STRUCTS(X) X(LightTransportHeader) X(SplatStats)
 #define PC_LIGHT_LAYOUT_FIELDS(X)                                                                           \
   X(LightTransportHeader, bounds) X(LightTransportHeader, splat_scale) X(LightTransportHeader, square_scale) \
-  X(LightTransportHeader, light_count) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
+  X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
   X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
 
 #ifndef __OPENCL_VERSION__

@@ -1,0 +1,241 @@
+/* Bidirectional path tracing (`bdpt`, lane width 1). Work item i of sample s traces light subpath
+ * (i, s) (light_path.cl: the `light` integrator's path, its camera connections splatted, its non-delta
+ * vertices kept in private memory, at most max_depth of them) and then the camera subpath of pixel i
+ * with key (i, s) (the path integrator's sample dimensions, below the light path's), and at each camera
+ * vertex takes every strategy: the emitter it hits (s = 0), next-event estimation (s = 1) and a
+ * connection to each light vertex (s >= 2); the light path's own camera connections are t = 1. A path
+ * with k scattering events is made by all k + 2 strategies (t = 0, a light path hitting the lens, is not
+ * taken), each weighted by the balance heuristic. The weights come from partial sums carried along each
+ * subpath, dVCM and dVC (Georgiev, "Implementing Vertex Connection and Merging", 2012, with vertex
+ * merging off; SmallVCM's BPT), so a connection costs two BSDF evaluations and their reverse densities,
+ * whatever the path length. What differs from SmallVCM:
+ *  - next-event estimation chooses lights through the light tree, from the receiving point: its density
+ *    of the light vertex is evaluated where the receiver is known (light_path.cl, first vertex);
+ *  - the camera's directional density is per whole image (camera_direction_pdf), so the light paths per
+ *    sample (the pixel count) cancel;
+ *  - Russian roulette is left out of the densities (any weights that sum to one over the strategies that
+ *    can make a path keep the estimate unbiased; roulette never makes a strategy impossible);
+ *  - area conversions take the geometric normal's cosine, throughputs the shading normal's.
+ * The camera subpath's contributions (s = 0, 1, >= 2) go to its own pixel of the splat film, once per
+ * sample, so that the squares estimate the pixel's variance; t = 1 splats land anywhere. */
+#define PC_BDPT 1
+#include "light_path.cl"
+
+/* Cut-out ray numbers of the connections (camera vertex depth d, light vertex k), past the light path's. */
+#define PC_BDPT_CUTOUT_BASE 0x60000000u
+
+inline float3 bsdf_to_local(float3 w, float3 t, float3 b, float3 n) { return (float3)(pc_dot(w, t), pc_dot(w, b), pc_dot(w, n)); }
+
+/* The contribution of connecting camera vertex s (material m, frame t b s.ns, wo_local towards the
+ * previous camera vertex; dvcm, dvc its partial sums) to light vertex y, unweighted sums in *others. */
+inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, float3 t, float3 b, float3 wo_local,
+                               float wo_ng, float dvcm, float dvc, const LightVertex* y, float* others) {
+  float3 d = y->p.xyz - s->p;
+  float dist2 = pc_dot(d, d);
+  if (!(dist2 > 0.0f)) return (float3)(0.0f);
+  float dist = sqrt(dist2);
+  d /= dist;
+  /* Reflection only at both ends (no non-delta material transmits), on each one's side of its surface. */
+  float3 y_ng = y->ng.xyz, y_ns = y->ns.xyz, wl = y->wl.xyz;
+  if (!(pc_dot(d, s->ng) * wo_ng > 0.0f) || !(pc_dot(-d, y_ng) * pc_dot(wl, y_ng) > 0.0f)) return (float3)(0.0f);
+  float3 wi_local = bsdf_to_local(d, t, b, s->ns);
+  float3 f_camera = bsdf_eval(m, wo_local, wi_local);
+  Material my = sc->materials[y->material];
+  my.color.xyz = y->color.xyz;
+  float3 yt, yb;
+  make_frame(y_ns, &yt, &yb);
+  float3 wc_local = bsdf_to_local(-d, yt, yb, y_ns), wl_local = bsdf_to_local(wl, yt, yb, y_ns);
+  float3 f_light = bsdf_eval(my, wc_local, wl_local);
+  /* Each end's density of making the other (per area there), and the reverse densities. */
+  float camera_dir_a = bsdf_pdf(m, wo_local, wi_local) * fabs(pc_dot(d, y_ng)) / dist2;
+  float camera_rev = bsdf_pdf(m, wi_local, wo_local);
+  float light_dir_a = bsdf_pdf(my, wl_local, wc_local) * fabs(pc_dot(d, s->ng)) / dist2;
+  float light_rev = bsdf_pdf(my, wc_local, wl_local);
+  *others = camera_dir_a * (y->ng.w + y->ns.w * light_rev) + light_dir_a * (dvcm + dvc * camera_rev);
+  /* The camera end's cosine (shading normal), the light end's adjoint factor (light_path.cl). */
+  float g = fabs(wi_local.z) * fabs(pc_dot(wl, y_ns)) * fabs(pc_dot(d, y_ng)) / (fabs(pc_dot(wl, y_ng)) * dist2);
+  return f_camera * f_light * y->beta.xyz * g;
+}
+
+/* The camera subpath of key (pixel px, py) and its strategies s = 0, 1 and >= 2 with the light subpath's
+ * vertices lv[0 .. lv_count) (in order of length). Returns the pixel's radiance estimate. */
+inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, SampleKey key, uint px, uint py,
+                                   const LightVertex* lv, uint lv_count, uint* rays) {
+  __constant const SceneHeader* h = sc->h;
+  Ray ray;
+  camera_ray(h, px, py, sample4(h, key, 0), &ray.o, &ray.d);
+  ray.tmin = 0.0f;
+  ray.tmax = INFINITY;
+  ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = cutout_seed(key, 0u);
+#endif
+  float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
+  float eta_scale = 1.0f;
+  /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera
+   * connection (t = 1). */
+  float dvcm = 1.0f / camera_direction_pdf(h, ray.d), dvc = 0.0f;
+  float3 prev_p = ray.o;
+  for (uint depth = 0;; ++depth) {
+    Hit hit;
+    ++*rays;
+    uint t_count = depth + 2u; /* camera vertices of a path ending at this hit: the lens point and depth + 1 */
+    if (!trace_scene(sc, sc, &ray, false, &hit)) {
+#ifdef PC_HAS_ENVIRONMENT
+      if (h->env_light != PC_INVALID) { /* s = 0 by the environment */
+        Light env = sc->lights[h->env_light];
+        float3 le = env_radiance(env, sc->textures, sc->texels, ray.d);
+        float others = 0.0f;
+        if (depth > 0u) {
+          float pos, dir;
+          light_emission_pdf(sc, lt, h->env_light, prev_p, ray.d, -ray.d, &pos, &dir);
+          float emit = emission_choice_pdf(emission_cdf, h->env_light) * pos * dir;
+          others = environment_light_pdf(sc, prev_p, ray.d) * dvcm + emit * dvc;
+        }
+        radiance += throughput * le * strategy_weight(lt, 0u, t_count, others);
+      }
+#endif
+      break;
+    }
+    Surface s = scene_surface(sc, &ray, &hit);
+    PrimShading sh = sc->shading[s.prim];
+    float3 wo = -ray.d;
+    float wo_ng = pc_dot(wo, s.ng);
+    {
+      float3 seg = s.p - prev_p;
+      float dist2 = pc_dot(seg, seg), cos_in = fabs(wo_ng);
+      dvcm *= dist2 / cos_in;
+      dvc /= cos_in;
+#ifdef PC_HAS_AREA_LIGHTS
+      if (sh.light != PC_INVALID) { /* s = 0 by an area light; seen directly, no other strategy has it */
+        float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
+        float others = 0.0f;
+        if (depth > 0u) {
+          float pos, dir;
+          light_emission_pdf(sc, lt, sh.light, s.p, s.ng, wo, &pos, &dir);
+          float emit = emission_choice_pdf(emission_cdf, sh.light) * pos * dir;
+          float direct_a = light_pdf(sc, sh.light, prev_p, s.p, s.ng) * cos_in / dist2;
+          others = direct_a * dvcm + emit * dvc;
+        }
+        radiance += throughput * le * strategy_weight(lt, 0u, t_count, others);
+      }
+#endif
+    }
+    if (depth >= h->max_depth) break;
+
+    Material m = material_at(sc, sh.material, &s, &hit);
+    float3 t, b;
+    make_frame(s.ns, &t, &b);
+    float3 wo_local = bsdf_to_local(wo, t, b, s.ns);
+    float4 u_light = sample4(h, key, 1 + 2 * depth);
+    float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
+
+    if (!bsdf_is_delta(m)) {
+      /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy. */
+      LightSample ls;
+      if (h->light_count > 0 && sample_light(sc, s.p, u_light.xyz, &ls)) {
+        float3 wi_local = bsdf_to_local(ls.wi, t, b, s.ns);
+        float3 f = bsdf_eval(m, wo_local, wi_local);
+        if (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
+          Ray shadow;
+          float direct = ls.pdf, cos_at_light = 1.0f;
+          if (ls.infinite) {
+            shadow = spawn_ray(&s, ls.wi);
+          } else {
+            shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n);
+            float3 to = ls.p - s.p;
+            if (ls.delta) direct *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
+            else cos_at_light = fabs(pc_dot(ls.n, ls.wi));
+          }
+          float pos, dir;
+          light_emission_pdf(sc, lt, ls.light, ls.p, ls.n, -ls.wi, &pos, &dir);
+          float emit = emission_choice_pdf(emission_cdf, ls.light) * pos * dir;
+          float bsdf_dir = ls.delta ? 0.0f : bsdf_pdf(m, wo_local, wi_local);
+          float bsdf_rev = bsdf_pdf(m, wi_local, wo_local);
+          float others = bsdf_dir / direct +
+                         emit * fabs(pc_dot(ls.wi, s.ng)) / (direct * cos_at_light) * (dvcm + dvc * bsdf_rev);
+          float w = strategy_weight(lt, 1u, t_count, others);
+#ifdef PC_HAS_CUTOUTS
+          shadow.cutout_seed = cutout_seed(key, 2u * depth + 1u);
+#endif
+          Hit blocker;
+          if (w != 0.0f) {
+            ++*rays;
+            if (!trace_scene(sc, sc, &shadow, true, &blocker))
+              radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
+          }
+        }
+      }
+      /* s >= 2: a connection to each light vertex the depth limit allows. */
+      for (uint k = 0; k < lv_count && lv[k].length + depth + 1u <= h->max_depth; ++k) {
+        float others;
+        float3 c = connect_vertices(sc, &s, m, t, b, wo_local, wo_ng, dvcm, dvc, lv + k, &others);
+        if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
+        float w = strategy_weight(lt, lv[k].length + 1u, t_count, others);
+        if (w == 0.0f) continue;
+        float3 y_err = (float3)(lv[k].p.w);
+        Ray shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, lv[k].p.xyz, y_err, lv[k].ng.xyz);
+#ifdef PC_HAS_CUTOUTS
+        shadow.cutout_seed = cutout_seed(key, PC_BDPT_CUTOUT_BASE + depth * h->max_depth + k);
+#endif
+        Hit blocker;
+        ++*rays;
+        if (!trace_scene(sc, sc, &shadow, true, &blocker)) radiance += throughput * c * w;
+      }
+    }
+
+    BsdfSample bs;
+    if (!bsdf_sample(m, wo_local, u_bsdf.xyz, &bs)) break;
+    float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
+    bool transmitted = bs.wi.z * wo_local.z < 0.0f;
+    if ((pc_dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) break;
+    float cos_out = fabs(pc_dot(wi, s.ng));
+    if (bs.delta) {
+      dvc *= cos_out;
+      dvcm = 0.0f;
+    } else {
+      dvc = cos_out / bs.pdf * (dvc * bsdf_pdf(m, bs.wi, wo_local) + dvcm);
+      dvcm = 1.0f / bs.pdf;
+    }
+    throughput *= bs.weight;
+    eta_scale *= bs.eta2;
+    prev_p = s.p;
+    if (depth + 1 > h->rr_depth) { /* the path integrator's roulette */
+      float q = fmin(1.0f, max_component(throughput) * eta_scale);
+      if (u_light.w >= q) break;
+      throughput /= q;
+    }
+    ray = spawn_ray(&s, wi);
+#ifdef PC_HAS_CUTOUTS
+    ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
+#endif
+  }
+  return radiance;
+}
+
+/* One work unit, as light_integrator.cl's light_pass: the BDPT samples of pixels [path_begin, path_begin +
+ * path_count) (a light subpath and a camera subpath each) for samples [sample_begin, sample_begin +
+ * sample_count), into the splat film (cleared by the host per unit). */
+__kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                        __global uint* film, __global SplatStats* stats, uint path_begin, uint path_count,
+                        uint sample_begin, uint sample_count) {
+  SceneData sc = PC_SCENE_DATA;
+  uint item = get_global_id(0);
+  if (item >= path_count) return;
+  uint pixel = path_begin + item;
+  SampleKey key;
+  key.pixel = pixel;
+  key.seed = h->seed;
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u};
+  LightVertex vertices[PC_BDPT_MAX_VERTICES];
+  for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
+    key.sample = s;
+    uint count = 0u;
+    trace_light_path(&sc, lt, emission_cdf, film, key, &n, vertices, &count);
+    float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, vertices, count, &n.rays);
+    if (splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, s & 1u, L);
+  }
+  add_splat_counts(stats, &n);
+}

@@ -1,0 +1,312 @@
+/* A light path (lane width 1): emitted from a light chosen by power (emission.cl), connected to the camera
+ * at every non-delta vertex (camera_importance.cl), shadow-tested and splatted into the pixels its image
+ * position lands in (splat_film.cl), weighted by the pixel filter. The `light` integrator traces these
+ * alone; BDPT (bdpt.cl, which defines PC_BDPT) traces the same paths as its light subpaths: then each
+ * camera connection is weighted by multiple importance sampling against BDPT's other strategies, and the
+ * non-delta vertices are kept for the camera subpath to connect to.
+ *
+ * Importance transport (Veach's thesis, ch. 5; pbrt-v4): the BSDF is evaluated with wo the direction to
+ * the camera (or the next vertex) and wi the direction back along the light path; refraction does not
+ * scale by (n_t / n_i)^2 (the radiance scaling the BSDF applies is undone: BsdfSample.eta2), and with
+ * shading normals each vertex takes the adjoint BSDF's factor |w_l . n_s| |w_o . n_g| / (|w_l . n_g| |w_o . n_s|)
+ * (w_l towards the light, w_o outgoing), at connections too, so that light and path tracing estimate the
+ * same pixel values.
+ *
+ * What a light path alone cannot see: light reaching the camera directly from an emitter (the emitter's
+ * own vertex is not connected), and anything seen through a specular (delta) surface, since a connection
+ * to a pinhole through a mirror or glass has probability zero (docs/light-transport.md). */
+#ifndef PATHCL_LIGHT_PATH_CL
+#define PATHCL_LIGHT_PATH_CL
+
+#include "shared/types.h"
+#include "shared/light_types.h"
+#include "math.cl"
+#include "rng.cl"
+#include "sampler.cl"
+#include "sampling.cl"
+#include "scene.cl"
+#include "camera.cl"
+#include "intersect.cl"
+#include "surface.cl"
+#include "texture.cl"
+#include "bsdf.cl"
+#include "environment.cl"
+#include "lights.cl"
+#include "material.cl"
+#include "counters.cl"
+#include "emission.cl"
+#include "camera_importance.cl"
+#include "splat_film.cl"
+
+/* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
+ * every group a camera path of the same key (BDPT's camera subpath, the path integrator's numbering:
+ * 0, then 1 + 2 depth and 2 + 2 depth) takes, so that the two subpaths of a BDPT sample are independent. */
+inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
+#define PC_LT_EMIT_POS(h) (light_group_base(h) + 0u)          /* x: light choice, yz: point, w: side */
+#define PC_LT_EMIT_DIR(h) (light_group_base(h) + 1u)          /* xy: direction */
+#define PC_LT_CONNECT(h, v) (light_group_base(h) + 2u + 2u * (v)) /* xy: lens point, z: roulette, at vertex v */
+#define PC_LT_BSDF(h, v) (light_group_base(h) + 3u + 2u * (v))    /* xyz: BSDF sample at vertex v */
+
+/* Cut-out ray numbers of a light path: 0 the first ray, then 2 v + 1 the camera connection of vertex v and
+ * 2 v + 2 the ray leaving it; offset from the path integrator's by this (their keys coincide). */
+#define PC_LT_CUTOUT_BASE 0x40000000u
+
+typedef struct {
+  uint rays, nan_splats, inf_splats, negative_splats, overflows;
+} SplatCounts;
+
+/* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
+inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
+  float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
+  float den = fabs(pc_dot(w_light, ng)) * fabs(pc_dot(w_out, ns));
+  return den > 0.0f ? num / den : 0.0f;
+}
+
+/* False (and counted) for a colour that is not finite and non-negative: such a splat is dropped. */
+inline bool splat_is_valid(float3 c, SplatCounts* n) {
+  if (isnan(c.x) || isnan(c.y) || isnan(c.z)) {
+    ++n->nan_splats;
+    return false;
+  }
+  if (isinf(c.x) || isinf(c.y) || isinf(c.z)) {
+    ++n->inf_splats;
+    return false;
+  }
+  if (c.x < 0.0f || c.y < 0.0f || c.z < 0.0f) {
+    ++n->negative_splats;
+    return false;
+  }
+  return true;
+}
+
+/* Splats colour c landing at image position `raster` into every pixel the filter reaches, weighted by it. */
+inline void splat_filtered(__global uint* film, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
+                           float2 raster, uint parity, float3 c, SplatCounts* n) {
+  if (!splat_is_valid(c, n)) return;
+  float r = h->filter_radius;
+  int x0 = max(0, (int)floor(raster.x - r)), x1 = min((int)h->width - 1, (int)floor(raster.x + r));
+  int y0 = max(0, (int)floor(raster.y - r)), y1 = min((int)h->height - 1, (int)floor(raster.y + r));
+  for (int y = y0; y <= y1; ++y) {
+    float wy = filter_density_1d(h, raster.y - ((float)y + 0.5f));
+    if (!(wy > 0.0f)) continue;
+    for (int x = x0; x <= x1; ++x) {
+      float w = wy * filter_density_1d(h, raster.x - ((float)x + 0.5f));
+      if (w > 0.0f) n->overflows += splat_pixel(film, lt, (uint)y * h->width + (uint)x, parity, c * w);
+    }
+  }
+}
+
+#ifdef PC_BDPT
+/* A non-delta vertex of a light subpath, kept for BDPT's camera subpath to connect to (7 x 16 bytes):
+ * what evaluating its BSDF towards any direction needs, its throughput, and its partial MIS quantities
+ * dVCM and dVC (Georgiev, "Implementing Vertex Connection and Merging", 2012; see bdpt.cl). */
+typedef struct {
+  float4 p;     /* xyz: position; w: the largest component of its rounding-error bound */
+  float4 ng;    /* xyz: geometric normal (front side); w: dVCM */
+  float4 ns;    /* xyz: shading normal; w: dVC */
+  float4 wl;    /* xyz: unit direction back along the light path */
+  float4 beta;  /* xyz: throughput arriving at the vertex (emission weight and the scattering before it) */
+  float4 color; /* xyz: the material's colour here (textures and vertex colours applied) */
+  uint material, prim, instance;
+  uint length;  /* scattering events of the light subpath up to and including this vertex */
+} LightVertex;
+
+/* The density with which next-event estimation from x (lights.cl's sample_light) picks light `index` at y
+ * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;
+ * for a point or spot light the choice times the squared distance (its solid-angle density at the light
+ * being a delta of area density 1; SmallVCM's convention). */
+inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
+  Light light = sc->lights[index];
+  switch (light.type) {
+#ifdef PC_HAS_AREA_LIGHTS
+    case PC_LIGHT_AREA:
+      return light_pdf(sc, index, x, y, ny);
+#endif
+#ifdef PC_HAS_POINT_LIGHTS
+    case PC_LIGHT_POINT:
+    case PC_LIGHT_SPOT: {
+      float3 to = y - x;
+      return light_choice_pdf(sc, x, index) * pc_dot(to, to);
+    }
+#endif
+#ifdef PC_HAS_DIRECTIONAL_LIGHTS
+    case PC_LIGHT_DIRECTIONAL:
+      return light_choice_pdf(sc, x, index);
+#endif
+#ifdef PC_HAS_ENVIRONMENT
+    case PC_LIGHT_ENVIRONMENT:
+      return light_choice_pdf(sc, x, index) * env_pdf(light, sc->textures, sc->env_dist, d);
+#endif
+    default:
+      return 0.0f;
+  }
+}
+
+/* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
+ * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
+ * unweighted, and no other. */
+inline float strategy_weight(__constant const LightTransportHeader* lt, uint s, uint t, float others) {
+  if (lt->only_strategy != PC_INVALID) return lt->only_strategy == (s | (t << 16)) ? 1.0f : 0.0f;
+  return 1.0f / (1.0f + others);
+}
+#endif
+
+/* Traces light path (key) and splats its camera connections. BDPT: with MIS weights, and its non-delta
+ * vertices in vertices[0 .. *count) (room for max_depth). */
+inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
+                             __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
+#ifdef PC_BDPT
+                             , LightVertex* vertices, uint* count
+#endif
+) {
+  __constant const SceneHeader* h = sc->h;
+  if (h->max_depth == 0u) return; /* no scattering: only directly seen lights, which light paths cannot see */
+  float4 u_pos = sample4(h, key, PC_LT_EMIT_POS(h)), u_dir = sample4(h, key, PC_LT_EMIT_DIR(h));
+  EmissionSample e;
+  if (!sample_emission(sc, lt, emission_cdf, u_pos.x, u_pos.yzw, u_dir.xy, &e)) return;
+  float3 beta = emission_weight(&e);
+  float beta0 = max_component(beta);
+  uint parity = key.sample & 1u;
+  Ray ray;
+  ray.o = e.prim != PC_INVALID ? offset_ray_origin(e.p, e.p_err, e.n, e.d) : e.p;
+  ray.d = e.d;
+  ray.tmin = 0.0f;
+  ray.tmax = INFINITY;
+  ray.skip_prim = e.prim;
+  ray.skip_instance = 0u;
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE);
+#endif
+#ifdef PC_BDPT
+  /* dVC starts as the emission's cosine over its density (0 for a delta light: no strategy but this one
+   * reaches its paths' first vertex); dVCM needs next-event estimation's density, which the light tree
+   * makes depend on the receiver, and is set at the first vertex. */
+  float emit_pdf = e.pdf_choice * e.pdf_pos * e.pdf_dir;
+  bool area = e.prim != PC_INVALID;
+  float cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
+  float dvc = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf, dvcm = 0.0f;
+  float3 prev_p = e.p;
+#endif
+  for (uint v = 0;; ++v) { /* v + 1 scattering events at the vertex found now */
+    Hit hit;
+    ++n->rays;
+    if (!trace_scene(sc, sc, &ray, false, &hit)) break;
+    Surface s = scene_surface(sc, &ray, &hit);
+    PrimShading sh = sc->shading[s.prim];
+    Material m = material_at(sc, sh.material, &s, &hit);
+    float3 t, b;
+    make_frame(s.ns, &t, &b);
+    float3 w_light = -ray.d; /* back along the light path */
+    float3 wl_local = (float3)(pc_dot(w_light, t), pc_dot(w_light, b), pc_dot(w_light, s.ns));
+    float wl_ng = pc_dot(w_light, s.ng);
+    float4 u_connect = sample4(h, key, PC_LT_CONNECT(h, v));
+#ifdef PC_BDPT
+    /* The densities of reaching this vertex, per area: dVCM /= p(light path reaches it), in solid angle
+     * times cos / dist^2 (Georgiev's eq. 31-33; the cosines are the geometric normal's throughout). */
+    float cos_in = fabs(wl_ng);
+    if (v == 0u) {
+      float direct = nee_pdf_w(sc, e.light, s.p, e.p, e.n, -e.d);
+      dvcm = direct * cos_light / emit_pdf;
+    } else {
+      float3 seg = s.p - prev_p;
+      dvcm *= pc_dot(seg, seg);
+    }
+    dvcm /= cos_in;
+    dvc /= cos_in;
+    prev_p = s.p;
+#endif
+
+    /* Connection to the camera. */
+    CameraWiSample cs;
+    if (!bsdf_is_delta(m) && camera_sample_wi(h, s.p, u_connect.xy, &cs)) {
+      float3 wc_local = (float3)(pc_dot(cs.wi, t), pc_dot(cs.wi, b), pc_dot(cs.wi, s.ns));
+      float3 f = bsdf_eval(m, wc_local, wl_local);
+      /* Reflection only (no non-delta material transmits): the camera on the light's side of the surface. */
+      if (pc_dot(cs.wi, s.ng) * wl_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
+        Ray shadow = spawn_ray(&s, cs.wi);
+        shadow.d = cs.p - shadow.o;
+        shadow.tmax = 1.0f - PC_SHADOW_EPSILON;
+#ifdef PC_HAS_CUTOUTS
+        shadow.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE + 2u * v + 1u);
+#endif
+        float g = fabs(wc_local.z) * shading_normal_factor(w_light, cs.wi, s.ns, s.ng);
+        /* over the width x height paths of a sample: the film sums to the pixel mean times spp */
+        float per_path = g * cs.We / (cs.pdf * (float)(h->width * h->height));
+#ifdef PC_BDPT
+        /* Against the camera subpath reaching this vertex (t >= 2): its density per area here, with the
+         * image position uniform over the image, over the light subpath's (times the light paths per
+         * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
+        float cam_pdf_a = camera_direction_pdf(h, -cs.wi) * fabs(pc_dot(cs.wi, s.ng)) / (cs.dist * cs.dist);
+        float rev = bsdf_pdf(m, wc_local, wl_local);
+        per_path *= strategy_weight(lt, v + 2u, 1u, cam_pdf_a * (dvcm + dvc * rev));
+#endif
+        Hit blocker;
+        if (per_path != 0.0f) { /* a NaN goes on, to be counted */
+          ++n->rays;
+          if (!trace_scene(sc, sc, &shadow, true, &blocker))
+            splat_filtered(film, h, lt, cs.raster, parity, beta * f * per_path, n);
+        }
+      }
+    }
+#ifdef PC_BDPT
+    if (!bsdf_is_delta(m)) {
+      LightVertex* lv = vertices + (*count)++;
+      lv->p = (float4)(s.p, max_component(s.p_err));
+      lv->ng = (float4)(s.ng, dvcm);
+      lv->ns = (float4)(s.ns, dvc);
+      lv->wl = (float4)(w_light, 0.0f);
+      lv->beta = (float4)(beta, 0.0f);
+      lv->color = (float4)(m.color.xyz, 0.0f);
+      lv->material = sh.material;
+      lv->prim = s.prim;
+      lv->instance = s.instance;
+      lv->length = v + 1u;
+    }
+#endif
+    if (v + 1u >= h->max_depth) break;
+
+    /* The next vertex. */
+    float4 u_bsdf = sample4(h, key, PC_LT_BSDF(h, v));
+    BsdfSample bs;
+    if (!bsdf_sample(m, wl_local, u_bsdf.xyz, &bs)) break;
+    float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
+    bool transmitted = bs.wi.z * wl_local.z < 0.0f;
+    if ((pc_dot(wi, s.ng) * wl_ng > 0.0f) == transmitted) break;
+#ifdef PC_BDPT
+    /* Scattering (Georgiev's eq. 34-35): a delta lobe keeps dVC (its reverse density equals the forward
+     * one) and leaves no strategy connecting here (dVCM = 0). */
+    float cos_out = fabs(pc_dot(wi, s.ng));
+    if (bs.delta) {
+      dvc *= cos_out;
+      dvcm = 0.0f;
+    } else {
+      dvc = cos_out / bs.pdf * (dvc * bsdf_pdf(m, bs.wi, wl_local) + dvcm);
+      dvcm = 1.0f / bs.pdf;
+    }
+#endif
+    /* Importance is not scaled by refraction: undo the radiance scaling (bs.eta2) the sample applied. */
+    beta *= bs.weight * (bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng));
+    if (v + 1u > h->rr_depth) {
+      /* Russian roulette on the throughput relative to the emitted one (light paths start at power scale). */
+      float q = fmin(1.0f, max_component(beta) / beta0);
+      if (u_connect.z >= q) break;
+      beta /= q;
+    }
+    ray = spawn_ray(&s, wi);
+#ifdef PC_HAS_CUTOUTS
+    ray.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE + 2u * v + 2u);
+#endif
+  }
+}
+
+/* Adds a work unit's counts to its SplatStats (integer atomics). */
+inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
+  volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
+  add_counter64(counters, n->rays);
+  if (n->nan_splats) atomic_add(counters + 2, n->nan_splats);
+  if (n->inf_splats) atomic_add(counters + 3, n->inf_splats);
+  if (n->negative_splats) atomic_add(counters + 4, n->negative_splats);
+  if (n->overflows) atomic_add(counters + 5, n->overflows);
+}
+
+#endif

@@ -1,0 +1,129 @@
+// What the tests of the splat-film integrators (`light`, `bdpt`) share: a render with the options they
+// vary, image means over independent seeds, and the per-pixel z-test of two films.
+#pragma once
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace light_transport_test {
+
+struct Options {
+  uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
+  uint32_t integrator = PC_INTEGRATOR_LIGHT;
+  size_t work_group = 0;
+  bool pairs = false;
+  int strategy_s = -1, strategy_t = -1;  // bdpt: this strategy alone
+  const Film* resume = nullptr;
+};
+
+// Renders on the test device; every hazard counter must stay at zero.
+inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
+  RenderOptions opt;
+  opt.spp = o.spp;
+  opt.max_depth = o.max_depth;
+  opt.seed = o.seed;
+  opt.integrator = o.integrator;
+  opt.pass_spp = o.pass_spp;
+  opt.tile_pixels = o.tile_pixels;
+  opt.work_group = o.work_group;
+  opt.debug_splat_pairs = o.pairs;
+  opt.debug_bdpt_strategy_s = o.strategy_s;
+  opt.debug_bdpt_strategy_t = o.strategy_t;
+  opt.resume = o.resume;
+  RenderResult r = render(test_device(), scene, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+  EXPECT_EQ(r.splat_overflows, 0u);
+  return r;
+}
+
+inline double image_mean(const Film& f) {
+  double sum = 0;
+  for (float v : f.mean) sum += v;
+  return sum / f.mean.size();
+}
+
+// Mean and standard error of the image mean over `seeds` independent renders.
+inline MeanStd seeded_mean(const DeviceScene& scene, Options o, int seeds) {
+  std::vector<double> means;
+  for (int s = 0; s < seeds; ++s) {
+    o.seed = 1000 + s;
+    means.push_back(image_mean(render_with(scene, o).film));
+  }
+  return mean_and_error(means);
+}
+
+inline DeviceScene scene_from(const std::string& name, const std::string& json) {
+  return load_device_scene(write_temp_file(name, json));
+}
+
+struct PixelComparison {
+  size_t compared = 0, failed = 0;  // channels compared, and those with |z| > 4
+  double sum_a = 0, sum_b = 0, sum_var = 0;  // sums of the compared means, and of their variances
+  // |z| of the difference of the two images' sums (pixels taken as independent).
+  double sum_z() const { return sum_var > 0 ? std::fabs(sum_b - sum_a) / std::sqrt(sum_var) : 0; }
+};
+
+// Per channel z = (b - a) / sqrt(var_a + var_b) over the pixels `skip` does not leave out.
+inline PixelComparison compare_pixels(const Film& a, const Film& b, const std::function<bool(size_t pixel)>& skip) {
+  PixelComparison c;
+  for (size_t i = 0; i < a.mean.size(); ++i) {
+    if (skip && skip(i / 3)) continue;
+    double var = double(a.variance[i]) + b.variance[i];
+    double d = double(b.mean[i]) - a.mean[i];
+    ++c.compared;
+    c.sum_var += var;
+    c.sum_a += a.mean[i];
+    c.sum_b += b.mean[i];
+    if (var <= 0 ? d != 0 : std::fabs(d) / std::sqrt(var) > 4) ++c.failed;
+  }
+  return c;
+}
+
+// The image is a pure function of scene, settings and seed: the same bits as a render with options o for
+// a work-group size of 16, units of 3 spp over 37 paths, 32-bit word pairs instead of 64-bit atomics, and
+// a render resumed from the half-way film of another (o.spp a power of two).
+inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options& o) {
+  Film reference = render_with(scene, o).film;
+  ASSERT_GT(image_mean(reference), 0.0);
+  auto same = [&](const Film& f, const char* what) {
+    EXPECT_EQ(f.splats, reference.splats) << what;
+    EXPECT_EQ(f.mean, reference.mean) << what;
+  };
+  Options w = o;
+  w.work_group = 16;
+  same(render_with(scene, w).film, "work group 16");
+  Options split = o;
+  split.pass_spp = 3;
+  split.tile_pixels = 37;
+  same(render_with(scene, split).film, "units of 3 spp over 37 paths");
+  Options pairs = o;
+  pairs.pairs = true;
+  same(render_with(scene, pairs).film, "32-bit word pairs");
+  RenderOptions partial;
+  partial.max_depth = o.max_depth;
+  partial.seed = o.seed;
+  partial.integrator = o.integrator;
+  Film start;
+  {
+    // Render o.spp with power-of-two horizons and keep the half-way film from the horizon callback.
+    RenderOptions p = partial;
+    p.spp = o.spp;
+    p.power_of_two_horizons = true;
+    RenderCallbacks cb;
+    cb.horizon = [&](const Film& f, double, double) {
+      if (f.spp == o.spp / 2) start = f;
+    };
+    render(test_device(), scene, p, cb);
+  }
+  ASSERT_EQ(start.spp, o.spp / 2);
+  Options resumed = o;
+  resumed.resume = &start;
+  same(render_with(scene, resumed).film, "resumed half-way");
+}
+
+}  // namespace light_transport_test
