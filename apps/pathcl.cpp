@@ -193,6 +193,7 @@ nlohmann::json device_stats(const RenderResult& r) {
                     {"failures", d.failures},
                     {"kernel_build_ms", d.kernel_build_ms},
                     {"kernel_from_cache", d.kernel_from_cache},
+                    {"kernel_private_bytes", d.kernel_private_bytes},
                     {"probe_seconds", d.probe_seconds}});
   return list;
 }

@@ -69,6 +69,10 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     throw UsageError("--work-group " + std::to_string(settings.work_group) + ": " + cl.info.name +
                      " runs the render kernel in work groups of at most " + std::to_string(limit));
   work_group_ = settings.work_group > 0 ? settings.work_group : std::min<size_t>(64, limit);
+  cl_ulong private_bytes = 0;
+  CL_CHECK(clGetKernelWorkGroupInfo(kernel_->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
+                                    &private_bytes, nullptr));
+  private_bytes_ = private_bytes;
   clear_film();
 }
 

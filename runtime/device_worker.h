@@ -65,6 +65,7 @@ class DeviceWorker {
 
   const KernelProgram& program() const { return *program_; }
   size_t work_group() const { return work_group_; }
+  uint64_t private_bytes() const { return private_bytes_; }  // CL_KERNEL_PRIVATE_MEM_SIZE of the render kernel
 
  private:
   double launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
@@ -83,6 +84,7 @@ class DeviceWorker {
   uint32_t integrator_ = PC_INTEGRATOR_PATH;
   uint32_t pixels_ = 0;
   size_t work_group_ = 0;
+  uint64_t private_bytes_ = 0;
   cl_uint first_unit_arg_ = 0;
   DeviceFault fault_;
   uint64_t units_run_ = 0;

@@ -70,6 +70,7 @@ struct DeviceReport {
   double kernel_build_ms = 0;
   bool kernel_from_cache = false;
   std::string kernel_options;
+  uint64_t kernel_private_bytes = 0;  // the render kernel's private memory per work item, as the driver reports it
   double probe_seconds = 0;
 };
 
