@@ -92,10 +92,7 @@ TEST(Bdpt, EachStrategyAloneIsUnbiasedOnTheCapSphere) {
 // The closed furnace (tests/furnace_test.cpp): a sphere whose wall emits Le and reflects rho gives
 // Le (1 - rho^(D+1)) / (1 - rho) everywhere, here with Russian roulette and every strategy at once.
 TEST(Bdpt, FurnaceMeanWithinFourStandardErrors) {
-  DeviceScene scene = scene_from("bdpt-furnace.json", R"({"camera": {"position": [0.1, -0.2, 0.3], "look_at": [0.5, 0.4, -1],
-    "fov_y_degrees": 100, "width": 16, "height": 16},
-    "materials": {"grey": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
-    "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 2, "flip_normals": true, "material": "grey", "emission": [0.5, 0.5, 0.5]}]})");
+  DeviceScene scene = furnace_scene();
   const uint32_t depth = 6;
   MeanStd m = seeded_mean(scene, bdpt(16, depth), 4);
   double exact = 0.5 * (1 - std::pow(0.5, depth + 1)) / 0.5;

@@ -34,6 +34,20 @@ TEST(LightIntegrator, CapSphereWithinFourStandardErrors) {
   }
 }
 
+// The closed furnace (tests/furnace_test.cpp): a sphere whose wall emits Le and reflects rho. Light
+// tracing sees all but the emission seen directly: Le rho (1 - rho^D) / (1 - rho) after D events.
+TEST(LightIntegrator, FurnaceMeanWithinFourStandardErrors) {
+  DeviceScene scene = furnace_scene();
+  const uint32_t depth = 6;
+  Options o;
+  o.spp = 32;
+  o.max_depth = depth;
+  MeanStd m = seeded_mean(scene, o, 4);
+  double exact = 0.5 * 0.5 * (1 - std::pow(0.5, depth)) / 0.5;
+  EXPECT_NEAR(m.mean, exact, 4 * m.std_error) << "error " << m.std_error;
+  EXPECT_LT(m.std_error, 0.01 * exact);
+}
+
 // A diffuse sphere of radius R = 5 and reflectance rho lit by a point light of intensity I at its centre,
 // enclosed in a glass ball of radius 0.5: every ray leaves the ball radially (normal incidence; reflected
 // rays cross the centre and leave on the other side) and no flux is absorbed but by the wall, so by

@@ -61,6 +61,15 @@ inline DeviceScene scene_from(const std::string& name, const std::string& json) 
   return load_device_scene(write_temp_file(name, json));
 }
 
+// The closed furnace of tests/furnace_test.cpp at 16 x 16: a sphere of radius 2 seen from inside, whose
+// wall emits Le = 0.5 and reflects rho = 0.5 diffusely.
+inline DeviceScene furnace_scene() {
+  return scene_from("furnace.json", R"({"camera": {"position": [0.1, -0.2, 0.3], "look_at": [0.5, 0.4, -1],
+    "fov_y_degrees": 100, "width": 16, "height": 16},
+    "materials": {"grey": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
+    "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 2, "flip_normals": true, "material": "grey", "emission": [0.5, 0.5, 0.5]}]})");
+}
+
 struct PixelComparison {
   size_t compared = 0, failed = 0;  // channels compared, and those with |z| > 4
   double sum_a = 0, sum_b = 0, sum_var = 0;  // sums of the compared means, and of their variances
