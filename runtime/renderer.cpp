@@ -22,6 +22,9 @@ using Clock = std::chrono::steady_clock;
 constexpr uint32_t kProbePixels = 64, kProbeSamples = 4;
 constexpr double kGpuUnitSeconds = 0.075;  // 50-100 ms: long enough to amortise a launch, short for watchdogs
 constexpr double kCpuUnitSeconds = 0.25;
+// A splat-film unit (light, bdpt) also clears, reads back and adds the whole film, 96 bytes a pixel (~20 ms
+// at 512 x 512 on a CPU device): longer units keep that under 2 % (measured: bdpt 7.2 s -> 6.8 s, Cornell box).
+constexpr double kSplatUnitSeconds = 1.0;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -221,6 +224,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.sub_device = info.sub_device;
     report.compute_units = info.compute_units;
     double target = info.is_gpu ? kGpuUnitSeconds : kCpuUnitSeconds;
+    if (uses_splat_film(options.integrator) && !info.is_gpu) target = kSplatUnitSeconds;
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
@@ -252,6 +256,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.kernel_build_ms = program.build_ms;
     report.kernel_from_cache = program.from_cache;
     report.kernel_options = program.options;
+    report.kernel_private_bytes = threads[e.device]->worker().private_bytes();
     if (e.probe_seconds > 0) schedule_devices[e.device].rate = double(kProbePixels) * kProbeSamples / e.probe_seconds;
   }
   if (std::none_of(ready.begin(), ready.end(), [](bool r) { return r; })) {
