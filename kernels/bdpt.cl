@@ -75,8 +75,8 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
   float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
   float eta_scale = 1.0f;
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera
-   * connection (t = 1). */
-  float dvcm = 1.0f / camera_direction_pdf(h, ray.d), dvc = 0.0f;
+   * connection (t = 1), counted as PC_BDPT_LIGHT_TRACING_COUNT of its paths. */
+  float dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = 0.0f;
   float3 prev_p = ray.o;
   for (uint depth = 0;; ++depth) {
     Hit hit;
