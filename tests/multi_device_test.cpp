@@ -125,6 +125,52 @@ TEST(MultiDevice, AFailingDeviceGivesItsUnitsBack) {
   }
 }
 
+// Light tracing and BDPT splat anywhere: their light paths are split across the devices by index, each
+// unit's splats come back as integers and are added exactly, so any split, a lagging device whose units
+// are copied (only the winner's splats count) and a failing device (its unfinished unit's splats are
+// dropped and the unit runs again elsewhere) all give the one-device film.
+TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
+  DeviceScene scene = small_cornell();
+  std::vector<DeviceInfo> devices = all_devices();
+  for (uint32_t integrator : {PC_INTEGRATOR_LIGHT, PC_INTEGRATOR_BDPT}) {
+    SCOPED_TRACE(integrator == PC_INTEGRATOR_LIGHT ? "light" : "bdpt");
+    RenderOptions opt = base_options();
+    opt.integrator = integrator;
+    Film one = render({devices.front()}, scene, opt).film;
+    ASSERT_EQ(one.splats.size(), size_t(PC_SPLAT_WORDS) * 48 * 40);
+    auto same = [&](const RenderResult& r, const std::string& what) {
+      EXPECT_EQ(r.film.splats, one.splats) << what;
+      EXPECT_EQ(r.film.mean, one.mean) << what;
+      EXPECT_EQ(r.splat_overflows, 0u) << what;
+    };
+    for (uint32_t tile : {1u, 37u, 0u}) {
+      RenderOptions split = opt;
+      split.tile_pixels = tile;
+      split.max_unit_pixels = tile == 1 ? 7 : 0;
+      split.pass_spp = tile == 0 ? 0 : tile == 1 ? 1 : 5;
+      RenderResult r = render(devices, scene, split);
+      same(r, "tile " + std::to_string(tile));
+      EXPECT_EQ(r.determinism, "bitwise");
+      if (tile == 1)
+        for (const DeviceReport& d : r.devices) EXPECT_GT(d.units, 0u) << d.name;
+    }
+    RenderOptions lagging = opt;
+    lagging.tile_pixels = 64;
+    lagging.power_of_two_horizons = true;
+    lagging.faults.resize(1);
+    lagging.faults[0].delay_seconds = 0.01;
+    same(render(devices, scene, lagging), "a lagging device");
+    RenderOptions failing = opt;
+    failing.tile_pixels = 16;
+    failing.max_unit_pixels = 160;
+    failing.faults.resize(2);
+    failing.faults[1].fail_after_units = 3;
+    RenderResult r = render(devices, scene, failing);
+    same(r, "a failing device");
+    EXPECT_EQ(r.devices[1].failures, 1u);
+  }
+}
+
 TEST(MultiDevice, ACheckpointWrittenOnTwoDevicesResumesOnOne) {
   DeviceScene scene = small_cornell();
   RenderOptions opt = base_options();
