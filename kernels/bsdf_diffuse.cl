@@ -9,19 +9,42 @@
 #define PC_DIFFUSE_SCALE 1.0f
 #endif
 
+/* Written once over lanes (V3 lane3f/lane3f8/lane3f16, F, I their float and int types; issue 15): c is the
+ * reflectance per lane, branches are per-lane selects, and the Material functions below are the one-lane
+ * instances, so every lane gets their bits (tests/bsdf_test.cpp, DiffuseLobesGiveTheOneLaneBits). */
+#define PC_DIFFUSE_LANES(V3, F, I)                                                                        \
+  inline PC_OVL V3 diffuse_eval_lanes(V3 c, V3 wi) {                                                      \
+    I above = wi.z > 0.0f;                                                                                \
+    return lane3(select((F)(0.0f), c.x * PC_DIFFUSE_SCALE * PC_INV_PI, above),                            \
+                 select((F)(0.0f), c.y * PC_DIFFUSE_SCALE * PC_INV_PI, above),                            \
+                 select((F)(0.0f), c.z * PC_DIFFUSE_SCALE * PC_INV_PI, above));                           \
+  }                                                                                                       \
+  inline PC_OVL F diffuse_pdf_lanes(V3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }                       \
+  /* Cosine-weighted wi; weight = f cos / pdf = reflectance. The mask: where the sample is valid. */     \
+  inline PC_OVL I diffuse_sample_lanes(V3 c, F u0, F u1, V3* wi, F* pdf, V3* weight) {                    \
+    F x, y, z;                                                                                            \
+    sample_cosine_hemisphere_lanes(u0, u1, &x, &y, &z);                                                   \
+    *wi = lane3(x, y, z);                                                                                 \
+    *pdf = diffuse_pdf_lanes(*wi);                                                                        \
+    *weight = lane3(c.x * PC_DIFFUSE_SCALE, c.y * PC_DIFFUSE_SCALE, c.z * PC_DIFFUSE_SCALE);              \
+    return *pdf > 0.0f;                                                                                   \
+  }
+PC_DIFFUSE_LANES(lane3f, float, int)
+PC_DIFFUSE_LANES(lane3f8, float8, int8)
+PC_DIFFUSE_LANES(lane3f16, float16, int16)
+#undef PC_DIFFUSE_LANES
+
 inline float3 diffuse_eval(Material m, float3 wo, float3 wi) {
-  return wi.z > 0.0f ? m.color.xyz * PC_DIFFUSE_SCALE * PC_INV_PI : (float3)(0.0f);
+  return float3_of(diffuse_eval_lanes(lane3_of(m.color.xyz), lane3_of(wi)));
 }
 
-inline float diffuse_pdf(Material m, float3 wo, float3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }
+inline float diffuse_pdf(Material m, float3 wo, float3 wi) { return diffuse_pdf_lanes(lane3_of(wi)); }
 
-/* Cosine-weighted wi; weight = f cos / pdf = reflectance. */
 inline bool diffuse_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  s->wi = sample_cosine_hemisphere(u.xy);
-  s->pdf = diffuse_pdf(m, wo, s->wi);
-  s->weight = m.color.xyz * PC_DIFFUSE_SCALE;
-  s->delta = false;
-  return s->pdf > 0.0f;
+  lane3f wi, weight;
+  float pdf;
+  int valid = diffuse_sample_lanes(lane3_of(m.color.xyz), u.x, u.y, &wi, &pdf, &weight);
+  return lobe_sample(valid, wi, pdf, weight, s);
 }
 
 #endif

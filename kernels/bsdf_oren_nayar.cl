@@ -3,37 +3,54 @@
 #ifndef PATHCL_BSDF_OREN_NAYAR_CL
 #define PATHCL_BSDF_OREN_NAYAR_CL
 
-inline float3 oren_nayar_eval(Material m, float3 wo, float3 wi) {
-  if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-  float s2 = m.sigma * m.sigma;
-  float a = 1.0f - s2 / (2.0f * (s2 + 0.33f));
-  float b = 0.45f * s2 / (s2 + 0.09f);
-  float sin_i = sqrt(fmax(0.0f, 1.0f - wi.z * wi.z)), sin_o = sqrt(fmax(0.0f, 1.0f - wo.z * wo.z));
-  /* cos(phi_i - phi_o), only where both azimuths are defined. */
-  float max_cos = 0.0f;
-  if (sin_i > 1e-4f && sin_o > 1e-4f)
-    max_cos = fmax(0.0f, clamp((wi.x * wo.x + wi.y * wo.y) / (sin_i * sin_o), -1.0f, 1.0f));
-  /* alpha = max(theta_i, theta_o), beta = min: tan(beta) uses the larger cosine, never 0 here. */
-  float sin_alpha, tan_beta;
-  if (wi.z > wo.z) {
-    sin_alpha = sin_o;
-    tan_beta = sin_i / wi.z;
-  } else {
-    sin_alpha = sin_i;
-    tan_beta = sin_o / wo.z;
+/* Written once over lanes, as bsdf_diffuse.cl's lobes (sigma per lane); the Material functions below are
+ * the one-lane instances (tests/bsdf_test.cpp, DiffuseLobesGiveTheOneLaneBits). */
+#define PC_OREN_NAYAR_LANES(V3, F, I)                                                                     \
+  inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {                                   \
+    F s2 = sigma * sigma;                                                                                 \
+    F a = 1.0f - s2 / (2.0f * (s2 + 0.33f));                                                              \
+    F b = 0.45f * s2 / (s2 + 0.09f);                                                                      \
+    F sin_i = sqrt(fmax(0.0f, 1.0f - wi.z * wi.z)), sin_o = sqrt(fmax(0.0f, 1.0f - wo.z * wo.z));         \
+    /* cos(phi_i - phi_o), only where both azimuths are defined. */                                      \
+    F max_cos = fmax(0.0f, clamp((wi.x * wo.x + wi.y * wo.y) / (sin_i * sin_o), -1.0f, 1.0f));            \
+    max_cos = select((F)(0.0f), max_cos, (sin_i > 1e-4f) & (sin_o > 1e-4f));                              \
+    /* alpha = max(theta_i, theta_o), beta = min: tan(beta) uses the larger cosine, never 0 here. */      \
+    I i_higher = wi.z > wo.z;                                                                             \
+    F sin_alpha = select(sin_i, sin_o, i_higher);                                                         \
+    F tan_beta = select(sin_o / wo.z, sin_i / wi.z, i_higher);                                            \
+    F k = a + b * max_cos * sin_alpha * tan_beta;                                                         \
+    I below = (wi.z <= 0.0f) | (wo.z <= 0.0f);                                                            \
+    return lane3(select(c.x * PC_INV_PI * k, (F)(0.0f), below), select(c.y * PC_INV_PI * k, (F)(0.0f), below), \
+                 select(c.z * PC_INV_PI * k, (F)(0.0f), below));                                          \
+  }                                                                                                       \
+  inline PC_OVL F oren_nayar_pdf_lanes(V3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }                    \
+  /* Sampled like Lambert; the mask: where the sample is valid (weight is then f cos / pdf). */          \
+  inline PC_OVL I oren_nayar_sample_lanes(V3 c, F sigma, V3 wo, F u0, F u1, V3* wi, F* pdf, V3* weight) { \
+    F x, y, z;                                                                                            \
+    sample_cosine_hemisphere_lanes(u0, u1, &x, &y, &z);                                                   \
+    *wi = lane3(x, y, z);                                                                                 \
+    *pdf = oren_nayar_pdf_lanes(*wi);                                                                     \
+    V3 f = oren_nayar_eval_lanes(c, sigma, wo, *wi);                                                      \
+    F cos_over_pdf = z / *pdf;                                                                            \
+    *weight = lane3(f.x * cos_over_pdf, f.y * cos_over_pdf, f.z * cos_over_pdf);                          \
+    return *pdf > 0.0f;                                                                                   \
   }
-  return m.color.xyz * PC_INV_PI * (a + b * max_cos * sin_alpha * tan_beta);
+PC_OREN_NAYAR_LANES(lane3f, float, int)
+PC_OREN_NAYAR_LANES(lane3f8, float8, int8)
+PC_OREN_NAYAR_LANES(lane3f16, float16, int16)
+#undef PC_OREN_NAYAR_LANES
+
+inline float3 oren_nayar_eval(Material m, float3 wo, float3 wi) {
+  return float3_of(oren_nayar_eval_lanes(lane3_of(m.color.xyz), m.sigma, lane3_of(wo), lane3_of(wi)));
 }
 
-inline float oren_nayar_pdf(Material m, float3 wo, float3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }
+inline float oren_nayar_pdf(Material m, float3 wo, float3 wi) { return oren_nayar_pdf_lanes(lane3_of(wi)); }
 
 inline bool oren_nayar_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  s->wi = sample_cosine_hemisphere(u.xy);
-  s->pdf = oren_nayar_pdf(m, wo, s->wi);
-  s->delta = false;
-  if (!(s->pdf > 0.0f)) return false;
-  s->weight = oren_nayar_eval(m, wo, s->wi) * (s->wi.z / s->pdf);
-  return true;
+  lane3f wi, weight;
+  float pdf;
+  int valid = oren_nayar_sample_lanes(lane3_of(m.color.xyz), m.sigma, lane3_of(wo), u.x, u.y, &wi, &pdf, &weight);
+  return lobe_sample(valid, wi, pdf, weight, s);
 }
 
 #endif

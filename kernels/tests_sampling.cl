@@ -274,17 +274,50 @@ PC_MATH_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
 PC_MATH_LANES_TEST(lane3f8, float8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
 PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
 
-__kernel void math_lanes_test(__global const float* in, __global uint* out) {
-  uint i = get_global_id(0);
-  float v[14][16];
-  for (uint j = 0u; j < 16u; ++j)
-    for (uint k = 0u; k < 14u; ++k) v[k][j] = in[14u * (16u * i + j) + k];
-  __global uint* o = out + i * 3u * 160u;
-  math_lanes_write_16(v, 0u, o);
-  math_lanes_write_8(v, 0u, o + 160u);
-  math_lanes_write_8(v, 8u, o + 160u + 80u);
-  for (uint j = 0u; j < 16u; ++j) math_lanes_write_1(v, j, o + 320u + 10u * j);
-}
+/* The diffuse and Oren-Nayar lobes over 16, 8 and one lane (bsdf_diffuse.cl, bsdf_oren_nayar.cl): lane j
+ * of item i reads 12 floats at in[12 (16 i + j)]: the reflectance (3), sigma, wo (3), wi (3), u (2), and
+ * writes 24 results as bits at out[((3 i + width) 16 + j) 24 + k] (width 0: 16 lanes, 1: 8, 2: one): per
+ * lobe eval (3), pdf, the sample's wi (3), pdf, weight (3) and validity (1 or 0). */
+#define PC_BSDF_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
+  inline void bsdf_lanes_write_##N(float in[12][16], uint first, __global uint* o) {                    \
+    F v[12];                                                                                              \
+    for (uint k = 0u; k < 12u; ++k) v[k] = LOAD(in[k] + first);                                           \
+    V3 c = lane3(v[0], v[1], v[2]), wo = lane3(v[4], v[5], v[6]), wi = lane3(v[7], v[8], v[9]);           \
+    V3 e0 = diffuse_eval_lanes(c, wi), e1 = oren_nayar_eval_lanes(c, v[3], wo, wi);                       \
+    V3 w0, w1, g0, g1;                                                                                    \
+    F p0, p1;                                                                                             \
+    F ok0 = select((F)(0.0f), (F)(1.0f), diffuse_sample_lanes(c, v[10], v[11], &w0, &p0, &g0));           \
+    F ok1 = select((F)(0.0f), (F)(1.0f), oren_nayar_sample_lanes(c, v[3], wo, v[10], v[11], &w1, &p1, &g1)); \
+    F r[24] = {e0.x, e0.y, e0.z, diffuse_pdf_lanes(wi), w0.x, w0.y, w0.z, p0, g0.x, g0.y, g0.z, ok0,     \
+               e1.x, e1.y, e1.z, oren_nayar_pdf_lanes(wi), w1.x, w1.y, w1.z, p1, g1.x, g1.y, g1.z, ok1};  \
+    for (uint k = 0u; k < 24u; ++k) {                                                                     \
+      float x[N];                                                                                         \
+      STORE(r[k], x);                                                                                     \
+      for (uint j = 0u; j < N; ++j) o[24u * j + k] = as_uint(x[j]);                                       \
+    }                                                                                                     \
+  }
+PC_BSDF_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
+PC_BSDF_LANES_TEST(lane3f8, float8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
+PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
+
+/* The kernel NAME_test of a lane test over float inputs: lane j of item i reads IN floats at
+ * in[IN (16 i + j)], and NAME_write_N (N = 16, 8, 1) writes OUT results per lane at 16 lanes, at 8 (two
+ * halves) and at one lane (each alone), item i's at out[3 i 16 OUT ..] in that order. */
+#define PC_FLOAT_LANES_TEST_KERNEL(name, IN, OUT)                                                         \
+  __kernel void name##_test(__global const float* in, __global uint* out) {                               \
+    uint i = get_global_id(0);                                                                            \
+    float v[IN][16];                                                                                      \
+    for (uint j = 0u; j < 16u; ++j)                                                                       \
+      for (uint k = 0u; k < IN; ++k) v[k][j] = in[IN * (16u * i + j) + k];                                \
+    __global uint* o = out + i * 48u * OUT;                                                               \
+    name##_write_16(v, 0u, o);                                                                            \
+    name##_write_8(v, 0u, o + 16u * OUT);                                                                 \
+    name##_write_8(v, 8u, o + 24u * OUT);                                                                 \
+    for (uint j = 0u; j < 16u; ++j) name##_write_1(v, j, o + 32u * OUT + OUT * j);                        \
+  }
+PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 14u, 10u)
+PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 12u, 24u)
+#undef PC_FLOAT_LANES_TEST_KERNEL
 
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys
  * pixel/sample/group[16 i .. 16 i + 15] and writes, per lane, its four numbers at 16 lanes, at 8 lanes

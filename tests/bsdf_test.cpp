@@ -6,6 +6,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -326,6 +327,51 @@ std::vector<pc_float4> run_fresnel_conductor(const std::vector<float>& cos_i, pc
 }
 
 }  // namespace
+
+// The diffuse and Oren-Nayar lobes, written once over lanes (issue 15), give the one-lane bits (the path
+// kernel's) at 16 and 8 lanes: both hemispheres for wo and wi, normal incidence (undefined azimuths),
+// wi.z equal to wo.z, sigma 0 and rough, edge sample numbers, side by side in one vector.
+TEST(BsdfLanes, DiffuseLobesGiveTheOneLaneBits) {
+  const size_t items = 32, lanes = 16 * items;
+  std::vector<float> in(12 * lanes);
+  uint32_t x = 9001;
+  auto uniform = [&] { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; };
+  auto direction = [&](float* d, bool upper) {
+    float z = upper ? uniform() : 2 * uniform() - 1, phi = 6.2831853f * uniform(), r = std::sqrt(std::max(0.0f, 1 - z * z));
+    d[0] = r * std::cos(phi);
+    d[1] = r * std::sin(phi);
+    d[2] = z;
+  };
+  const float edges[] = {0.0f, 0.5f, 0x1.fffffep-1f, 1e-7f};
+  for (size_t j = 0; j < lanes; ++j) {
+    float* v = &in[12 * j];
+    for (int k = 0; k < 3; ++k) v[k] = uniform();
+    v[3] = j % 4 == 0 ? 0.0f : uniform() * 1.2f;
+    direction(v + 4, j % 5 != 0);
+    direction(v + 7, j % 3 != 0);
+    if (j % 7 == 0) v[4] = 0, v[5] = 0, v[6] = 1;      // normal incidence: sin_o = 0
+    if (j % 11 == 0) v[7] = 0, v[8] = 0, v[9] = 1;     // sin_i = 0
+    if (j % 13 == 0) v[7] = -v[4], v[8] = v[5], v[9] = v[6];  // wi.z == wo.z
+    v[10] = j % 6 == 0 ? edges[j / 6 % 4] : uniform();
+    v[11] = j % 9 == 0 ? edges[j / 9 % 4] : uniform();
+  }
+  std::vector<uint32_t> bits = run_float_lanes_test("bsdf_lanes_test", in, items, 384);
+  LaneComparison lc = compare_lanes(bits, items, 384, [](float f) { return bool(std::isfinite(f)); });
+  EXPECT_EQ(lc.differing, 0u);
+  EXPECT_GT(lc.valid, items * 384 * 9 / 10);  // the invalid samples' weights may be anything
+  // The one-lane results are the Material functions' (bsdf_diffuse.cl's one-lane instances): spot-check
+  // that the lobes did something: some eval is positive, some zero (wi below).
+  size_t positive = 0, zero = 0;
+  for (size_t i = 0; i < items; ++i)
+    for (size_t j = 0; j < 16; ++j) {
+      float e;
+      std::memcpy(&e, &bits[(3 * i + 2) * 384 + 24 * j + 12], sizeof e);
+      positive += e > 0;
+      zero += e == 0;
+    }
+  EXPECT_GT(positive, lanes / 3);
+  EXPECT_GT(zero, lanes / 10);
+}
 
 TEST(BsdfExact, FresnelDielectricMatchesSnellAndTheFresnelEquations) {
   const double ior = 1.5, critical = std::asin(1 / ior) / kDeg;  // 41.81 degrees

@@ -245,13 +245,7 @@ TEST(CameraLanes, FrameOffsetAndMisWeightGiveTheOneLaneBits) {
     v[12] = j % 5 == 0 ? pdfs[j / 5 % 4] : uniform() * 4;
     v[13] = j % 3 == 0 ? pdfs[j / 3 % 4] : uniform() * 4;
   }
-  ClContext& cl = test_device();
-  ClBuffer bin = upload(cl, in), out(cl, CL_MEM_WRITE_ONLY, items * 3 * 160 * sizeof(uint32_t));
-  ClKernel k(sampling_test_program().kernel("math_lanes_test"));
-  k.arg(0, bin.mem);
-  k.arg(1, out.mem);
-  run_kernel(cl, k.k, items);
-  std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, items * 3 * 160);
+  std::vector<uint32_t> bits = run_float_lanes_test("math_lanes_test", in, items, 160);
   LaneComparison lc = compare_lanes(bits, items, 160, [](float f) { return bool(std::isfinite(f)); });
   EXPECT_EQ(lc.differing, 0u);
   EXPECT_EQ(lc.valid, items * 160);

@@ -114,6 +114,16 @@ LaneComparison compare_lanes(const std::vector<uint32_t>& bits, size_t items, si
   return c;
 }
 
+std::vector<uint32_t> run_float_lanes_test(const char* kernel, const std::vector<float>& in, size_t items, size_t stride) {
+  ClContext& cl = test_device();
+  ClBuffer bin = upload(cl, in), out(cl, CL_MEM_WRITE_ONLY, items * 3 * stride * sizeof(uint32_t));
+  ClKernel k(sampling_test_program().kernel(kernel));
+  k.arg(0, bin.mem);
+  k.arg(1, out.mem);
+  run_kernel(cl, k.k, items);
+  return read_buffer<uint32_t>(cl, out, items * 3 * stride);
+}
+
 MeanStd mean_and_error(const std::vector<double>& values) {
   MeanStd r;
   double n = double(values.size());

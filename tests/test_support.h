@@ -70,6 +70,10 @@ struct LaneComparison {
   size_t differing = 0, valid = 0;
 };
 LaneComparison compare_lanes(const std::vector<uint32_t>& bits, size_t items, size_t stride, bool (*valid)(float));
+// Runs kernels/tests_sampling.cl's lane test `kernel` (PC_FLOAT_LANES_TEST_KERNEL) over `items` work items
+// of 16 lanes reading `in`, with `stride` results per item and width (16 x its results per lane); returns
+// the bits, as compare_lanes takes them.
+std::vector<uint32_t> run_float_lanes_test(const char* kernel, const std::vector<float>& in, size_t items, size_t stride);
 
 // Mean and standard error of the mean of values.
 struct MeanStd {
