@@ -151,8 +151,9 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
       RenderResult r = render(devices, scene, split);
       same(r, "tile " + std::to_string(tile));
       EXPECT_EQ(r.determinism, "bitwise");
-      if (tile == 1)
+      if (tile == 1) {
         for (const DeviceReport& d : r.devices) EXPECT_GT(d.units, 0u) << d.name;
+      }
     }
     RenderOptions lagging = opt;
     lagging.tile_pixels = 64;
@@ -160,11 +161,12 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
     lagging.faults.resize(1);
     lagging.faults[0].delay_seconds = 0.01;
     same(render(devices, scene, lagging), "a lagging device");
-    RenderOptions failing = opt;
+    RenderOptions failing = opt;  // 144 units of one sample: each device takes one at the start
     failing.tile_pixels = 16;
     failing.max_unit_pixels = 160;
+    failing.pass_spp = 1;
     failing.faults.resize(2);
-    failing.faults[1].fail_after_units = 3;
+    failing.faults[1].fail_after_units = 1;
     RenderResult r = render(devices, scene, failing);
     same(r, "a failing device");
     EXPECT_EQ(r.devices[1].failures, 1u);
