@@ -11,7 +11,7 @@
 
 /* Written once over lanes (V3 lane3f/lane3f8/lane3f16, F, I their float and int types; issue 15): c is the
  * reflectance per lane, branches are per-lane selects, and the Material functions below are the one-lane
- * instances, so every lane gets their bits (tests/bsdf_test.cpp, DiffuseLobesGiveTheOneLaneBits). */
+ * instances, so every lane gets their bits (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_DIFFUSE_LANES(V3, F, I)                                                                        \
   inline PC_OVL V3 diffuse_eval_lanes(V3 c, V3 wi) {                                                      \
     I above = wi.z > 0.0f;                                                                                \

@@ -4,7 +4,7 @@
 #define PATHCL_BSDF_OREN_NAYAR_CL
 
 /* Written once over lanes, as bsdf_diffuse.cl's lobes (sigma per lane); the Material functions below are
- * the one-lane instances (tests/bsdf_test.cpp, DiffuseLobesGiveTheOneLaneBits). */
+ * the one-lane instances (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_OREN_NAYAR_LANES(V3, F, I)                                                                     \
   inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {                                   \
     F s2 = sigma * sigma;                                                                                 \

@@ -12,7 +12,6 @@
 inline float error_gamma(int n) { return (n * PC_MACHINE_EPSILON) / (1.0f - n * PC_MACHINE_EPSILON); }
 
 inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
-inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* Written once over lanes (V3 lane3f/lane3f8/lane3f16 of exact_math.cl, F, I their float and int types,
  * for issue 15's lane-generic kernel), branches as per-lane selects; the float3 functions below are the
@@ -43,6 +42,7 @@ inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722
     oz = select(oz, -oz, back);                                                                           \
     return lane3(pc_offset_component_(p.x, ox), pc_offset_component_(p.y, oy), pc_offset_component_(p.z, oz)); \
   }                                                                                                       \
+  inline PC_OVL F luminance_lanes(V3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }          \
   inline PC_OVL F power_heuristic(F pdf_a, F pdf_b) {                                                     \
     F a = pdf_a * pdf_a, b = pdf_b * pdf_b;                                                               \
     /* Where the squares overflowed (a light sampled from 1e18 away has a pdf of 1e36: inf / inf was      \
@@ -58,6 +58,8 @@ PC_MATH_LANES(lane3f16, float16, int16)
 
 inline lane3f lane3_of(float3 v) { return lane3(v.x, v.y, v.z); }
 inline float3 float3_of(lane3f v) { return (float3)(v.x, v.y, v.z); }
+
+inline float luminance(float3 c) { return luminance_lanes(lane3_of(c)); }
 
 inline PC_OVL void make_frame(float3 n, float3* t, float3* b) {
   lane3f lt, lb;

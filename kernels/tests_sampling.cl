@@ -274,26 +274,35 @@ PC_MATH_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
 PC_MATH_LANES_TEST(lane3f8, float8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
 PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
 
-/* The diffuse and Oren-Nayar lobes over 16, 8 and one lane (bsdf_diffuse.cl, bsdf_oren_nayar.cl): lane j
- * of item i reads 12 floats at in[12 (16 i + j)]: the reflectance (3), sigma, wo (3), wi (3), u (2), and
- * writes 24 results as bits at out[((3 i + width) 16 + j) 24 + k] (width 0: 16 lanes, 1: 8, 2: one): per
- * lobe eval (3), pdf, the sample's wi (3), pdf, weight (3) and validity (1 or 0). */
+/* The diffuse, Oren-Nayar and Phong lobes over 16, 8 and one lane (bsdf_diffuse.cl, bsdf_oren_nayar.cl,
+ * bsdf_phong.cl): lane j of item i reads 17 floats at in[17 (16 i + j)]: the colour (3), sigma, wo (3), wi
+ * (3), u (3), the specular colour (3) and exponent, and writes 36 results as bits at
+ * out[((3 i + width) 16 + j) 36 + k] (width 0: 16 lanes, 1: 8, 2: one): per lobe eval (3), pdf, the
+ * sample's wi (3), pdf, weight (3) and validity (1 or 0). */
 #define PC_BSDF_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
-  inline void bsdf_lanes_write_##N(float in[12][16], uint first, __global uint* o) {                    \
-    F v[12];                                                                                              \
-    for (uint k = 0u; k < 12u; ++k) v[k] = LOAD(in[k] + first);                                           \
+  inline void bsdf_lanes_write_##N(float in[17][16], uint first, __global uint* o) {                    \
+    F v[17];                                                                                              \
+    for (uint k = 0u; k < 17u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 c = lane3(v[0], v[1], v[2]), wo = lane3(v[4], v[5], v[6]), wi = lane3(v[7], v[8], v[9]);           \
-    V3 e0 = diffuse_eval_lanes(c, wi), e1 = oren_nayar_eval_lanes(c, v[3], wo, wi);                       \
-    V3 w0, w1, g0, g1;                                                                                    \
-    F p0, p1;                                                                                             \
-    F ok0 = select((F)(0.0f), (F)(1.0f), diffuse_sample_lanes(c, v[10], v[11], &w0, &p0, &g0));           \
-    F ok1 = select((F)(0.0f), (F)(1.0f), oren_nayar_sample_lanes(c, v[3], wo, v[10], v[11], &w1, &p1, &g1)); \
-    F r[24] = {e0.x, e0.y, e0.z, diffuse_pdf_lanes(wi), w0.x, w0.y, w0.z, p0, g0.x, g0.y, g0.z, ok0,     \
-               e1.x, e1.y, e1.z, oren_nayar_pdf_lanes(wi), w1.x, w1.y, w1.z, p1, g1.x, g1.y, g1.z, ok1};  \
-    for (uint k = 0u; k < 24u; ++k) {                                                                     \
+    V3 sc = lane3(v[13], v[14], v[15]);                                                                   \
+    F n = v[16];                                                                                          \
+    V3 e[3] = {diffuse_eval_lanes(c, wi), oren_nayar_eval_lanes(c, v[3], wo, wi), phong_eval_lanes(c, sc, n, wo, wi)}; \
+    F p[3] = {diffuse_pdf_lanes(wi), oren_nayar_pdf_lanes(wi), phong_pdf_lanes(c, sc, n, wo, wi)};        \
+    V3 w[3], g[3];                                                                                        \
+    F q[3], ok[3];                                                                                        \
+    ok[0] = select((F)(0.0f), (F)(1.0f), diffuse_sample_lanes(c, v[10], v[11], &w[0], &q[0], &g[0]));     \
+    ok[1] = select((F)(0.0f), (F)(1.0f), oren_nayar_sample_lanes(c, v[3], wo, v[10], v[11], &w[1], &q[1], &g[1])); \
+    ok[2] = select((F)(0.0f), (F)(1.0f),                                                                  \
+                   phong_sample_lanes(c, sc, n, wo, v[10], v[11], v[12], &w[2], &q[2], &g[2]));           \
+    F r[36];                                                                                              \
+    for (uint l = 0u; l < 3u; ++l) {                                                                      \
+      F lobe[12] = {e[l].x, e[l].y, e[l].z, p[l], w[l].x, w[l].y, w[l].z, q[l], g[l].x, g[l].y, g[l].z, ok[l]}; \
+      for (uint k = 0u; k < 12u; ++k) r[12u * l + k] = lobe[k];                                           \
+    }                                                                                                     \
+    for (uint k = 0u; k < 36u; ++k) {                                                                     \
       float x[N];                                                                                         \
       STORE(r[k], x);                                                                                     \
-      for (uint j = 0u; j < N; ++j) o[24u * j + k] = as_uint(x[j]);                                       \
+      for (uint j = 0u; j < N; ++j) o[36u * j + k] = as_uint(x[j]);                                       \
     }                                                                                                     \
   }
 PC_BSDF_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
@@ -316,7 +325,7 @@ PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
     for (uint j = 0u; j < 16u; ++j) name##_write_1(v, j, o + 32u * OUT + OUT * j);                        \
   }
 PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 14u, 10u)
-PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 12u, 24u)
+PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 17u, 36u)
 #undef PC_FLOAT_LANES_TEST_KERNEL
 
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys

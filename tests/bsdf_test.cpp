@@ -328,12 +328,13 @@ std::vector<pc_float4> run_fresnel_conductor(const std::vector<float>& cos_i, pc
 
 }  // namespace
 
-// The diffuse and Oren-Nayar lobes, written once over lanes (issue 15), give the one-lane bits (the path
-// kernel's) at 16 and 8 lanes: both hemispheres for wo and wi, normal incidence (undefined azimuths),
-// wi.z equal to wo.z, sigma 0 and rough, edge sample numbers, side by side in one vector.
-TEST(BsdfLanes, DiffuseLobesGiveTheOneLaneBits) {
-  const size_t items = 32, lanes = 16 * items;
-  std::vector<float> in(12 * lanes);
+// The diffuse, Oren-Nayar and Phong lobes, written once over lanes (issue 15), give the one-lane bits (the
+// path kernel's) at 16 and 8 lanes: both hemispheres for wo and wi, normal incidence (undefined azimuths),
+// wi.z equal to wo.z, sigma 0 and rough, Phong exponents from 0.5 to 1000 and either lobe chosen, edge
+// sample numbers, side by side in one vector.
+TEST(BsdfLanes, LobesGiveTheOneLaneBits) {
+  const size_t items = 32, lanes = 16 * items, results = 36;
+  std::vector<float> in(17 * lanes);
   uint32_t x = 9001;
   auto uniform = [&] { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; };
   auto direction = [&](float* d, bool upper) {
@@ -344,33 +345,46 @@ TEST(BsdfLanes, DiffuseLobesGiveTheOneLaneBits) {
   };
   const float edges[] = {0.0f, 0.5f, 0x1.fffffep-1f, 1e-7f};
   for (size_t j = 0; j < lanes; ++j) {
-    float* v = &in[12 * j];
-    for (int k = 0; k < 3; ++k) v[k] = uniform();
+    float* v = &in[17 * j];
+    for (int k = 0; k < 3; ++k) v[k] = uniform() * 0.6f;
     v[3] = j % 4 == 0 ? 0.0f : uniform() * 1.2f;
     direction(v + 4, j % 5 != 0);
     direction(v + 7, j % 3 != 0);
     if (j % 7 == 0) v[4] = 0, v[5] = 0, v[6] = 1;      // normal incidence: sin_o = 0
     if (j % 11 == 0) v[7] = 0, v[8] = 0, v[9] = 1;     // sin_i = 0
     if (j % 13 == 0) v[7] = -v[4], v[8] = v[5], v[9] = v[6];  // wi.z == wo.z
-    v[10] = j % 6 == 0 ? edges[j / 6 % 4] : uniform();
-    v[11] = j % 9 == 0 ? edges[j / 9 % 4] : uniform();
+    if (j % 17 == 0) v[7] = -v[4], v[8] = -v[5], v[9] = v[6];  // wi the mirror direction of wo
+    for (int k = 10; k < 13; ++k) v[k] = (j + k) % 6 == 0 ? edges[(j / 6 + k) % 4] : uniform();
+    for (int k = 13; k < 16; ++k) v[k] = j % 8 == 0 ? 0.0f : uniform() * 0.4f;
+    const float exponents[] = {0.5f, 1.0f, 20.0f, 1000.0f};
+    v[16] = j % 3 == 0 ? exponents[j / 3 % 4] : 1 + uniform() * 200;
   }
-  std::vector<uint32_t> bits = run_float_lanes_test("bsdf_lanes_test", in, items, 384);
-  LaneComparison lc = compare_lanes(bits, items, 384, [](float f) { return bool(std::isfinite(f)); });
+  std::vector<uint32_t> bits = run_float_lanes_test("bsdf_lanes_test", in, items, 16 * results);
+  LaneComparison lc = compare_lanes(bits, items, 16 * results, [](float f) { return bool(std::isfinite(f)); });
   EXPECT_EQ(lc.differing, 0u);
-  EXPECT_GT(lc.valid, items * 384 * 9 / 10);  // the invalid samples' weights may be anything
-  // The one-lane results are the Material functions' (bsdf_diffuse.cl's one-lane instances): spot-check
-  // that the lobes did something: some eval is positive, some zero (wi below).
-  size_t positive = 0, zero = 0;
+  EXPECT_GT(lc.valid, items * 16 * results * 9 / 10);  // the invalid samples' weights may be anything
+  // The lobes did something at one lane: per lobe some eval is positive and some zero (wi below), and
+  // Phong chose each of its two lobes (its sampled wi off and on the cosine lobe's).
+  for (size_t lobe = 0; lobe < 3; ++lobe) {
+    size_t positive = 0, zero = 0;
+    for (size_t i = 0; i < items; ++i)
+      for (size_t j = 0; j < 16; ++j) {
+        float e;
+        std::memcpy(&e, &bits[(3 * i + 2) * 16 * results + results * j + 12 * lobe], sizeof e);
+        positive += e > 0;
+        zero += e == 0;
+      }
+    EXPECT_GT(positive, lanes / 3) << "lobe " << lobe;
+    EXPECT_GT(zero, lanes / 10) << "lobe " << lobe;
+  }
+  size_t specular_chosen = 0;
   for (size_t i = 0; i < items; ++i)
     for (size_t j = 0; j < 16; ++j) {
-      float e;
-      std::memcpy(&e, &bits[(3 * i + 2) * 384 + 24 * j + 12], sizeof e);
-      positive += e > 0;
-      zero += e == 0;
+      const uint32_t* one = &bits[(3 * i + 2) * 16 * results + results * j];
+      specular_chosen += one[4] != one[28];  // diffuse's cosine-lobe wi against Phong's
     }
-  EXPECT_GT(positive, lanes / 3);
-  EXPECT_GT(zero, lanes / 10);
+  EXPECT_GT(specular_chosen, lanes / 20);
+  EXPECT_LT(specular_chosen, lanes);
 }
 
 TEST(BsdfExact, FresnelDielectricMatchesSnellAndTheFresnelEquations) {
