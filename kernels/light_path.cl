@@ -148,10 +148,10 @@ inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, floa
  * (bdpt.cl), which only the t = 1 terms contain, and divides t = 1's own sum. Why less than one: the other
  * strategies' samples are stratified per pixel by the sampler, while the splats reaching a pixel come from
  * unstratified light paths, a noise their densities do not show (on a diffuse floor lit by a small lamp,
- * light tracing's density is of the order of next-event estimation's, so it gets a like share). Measured (docs/benchmarks.md,
- * relMSE at 8 spp, sobol): 0.25 best of 1, 0.5, 0.25, 0.1, 0.03 on the Cornell box (25 % below 1), as good
- * as 1 on glass-metal and the lamp turned up, better on the terrain. Caustics from delta lights keep weight
- * 1: no other strategy makes them. */
+ * light tracing's density is of the order of next-event estimation's, so it gets a like share). Measured
+ * (docs/benchmarks.md, relMSE at 8 spp, sobol): 0.25 best of 1, 0.5, 0.25, 0.1, 0.03 on the Cornell box
+ * (25 % below 1), as good as 1 on glass-metal and the lamp turned up, better on the terrain. Caustics from
+ * delta lights keep weight 1: no other strategy makes them. */
 #define PC_BDPT_LIGHT_TRACING_COUNT 0.25f
 
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the

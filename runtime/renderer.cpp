@@ -223,8 +223,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.platform = info.platform_name;
     report.sub_device = info.sub_device;
     report.compute_units = info.compute_units;
-    double target = info.is_gpu ? kGpuUnitSeconds : kCpuUnitSeconds;
-    if (uses_splat_film(options.integrator) && !info.is_gpu) target = kSplatUnitSeconds;
+    double target = info.is_gpu ? kGpuUnitSeconds : uses_splat_film(options.integrator) ? kSplatUnitSeconds : kCpuUnitSeconds;
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
