@@ -14,12 +14,13 @@ typedef struct {
   bool delta;    /* wi came from a delta lobe: no light sampling can reach it, no MIS */
 } BsdfSample;
 
-/* A non-delta lobe's BsdfSample from its one-lane *_sample_lanes results (bsdf_diffuse.cl). */
-inline bool lobe_sample(int valid, lane3f wi, float pdf, lane3f weight, BsdfSample* s) {
+/* A lobe's BsdfSample from its one-lane *_sample_lanes results (bsdf_diffuse.cl); delta: wi came from a
+ * delta lobe. */
+inline bool lobe_sample(int valid, lane3f wi, float pdf, lane3f weight, int delta, BsdfSample* s) {
   s->wi = float3_of(wi);
   s->pdf = pdf;
   s->weight = float3_of(weight);
-  s->delta = false;
+  s->delta = delta;
   return valid;
 }
 

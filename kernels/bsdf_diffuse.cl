@@ -44,7 +44,7 @@ inline bool diffuse_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   lane3f wi, weight;
   float pdf;
   int valid = diffuse_sample_lanes(lane3_of(m.color.xyz), u.x, u.y, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, s);
+  return lobe_sample(valid, wi, pdf, weight, 0, s);
 }
 
 #endif

@@ -2,15 +2,27 @@
 #ifndef PATHCL_BSDF_MIRROR_CL
 #define PATHCL_BSDF_MIRROR_CL
 
+/* Written once over lanes, as bsdf_diffuse.cl's lobes; the mask: where the sample is valid. */
+#define PC_MIRROR_LANES(V3, F, I)                                                                         \
+  inline PC_OVL I mirror_sample_lanes(V3 c, V3 wo, V3* wi, F* pdf, V3* weight) {                          \
+    *wi = reflect_local(wo);                                                                              \
+    *weight = c;                                                                                          \
+    *pdf = 1.0f;                                                                                          \
+    return wo.z > 0.0f;                                                                                   \
+  }
+PC_MIRROR_LANES(lane3f, float, int)
+PC_MIRROR_LANES(lane3f8, float8, int8)
+PC_MIRROR_LANES(lane3f16, float16, int16)
+#undef PC_MIRROR_LANES
+
 inline float3 mirror_eval(Material m, float3 wo, float3 wi) { return (float3)(0.0f); }
 inline float mirror_pdf(Material m, float3 wo, float3 wi) { return 0.0f; }
 
 inline bool mirror_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  s->wi = reflect_local(wo);
-  s->weight = m.color.xyz;
-  s->pdf = 1.0f;
-  s->delta = true;
-  return wo.z > 0.0f;
+  lane3f wi, weight;
+  float pdf;
+  int valid = mirror_sample_lanes(lane3_of(m.color.xyz), lane3_of(wo), &wi, &pdf, &weight);
+  return lobe_sample(valid, wi, pdf, weight, 1, s);
 }
 
 #endif

@@ -50,7 +50,7 @@ inline bool oren_nayar_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   lane3f wi, weight;
   float pdf;
   int valid = oren_nayar_sample_lanes(lane3_of(m.color.xyz), m.sigma, lane3_of(wo), u.x, u.y, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, s);
+  return lobe_sample(valid, wi, pdf, weight, 0, s);
 }
 
 #endif

@@ -74,7 +74,7 @@ inline bool phong_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   float pdf;
   int valid = phong_sample_lanes(lane3_of(m.color.xyz), lane3_of(m.specular.xyz), m.exponent, lane3_of(wo), u.x, u.y,
                                  u.z, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, s);
+  return lobe_sample(valid, wi, pdf, weight, 0, s);
 }
 
 #endif

@@ -6,51 +6,75 @@
 #ifndef PATHCL_BSDF_PLASTIC_CL
 #define PATHCL_BSDF_PLASTIC_CL
 
-inline float plastic_coat_probability(Material m, float3 wo) {
-  float f = fresnel_dielectric(wo.z, m.ior);
-  float base = (1.0f - f) * max_component(m.color.xyz);
-  return f + base > 0.0f ? f / (f + base) : 1.0f;
-}
-
-inline float3 plastic_base_eval(Material m, float3 wo, float3 wi) {
-  return m.color.xyz * (PC_INV_PI * (1.0f - fresnel_dielectric(wo.z, m.ior)) * (1.0f - fresnel_dielectric(wi.z, m.ior)));
-}
-
-/* The non-delta part: the base, plus the rough coat. */
-inline float3 plastic_eval(Material m, float3 wo, float3 wi) {
-  if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-  float3 f = plastic_base_eval(m, wo, wi);
-  if (m.alpha > 0.0f) {
-    float3 h = pc_normalize(wo + wi);
-    f += fresnel_dielectric(pc_dot(wo, h), m.ior) * ggx_d(h, m.alpha) * ggx_g2(wo, wi, m.alpha) / (4.0f * wo.z * wi.z);
+/* Written once over lanes, as bsdf_diffuse.cl's lobes (colour, ior and alpha per lane; smooth or rough
+ * coat and the lobe choice per-lane selects); the Material functions below are the one-lane instances
+ * (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+#define PC_PLASTIC_LANES(V3, F, I)                                                                        \
+  inline PC_OVL F plastic_coat_probability_lanes(V3 c, F ior, V3 wo) {                                    \
+    F f = fresnel_dielectric(wo.z, ior);                                                                  \
+    F base = (1.0f - f) * fmax(c.x, fmax(c.y, c.z));                                                      \
+    return select((F)(1.0f), f / (f + base), f + base > 0.0f);                                            \
+  }                                                                                                       \
+  /* The non-delta part: the base, plus the rough coat. */                                               \
+  inline PC_OVL V3 plastic_eval_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {                               \
+    F base = PC_INV_PI * (1.0f - fresnel_dielectric(wo.z, ior)) * (1.0f - fresnel_dielectric(wi.z, ior)); \
+    V3 h = pc_normalize(lane3(wo.x + wi.x, wo.y + wi.y, wo.z + wi.z));                                    \
+    F coat = fresnel_dielectric(pc_dot(wo, h), ior) * ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0f * wo.z * wi.z); \
+    I rough = alpha > 0.0f, below = (wi.z <= 0.0f) | (wo.z <= 0.0f);                                      \
+    F fx = c.x * base, fy = c.y * base, fz = c.z * base;                                                  \
+    fx = select(fx, fx + coat, rough);                                                                    \
+    fy = select(fy, fy + coat, rough);                                                                    \
+    fz = select(fz, fz + coat, rough);                                                                    \
+    return lane3(select(fx, (F)(0.0f), below), select(fy, (F)(0.0f), below), select(fz, (F)(0.0f), below)); \
+  }                                                                                                       \
+  inline PC_OVL F plastic_pdf_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {                                 \
+    F pc = plastic_coat_probability_lanes(c, ior, wo);                                                    \
+    F pdf = (1.0f - pc) * wi.z * PC_INV_PI;                                                               \
+    pdf = select(pdf, pdf + pc * ggx_reflection_pdf(wo, wi, alpha), alpha > 0.0f);                        \
+    return select(pdf, (F)(0.0f), (wi.z <= 0.0f) | (wo.z <= 0.0f));                                       \
+  }                                                                                                       \
+  /* u2 chooses the lobe: the coat (a delta where alpha = 0: *delta set) or the base. The mask: where the \
+   * sample is valid. */                                                                                  \
+  inline PC_OVL I plastic_sample_lanes(V3 c, F ior, F alpha, V3 wo, F u0, F u1, F u2, V3* wi, F* pdf,     \
+                                       V3* weight, I* delta) {                                            \
+    F pc = plastic_coat_probability_lanes(c, ior, wo);                                                    \
+    I coat = u2 < pc;                                                                                     \
+    *delta = coat & (alpha == 0.0f);                                                                        \
+    V3 lobe = reflect_about(wo, ggx_sample_visible(wo, alpha, u0, u1));                                   \
+    F x, y, z;                                                                                            \
+    sample_cosine_hemisphere_lanes(u0, u1, &x, &y, &z);                                                   \
+    V3 r = lane3(select(x, lobe.x, coat), select(y, lobe.y, coat), select(z, lobe.z, coat));              \
+    F p = plastic_pdf_lanes(c, ior, alpha, wo, r);                                                        \
+    V3 f = plastic_eval_lanes(c, ior, alpha, wo, r);                                                      \
+    F cos_over_pdf = r.z / p;                                                                             \
+    V3 m = reflect_local(wo);                                                                             \
+    F coat_weight = fresnel_dielectric(wo.z, ior) / pc;                                                   \
+    *wi = lane3(select(r.x, m.x, *delta), select(r.y, m.y, *delta), select(r.z, m.z, *delta));            \
+    *pdf = select(p, pc, *delta);                                                                         \
+    *weight = lane3(select(f.x * cos_over_pdf, coat_weight, *delta), select(f.y * cos_over_pdf, coat_weight, *delta), \
+                    select(f.z * cos_over_pdf, coat_weight, *delta));                                     \
+    return *delta | ((r.z > 0.0f) & (p > 0.0f));                                                          \
   }
-  return f;
+PC_PLASTIC_LANES(lane3f, float, int)
+PC_PLASTIC_LANES(lane3f8, float8, int8)
+PC_PLASTIC_LANES(lane3f16, float16, int16)
+#undef PC_PLASTIC_LANES
+
+inline float3 plastic_eval(Material m, float3 wo, float3 wi) {
+  return float3_of(plastic_eval_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), lane3_of(wi)));
 }
 
 inline float plastic_pdf(Material m, float3 wo, float3 wi) {
-  if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
-  float pc = plastic_coat_probability(m, wo);
-  float pdf = (1.0f - pc) * wi.z * PC_INV_PI;
-  if (m.alpha > 0.0f) pdf += pc * ggx_reflection_pdf(wo, wi, m.alpha);
-  return pdf;
+  return plastic_pdf_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), lane3_of(wi));
 }
 
 inline bool plastic_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  float pc = plastic_coat_probability(m, wo);
-  bool coat = u.z < pc;
-  s->delta = coat && m.alpha == 0.0f;
-  if (s->delta) {
-    s->wi = reflect_local(wo);
-    s->pdf = pc;
-    s->weight = (float3)(fresnel_dielectric(wo.z, m.ior) / pc);
-    return true;
-  }
-  s->wi = coat ? reflect_about(wo, ggx_sample_visible(wo, m.alpha, u.xy)) : sample_cosine_hemisphere(u.xy);
-  if (s->wi.z <= 0.0f) return false;
-  s->pdf = plastic_pdf(m, wo, s->wi);
-  if (!(s->pdf > 0.0f)) return false;
-  s->weight = plastic_eval(m, wo, s->wi) * (s->wi.z / s->pdf);
-  return true;
+  lane3f wi, weight;
+  float pdf;
+  int delta;
+  int valid = plastic_sample_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), u.x, u.y, u.z, &wi, &pdf,
+                                   &weight, &delta);
+  return lobe_sample(valid, wi, pdf, weight, delta, s);
 }
 
 #endif

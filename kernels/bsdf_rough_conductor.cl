@@ -4,24 +4,48 @@
 #ifndef PATHCL_BSDF_ROUGH_CONDUCTOR_CL
 #define PATHCL_BSDF_ROUGH_CONDUCTOR_CL
 
+/* Written once over lanes, as bsdf_diffuse.cl's lobes (eta, k and alpha per lane); the Material functions
+ * below are the one-lane instances (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+#define PC_ROUGH_CONDUCTOR_LANES(V3, F, I)                                                                \
+  inline PC_OVL V3 rough_conductor_eval_lanes(V3 eta, V3 k, F alpha, V3 wo, V3 wi) {                      \
+    V3 h = pc_normalize(lane3(wo.x + wi.x, wo.y + wi.y, wo.z + wi.z));                                    \
+    V3 f = fresnel_conductor(pc_dot(wo, h), eta, k);                                                      \
+    F s = ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0f * wo.z * wi.z);                                 \
+    I below = (wi.z <= 0.0f) | (wo.z <= 0.0f);                                                            \
+    return lane3(select(f.x * s, (F)(0.0f), below), select(f.y * s, (F)(0.0f), below),                    \
+                 select(f.z * s, (F)(0.0f), below));                                                      \
+  }                                                                                                       \
+  inline PC_OVL F rough_conductor_pdf_lanes(F alpha, V3 wo, V3 wi) { return ggx_reflection_pdf(wo, wi, alpha); } \
+  /* The mask: where the sample is valid (weight is then f cos / pdf). */                                \
+  inline PC_OVL I rough_conductor_sample_lanes(V3 eta, V3 k, F alpha, V3 wo, F u0, F u1, V3* wi, F* pdf,  \
+                                               V3* weight) {                                              \
+    *wi = reflect_about(wo, ggx_sample_visible(wo, alpha, u0, u1));                                       \
+    *pdf = rough_conductor_pdf_lanes(alpha, wo, *wi);                                                     \
+    V3 f = rough_conductor_eval_lanes(eta, k, alpha, wo, *wi);                                            \
+    F cos_over_pdf = wi->z / *pdf;                                                                        \
+    *weight = lane3(f.x * cos_over_pdf, f.y * cos_over_pdf, f.z * cos_over_pdf);                          \
+    return (wi->z > 0.0f) & (*pdf > 0.0f);                                                                \
+  }
+PC_ROUGH_CONDUCTOR_LANES(lane3f, float, int)
+PC_ROUGH_CONDUCTOR_LANES(lane3f8, float8, int8)
+PC_ROUGH_CONDUCTOR_LANES(lane3f16, float16, int16)
+#undef PC_ROUGH_CONDUCTOR_LANES
+
 inline float3 rough_conductor_eval(Material m, float3 wo, float3 wi) {
-  if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-  float3 h = pc_normalize(wo + wi);
-  float3 f = fresnel_conductor(pc_dot(wo, h), m.specular.xyz, m.k.xyz);
-  return f * (ggx_d(h, m.alpha) * ggx_g2(wo, wi, m.alpha) / (4.0f * wo.z * wi.z));
+  return float3_of(rough_conductor_eval_lanes(lane3_of(m.specular.xyz), lane3_of(m.k.xyz), m.alpha, lane3_of(wo),
+                                              lane3_of(wi)));
 }
 
-inline float rough_conductor_pdf(Material m, float3 wo, float3 wi) { return ggx_reflection_pdf(wo, wi, m.alpha); }
+inline float rough_conductor_pdf(Material m, float3 wo, float3 wi) {
+  return rough_conductor_pdf_lanes(m.alpha, lane3_of(wo), lane3_of(wi));
+}
 
 inline bool rough_conductor_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  float3 h = ggx_sample_visible(wo, m.alpha, u.xy);
-  s->wi = reflect_about(wo, h);
-  s->delta = false;
-  if (s->wi.z <= 0.0f) return false;
-  s->pdf = rough_conductor_pdf(m, wo, s->wi);
-  if (!(s->pdf > 0.0f)) return false;
-  s->weight = rough_conductor_eval(m, wo, s->wi) * (s->wi.z / s->pdf);
-  return true;
+  lane3f wi, weight;
+  float pdf;
+  int valid = rough_conductor_sample_lanes(lane3_of(m.specular.xyz), lane3_of(m.k.xyz), m.alpha, lane3_of(wo), u.x,
+                                           u.y, &wi, &pdf, &weight);
+  return lobe_sample(valid, wi, pdf, weight, 0, s);
 }
 
 #endif

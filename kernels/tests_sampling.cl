@@ -97,7 +97,7 @@ __kernel void fresnel_dielectric_test(__global const float2* in, __global float*
 /* fresnel_conductor per cos_i, for one (eta, k). */
 __kernel void fresnel_conductor_test(__global const float* cos_i, float4 eta, float4 k, __global float4* out) {
   uint i = get_global_id(0);
-  out[i] = (float4)(fresnel_conductor(cos_i[i], eta.xyz, k.xyz), 0.0f);
+  out[i] = (float4)(float3_of(fresnel_conductor(cos_i[i], lane3_of(eta.xyz), lane3_of(k.xyz))), 0.0f);
 }
 
 /* ---- Lights (the scene arguments as the render kernel takes them, PC_SCENE_PARAMS of scene.cl) ---- */
@@ -227,6 +227,13 @@ __kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
 #define PC_STORE_LANES_1(x, p) (p)[0] = (x)
 #define PC_STORE_LANES_8(x, p) vstore8(x, 0, p)
 #define PC_STORE_LANES_16(x, p) vstore16(x, 0, p)
+/* Results r[0 .. COUNT) of N lanes written as bits, lane j's at o[COUNT j ..]. */
+#define PC_WRITE_LANE_RESULTS(r, COUNT, N, STORE, o)                                                      \
+  for (uint k = 0u; k < COUNT; ++k) {                                                                     \
+    float x[N];                                                                                           \
+    STORE(r[k], x);                                                                                       \
+    for (uint j = 0u; j < N; ++j) o[COUNT * j + k] = as_uint(x[j]);                                       \
+  }
 PC_CAMERA_LANES_TEST(float, uint, lane3f, 1, , PC_STORE_LANES_1)
 PC_CAMERA_LANES_TEST(float8, uint8, lane3f8, 8, , PC_STORE_LANES_8)
 PC_CAMERA_LANES_TEST(float16, uint16, lane3f16, 16, , PC_STORE_LANES_16)
@@ -261,11 +268,7 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
     V3 po = offset_ray_origin(lane3(v[6], v[7], v[8]), lane3(v[3], v[4], v[5]), lane3(v[0], v[1], v[2]),   \
                               lane3(v[9], v[10], v[11]));                                                 \
     F r[10] = {t.x, t.y, t.z, b.x, b.y, b.z, po.x, po.y, po.z, power_heuristic(v[12], v[13])};           \
-    for (uint k = 0u; k < 10u; ++k) {                                                                     \
-      float x[N];                                                                                         \
-      STORE(r[k], x);                                                                                     \
-      for (uint j = 0u; j < N; ++j) o[10u * j + k] = as_uint(x[j]);                                       \
-    }                                                                                                     \
+    PC_WRITE_LANE_RESULTS(r, 10u, N, STORE, o);                                                           \
   }
 #define PC_LOAD_LANES_1(p) (p)[0]
 #define PC_LOAD_LANES_8(p) vload8(0, p)
@@ -299,15 +302,48 @@ PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
       F lobe[12] = {e[l].x, e[l].y, e[l].z, p[l], w[l].x, w[l].y, w[l].z, q[l], g[l].x, g[l].y, g[l].z, ok[l]}; \
       for (uint k = 0u; k < 12u; ++k) r[12u * l + k] = lobe[k];                                           \
     }                                                                                                     \
-    for (uint k = 0u; k < 36u; ++k) {                                                                     \
-      float x[N];                                                                                         \
-      STORE(r[k], x);                                                                                     \
-      for (uint j = 0u; j < N; ++j) o[36u * j + k] = as_uint(x[j]);                                       \
-    }                                                                                                     \
+    PC_WRITE_LANE_RESULTS(r, 36u, N, STORE, o);                                                           \
   }
 PC_BSDF_LANES_TEST(lane3f, float, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
 PC_BSDF_LANES_TEST(lane3f8, float8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
 PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
+
+/* The mirror, dielectric, rough conductor and plastic lobes over 16, 8 and one lane (bsdf_mirror.cl,
+ * bsdf_dielectric.cl, bsdf_rough_conductor.cl, bsdf_plastic.cl): lane j of item i reads 20 floats at
+ * in[20 (16 i + j)]: the colour (3), ior, alpha, the conductor's eta (3) and k (3), wo (3), wi (3) and u
+ * (3), and writes 56 results as bits at out[((3 i + width) 16 + j) 56 + k]: per lobe eval (3), pdf, the
+ * sample's wi (3), pdf, weight (3), validity, delta (1 or 0) and eta2 (the delta lobes' eval and pdf,
+ * and all but the dielectric's eta2, are written as 0, 0 and 1). */
+#define PC_FRESNEL_LOBES_LANES_TEST(V3, F, I, N, LOAD, STORE)                                             \
+  inline void fresnel_lobes_lanes_write_##N(float in[20][16], uint first, __global uint* o) {             \
+    F v[20];                                                                                              \
+    for (uint k = 0u; k < 20u; ++k) v[k] = LOAD(in[k] + first);                                           \
+    V3 c = lane3(v[0], v[1], v[2]), eta = lane3(v[5], v[6], v[7]), kk = lane3(v[8], v[9], v[10]);         \
+    V3 wo = lane3(v[11], v[12], v[13]), wi = lane3(v[14], v[15], v[16]);                                  \
+    F ior = v[3], alpha = v[4];                                                                           \
+    V3 zero = lane3((F)(0.0f), (F)(0.0f), (F)(0.0f));                                                     \
+    V3 e[4] = {zero, zero, rough_conductor_eval_lanes(eta, kk, alpha, wo, wi),                            \
+               plastic_eval_lanes(c, ior, alpha, wo, wi)};                                                \
+    F p[4] = {(F)(0.0f), (F)(0.0f), rough_conductor_pdf_lanes(alpha, wo, wi),                             \
+              plastic_pdf_lanes(c, ior, alpha, wo, wi)};                                                  \
+    V3 w[4], g[4];                                                                                        \
+    F q[4], eta2[4] = {(F)(1.0f), (F)(1.0f), (F)(1.0f), (F)(1.0f)};                                       \
+    I ok[4], delta[4] = {(I)(-1), (I)(-1), (I)(0), (I)(0)};                                               \
+    ok[0] = mirror_sample_lanes(c, wo, &w[0], &q[0], &g[0]);                                              \
+    ok[1] = dielectric_sample_lanes(c, ior, wo, v[19], &w[1], &q[1], &g[1], &eta2[1]);                    \
+    ok[2] = rough_conductor_sample_lanes(eta, kk, alpha, wo, v[17], v[18], &w[2], &q[2], &g[2]);          \
+    ok[3] = plastic_sample_lanes(c, ior, alpha, wo, v[17], v[18], v[19], &w[3], &q[3], &g[3], &delta[3]); \
+    F r[56];                                                                                              \
+    for (uint l = 0u; l < 4u; ++l) {                                                                      \
+      F lobe[14] = {e[l].x, e[l].y, e[l].z, p[l], w[l].x, w[l].y, w[l].z, q[l], g[l].x, g[l].y, g[l].z,    \
+                    select((F)(0.0f), (F)(1.0f), ok[l]), select((F)(0.0f), (F)(1.0f), delta[l]), eta2[l]}; \
+      for (uint k = 0u; k < 14u; ++k) r[14u * l + k] = lobe[k];                                           \
+    }                                                                                                     \
+    PC_WRITE_LANE_RESULTS(r, 56u, N, STORE, o);                                                           \
+  }
+PC_FRESNEL_LOBES_LANES_TEST(lane3f, float, int, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
+PC_FRESNEL_LOBES_LANES_TEST(lane3f8, float8, int8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
+PC_FRESNEL_LOBES_LANES_TEST(lane3f16, float16, int16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
 
 /* The kernel NAME_test of a lane test over float inputs: lane j of item i reads IN floats at
  * in[IN (16 i + j)], and NAME_write_N (N = 16, 8, 1) writes OUT results per lane at 16 lanes, at 8 (two
@@ -326,6 +362,7 @@ PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
   }
 PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 14u, 10u)
 PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 17u, 36u)
+PC_FLOAT_LANES_TEST_KERNEL(fresnel_lobes_lanes, 20u, 56u)
 #undef PC_FLOAT_LANES_TEST_KERNEL
 
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys

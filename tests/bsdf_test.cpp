@@ -326,6 +326,21 @@ std::vector<pc_float4> run_fresnel_conductor(const std::vector<float>& cos_i, pc
   return read_buffer<pc_float4>(cl, out, cos_i.size());
 }
 
+// Inputs of the lane tests below: uniform numbers, directions on the sphere or the upper hemisphere, and
+// sample numbers at the edges of [0, 1).
+struct LaneInputs {
+  uint32_t x;
+  float uniform() { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; }
+  void direction(float* d, bool upper) {
+    float z = upper ? uniform() : 2 * uniform() - 1, phi = 6.2831853f * uniform();
+    float r = std::sqrt(std::max(0.0f, 1 - z * z));
+    d[0] = r * std::cos(phi);
+    d[1] = r * std::sin(phi);
+    d[2] = z;
+  }
+};
+const float kEdgeSamples[] = {0.0f, 0.5f, 0x1.fffffep-1f, 1e-7f};
+
 }  // namespace
 
 // The diffuse, Oren-Nayar and Phong lobes, written once over lanes (issue 15), give the one-lane bits (the
@@ -335,26 +350,19 @@ std::vector<pc_float4> run_fresnel_conductor(const std::vector<float>& cos_i, pc
 TEST(BsdfLanes, LobesGiveTheOneLaneBits) {
   const size_t items = 32, lanes = 16 * items, results = 36;
   std::vector<float> in(17 * lanes);
-  uint32_t x = 9001;
-  auto uniform = [&] { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; };
-  auto direction = [&](float* d, bool upper) {
-    float z = upper ? uniform() : 2 * uniform() - 1, phi = 6.2831853f * uniform(), r = std::sqrt(std::max(0.0f, 1 - z * z));
-    d[0] = r * std::cos(phi);
-    d[1] = r * std::sin(phi);
-    d[2] = z;
-  };
-  const float edges[] = {0.0f, 0.5f, 0x1.fffffep-1f, 1e-7f};
+  LaneInputs r{9001};
+  auto uniform = [&] { return r.uniform(); };
   for (size_t j = 0; j < lanes; ++j) {
     float* v = &in[17 * j];
     for (int k = 0; k < 3; ++k) v[k] = uniform() * 0.6f;
     v[3] = j % 4 == 0 ? 0.0f : uniform() * 1.2f;
-    direction(v + 4, j % 5 != 0);
-    direction(v + 7, j % 3 != 0);
+    r.direction(v + 4, j % 5 != 0);
+    r.direction(v + 7, j % 3 != 0);
     if (j % 7 == 0) v[4] = 0, v[5] = 0, v[6] = 1;      // normal incidence: sin_o = 0
     if (j % 11 == 0) v[7] = 0, v[8] = 0, v[9] = 1;     // sin_i = 0
     if (j % 13 == 0) v[7] = -v[4], v[8] = v[5], v[9] = v[6];  // wi.z == wo.z
     if (j % 17 == 0) v[7] = -v[4], v[8] = -v[5], v[9] = v[6];  // wi the mirror direction of wo
-    for (int k = 10; k < 13; ++k) v[k] = (j + k) % 6 == 0 ? edges[(j / 6 + k) % 4] : uniform();
+    for (int k = 10; k < 13; ++k) v[k] = (j + k) % 6 == 0 ? kEdgeSamples[(j / 6 + k) % 4] : uniform();
     for (int k = 13; k < 16; ++k) v[k] = j % 8 == 0 ? 0.0f : uniform() * 0.4f;
     const float exponents[] = {0.5f, 1.0f, 20.0f, 1000.0f};
     v[16] = j % 3 == 0 ? exponents[j / 3 % 4] : 1 + uniform() * 200;
@@ -385,6 +393,70 @@ TEST(BsdfLanes, LobesGiveTheOneLaneBits) {
     }
   EXPECT_GT(specular_chosen, lanes / 20);
   EXPECT_LT(specular_chosen, lanes);
+}
+
+TEST(BsdfLanes, FresnelLobesGiveTheOneLaneBits) {
+  // Mirror, dielectric, rough conductor and plastic (kernels/tests_sampling.cl, fresnel_lobes_lanes_test).
+  const size_t items = 32, lanes = 16 * items, results = 56, lobe_results = 14;
+  std::vector<float> in(20 * lanes);
+  LaneInputs r{4242};
+  auto uniform = [&] { return r.uniform(); };
+  for (size_t j = 0; j < lanes; ++j) {
+    float* v = &in[20 * j];
+    for (int k = 0; k < 3; ++k) v[k] = j % 8 == 0 ? 0.0f : uniform() * 0.6f;  // black: the coat alone
+    v[3] = j % 9 == 0 ? 1.0f : 1.1f + 1.4f * uniform();                      // ior 1: no Fresnel at all
+    v[4] = j % 4 == 0 ? 0.0f : j % 4 == 1 ? 1e-4f : 0.01f + uniform();       // smooth, the smallest, rough
+    for (int k = 5; k < 8; ++k) v[k] = 0.1f + 2 * uniform();
+    for (int k = 8; k < 11; ++k) v[k] = 4 * uniform();
+    if (j % 6 == 0) v[5] = 1, v[8] = 0;                                       // a "specular": 0 channel
+    r.direction(v + 11, j % 3 != 0);                                            // inside the glass a third
+    r.direction(v + 14, j % 5 != 0);
+    if (j % 7 == 0) v[11] = 0, v[12] = 0, v[13] = j % 2 ? 1.0f : -1.0f;       // normal incidence
+    if (j % 19 == 0) v[11] = 1, v[12] = 0, v[13] = 1e-7f;                     // grazing
+    if (j % 13 == 0) v[14] = -v[11], v[15] = -v[12], v[16] = v[13];           // wi the mirror direction
+    for (int k = 17; k < 20; ++k) v[k] = (j + k) % 6 == 0 ? kEdgeSamples[(j / 6 + k) % 4] : uniform();
+  }
+  std::vector<uint32_t> bits = run_float_lanes_test("fresnel_lobes_lanes_test", in, items, 16 * results);
+  LaneComparison lc = compare_lanes(bits, items, 16 * results, [](float f) { return bool(std::isfinite(f)); });
+  EXPECT_EQ(lc.differing, 0u);
+  EXPECT_GT(lc.valid, items * 16 * results * 8 / 10);  // the invalid samples' values may be anything
+  // What the lobes did at one lane: each case on either side of a per-lane branch occurs.
+  auto one = [&](size_t lane, size_t lobe, size_t k) {
+    float f;
+    size_t at = (3 * (lane / 16) + 2) * 16 * results + results * (lane % 16) + lobe_results * lobe + k;
+    std::memcpy(&f, &bits[at], sizeof f);
+    return f;
+  };
+  size_t reflected = 0, refracted = 0, total_reflection = 0, coat_delta = 0, coat_rough = 0, base = 0;
+  size_t conductor_positive = 0, conductor_zero = 0, plastic_positive = 0, plastic_zero = 0;
+  for (size_t j = 0; j < lanes; ++j) {
+    if (one(j, 1, 11) == 1) {
+      bool refraction = one(j, 1, 13) != 1;
+      refracted += refraction;
+      reflected += !refraction;
+      total_reflection += !refraction && one(j, 1, 7) == 1;
+    }
+    if (one(j, 3, 11) == 1) {  // the rough coat's wi is the rough conductor's (the same alpha, wo and u)
+      bool delta = one(j, 3, 12) == 1, conductor_wi = one(j, 3, 4) == one(j, 2, 4) && one(j, 3, 6) == one(j, 2, 6);
+      coat_delta += delta;
+      coat_rough += !delta && conductor_wi;
+      base += !delta && !conductor_wi;
+    }
+    conductor_positive += one(j, 2, 0) > 0;
+    conductor_zero += one(j, 2, 0) == 0;
+    plastic_positive += one(j, 3, 0) > 0;
+    plastic_zero += one(j, 3, 0) == 0;
+  }
+  EXPECT_GT(reflected, lanes / 50);
+  EXPECT_GT(refracted, lanes / 3);
+  EXPECT_GT(total_reflection, 0u);
+  EXPECT_GT(coat_delta, lanes / 50);
+  EXPECT_GT(coat_rough, lanes / 50);
+  EXPECT_GT(base, lanes / 3);
+  EXPECT_GT(conductor_positive, lanes / 5);
+  EXPECT_GT(conductor_zero, lanes / 10);
+  EXPECT_GT(plastic_positive, lanes / 5);
+  EXPECT_GT(plastic_zero, lanes / 10);
 }
 
 TEST(BsdfExact, FresnelDielectricMatchesSnellAndTheFresnelEquations) {
