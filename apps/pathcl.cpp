@@ -437,6 +437,8 @@ struct RaysArgs {
   std::string scene, rays, hits, device, stats;
   int64_t repeat = 5;
   size_t work_group = 0;
+  uint32_t lanes = 1;
+  bool any_hit = false;
 };
 
 int run_rays(const RaysArgs& a) {
@@ -449,7 +451,7 @@ int run_rays(const RaysArgs& a) {
                                            std::to_string(devices.size()));
   ClContext cl(devices.front());
   TraceTiming timing;
-  std::vector<HitRecord> hits = trace_ray_records(cl, s.device, rays, a.repeat, timing, a.work_group);
+  std::vector<HitRecord> hits = trace_ray_records(cl, s.device, rays, a.repeat, timing, a.work_group, a.lanes, a.any_hit);
   size_t hit_count = std::count_if(hits.begin(), hits.end(), [](const HitRecord& h) { return h.prim != PC_INVALID; });
   double kernel_ms = median(timing.kernel_ms), wall_ms = median(timing.wall_ms);
   double n = double(rays.size());
@@ -463,6 +465,8 @@ int run_rays(const RaysArgs& a) {
               {"rays", rays.size()},
               {"hits", hit_count},
               {"repeat", a.repeat},
+              {"lanes", a.lanes},
+              {"any_hit", a.any_hit},
               {"kernel_ms_median", kernel_ms},
               {"wall_ms_median", wall_ms},
               {"kernel_ms", timing.kernel_ms},
@@ -549,6 +553,8 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--repeat", ya.repeat, "timed repetitions (the median is reported)");
   rays_cmd->add_option("--stats", ya.stats, "write statistics as JSON");
   rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: the driver's choice)");
+  rays_cmd->add_option("--lanes", ya.lanes, "rays per work item: 1, or packets of 8 or 16 (8-wide BVH devices)");
+  rays_cmd->add_flag("--any-hit", ya.any_hit, "stop each ray at its first hit found (shadow rays; only hit or miss is defined)");
 
   add_compare_command(app);
   add_bench_command(app);

@@ -82,23 +82,31 @@ inline RayPrecomp ray_precompute(float3 d) {
  * does not limit the interval, and a ray lying in a box face counts as inside. An empty box (lo = +inf,
  * hi = -inf) is always missed. Returns each box's entry distance, or INFINITY when it is missed within
  * [tmin, tmax]. */
-#define PC_DEFINE_RAY_BOXES(N)                                                                                  \
-  inline float##N ray_boxes##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x,           \
-                               float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z) {           \
-    float##N lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;                                               \
-    float##N ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;                                               \
-    float##N lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;                                               \
-    float##N nx = negative.x ? hx : lx, fx = negative.x ? lx : hx;                                                   \
-    float##N ny = negative.y ? hy : ly, fy = negative.y ? ly : hy;                                                   \
-    float##N nz = negative.z ? hz : lz, fz = negative.z ? lz : hz;                                                   \
-    float##N enter = (float##N)(tmin), exit = (float##N)(tmax);                                                     \
+#define PC_DEFINE_SLAB(F)                                                                                       \
+  /* The entry distance from the near (nx, ny, nz) and far (fx, fy, fz) plane distances of each axis, or  \
+   * INFINITY for a miss within [tmin, tmax]. Also the packet traversal's, per lane (kernels/packet.cl). */ \
+  inline PC_OVL F slab_entry(F nx, F fx, F ny, F fy, F nz, F fz, F tmin, F tmax) {                         \
+    F enter = tmin, exit = tmax;                                                                                     \
     enter = select(enter, nx, nx > enter);                                                                           \
     enter = select(enter, ny, ny > enter);                                                                           \
     enter = select(enter, nz, nz > enter);                                                                           \
     exit = select(exit, fx, fx < exit);                                                                              \
     exit = select(exit, fy, fy < exit);                                                                              \
     exit = select(exit, fz, fz < exit);                                                                              \
-    return select((float##N)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));                     \
+    return select((F)(INFINITY), enter, enter <= exit * (1.0f + 2.0f * error_gamma(3)));                           \
+  }
+PC_DEFINE_SLAB(float4)
+PC_DEFINE_SLAB(float8)
+PC_DEFINE_SLAB(float16)
+#undef PC_DEFINE_SLAB
+#define PC_DEFINE_RAY_BOXES(N)                                                                                  \
+  inline float##N ray_boxes##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x,           \
+                               float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z) {           \
+    float##N lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;                                               \
+    float##N ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;                                               \
+    float##N lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;                                               \
+    return slab_entry(negative.x ? hx : lx, negative.x ? lx : hx, negative.y ? hy : ly, negative.y ? ly : hy,        \
+                      negative.z ? hz : lz, negative.z ? lz : hz, (float##N)(tmin), (float##N)(tmax));               \
   }
 PC_DEFINE_RAY_BOXES(4)
 PC_DEFINE_RAY_BOXES(8)

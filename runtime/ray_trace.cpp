@@ -10,7 +10,13 @@
 #include "runtime/scene_buffers.h"
 
 std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
-                                         int repeat, TraceTiming& timing, size_t work_group) {
+                                         int repeat, TraceTiming& timing, size_t work_group, uint32_t lanes,
+                                         bool any_hit) {
+  if (lanes != 1 && lanes != 8 && lanes != 16)
+    throw UsageError("--lanes " + std::to_string(lanes) + ": rays are traced one at a time (1) or as packets of 8 or 16");
+  if (lanes > 1 && bvh_width(cl.info) != 8)
+    throw UsageError("--lanes " + std::to_string(lanes) + ": packets traverse the 8-wide BVH, and " + cl.info.name +
+                     " uses the " + std::to_string(bvh_width(cl.info)) + "-wide one");
   KernelProgram program = build_kernel_program(cl, "trace.cl", kernel_options(scene.features));
   timing.kernel_build_ms = program.build_ms;
   timing.kernel_from_cache = program.from_cache;
@@ -28,15 +34,16 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
   BvhBuffers bvh = upload_bvh(cl, scene);
   ClBuffer prims = upload(cl, scene.prims), ray_buf = upload(cl, moved.empty() ? rays : moved);
   ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
-  ClKernel kernel(program.kernel("trace_rays"));
+  ClKernel kernel(program.kernel(lanes == 1 ? "trace_rays" : lanes == 8 ? "trace_rays_packet8" : "trace_rays_packet16"));
   cl_uint next = bvh.bind(kernel, 0);
   kernel.arg(next, prims.mem);
   kernel.arg(next + 1, ray_buf.mem);
   kernel.arg(next + 2, hit_buf.mem);
   kernel.arg(next + 3, cl_uint(rays.size()));
+  kernel.arg(next + 4, cl_uint(any_hit));
   for (int r = 0; r < repeat; ++r) {
     auto start = std::chrono::steady_clock::now();
-    timing.kernel_ms.push_back(run_kernel(cl, kernel.k, rays.size(), work_group));
+    timing.kernel_ms.push_back(run_kernel(cl, kernel.k, (rays.size() + lanes - 1) / lanes, work_group));
     timing.wall_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   }
   CL_CHECK(clEnqueueReadBuffer(cl.queue, hit_buf.mem, CL_TRUE, 0, sizeof(HitRecord) * hits.size(), hits.data(), 0,

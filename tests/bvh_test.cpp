@@ -251,6 +251,38 @@ TEST(Bvh, BothLayoutsMatchBruteForceExactlyTiesIncluded) {
     }
     EXPECT_EQ(mismatches, 0u) << width << "-wide";
   }
+  // Packets of 8 and 16 rays (kernels/packet.cl, the 8-wide BVH): the same records, for packets mixing the
+  // grid's parallel rays with random ones as above, and for packets of only one or only the other kind.
+  std::vector<size_t> grouped;
+  for (size_t start : {0, 1})
+    for (size_t i = start; i < rays.size(); i += 2) grouped.push_back(i);
+  std::vector<RayRecord> grouped_rays;
+  for (size_t i : grouped) grouped_rays.push_back(rays[i]);
+  BvhWidthScope scope(8);
+  for (uint32_t lanes : {8u, 16u}) {
+    for (bool mixed : {true, false}) {
+      TraceTiming timing;
+      std::vector<HitRecord> packet = trace_ray_records(cl, scene, mixed ? rays : grouped_rays, 1, timing, 0, lanes);
+      size_t mismatches = 0;
+      for (size_t k = 0; k < rays.size(); ++k) {
+        const HitRecord &want = brute[mixed ? k : grouped[k]], &got = packet[k];
+        bool same = want.t == got.t && want.prim == got.prim &&
+                    (want.prim == PC_INVALID || (want.u == got.u && want.v == got.v));
+        if (!same && ++mismatches < 10)
+          ADD_FAILURE() << lanes << " lanes, " << (mixed ? "mixed" : "grouped") << ", ray " << k << ": brute force t="
+                        << want.t << " prim=" << want.prim << ", packet t=" << got.t << " prim=" << got.prim;
+      }
+      EXPECT_EQ(mismatches, 0u) << lanes << " lanes, " << (mixed ? "mixed" : "grouped");
+    }
+  }
+  // Any hit (shadow rays), one ray or packets: a hit exactly where brute force finds the nearest one.
+  for (uint32_t lanes : {1u, 8u, 16u}) {
+    TraceTiming timing;
+    std::vector<HitRecord> any = trace_ray_records(cl, scene, rays, 1, timing, 0, lanes, true);
+    size_t mismatches = 0;
+    for (size_t k = 0; k < rays.size(); ++k) mismatches += (any[k].prim == PC_INVALID) != (brute[k].prim == PC_INVALID);
+    EXPECT_EQ(mismatches, 0u) << lanes << " lanes, any hit";
+  }
 }
 
 TEST(Bvh, EmptySceneMissesEverything) {

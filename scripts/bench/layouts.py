@@ -1,8 +1,8 @@
 """BVH layouts side by side (issue 15; a benchmark, not a test): `pathcl rays` with the 4- and the 8-wide
-BVH (PATHCL_BVH_WIDTH) against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads) on the same
+BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--lanes), against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads) on the same
 camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
 the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
-Checks that both layouts give the same hit records as each other.
+Checks that both layouts and the packets give the same hit records as each other.
 Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts-*.json)
 """
 import argparse
@@ -32,9 +32,9 @@ def with_width(width):
     return dict(os.environ, PATHCL_BVH_WIDTH=str(width))
 
 
-def pathcl_rays(scene, rays, width, work, hits=None):
+def pathcl_rays(scene, rays, width, work, hits=None, lanes=1):
     stats = os.path.join(work, "stats.json")
-    cmd = [PATHCL, "rays", scene, "--rays", rays, "--repeat", "5", "--stats", stats]
+    cmd = [PATHCL, "rays", scene, "--rays", rays, "--repeat", "5", "--stats", stats, "--lanes", str(lanes)]
     if hits:
         cmd += ["--hits", hits]
     run(cmd, with_width(width))
@@ -80,27 +80,36 @@ def main():
     result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
               "pathcl": run([PATHCL, "--version"]).splitlines()[0], "rounds": args.rounds, "rays": {}, "samples": {}}
     for name, rays in (("camera", cam), ("diffuse_bounce", bounce)):
-        runs = {"bvh4": [], "bvh8": [], "embree-1": [], "embree-2": []}
+        runs = {"bvh4": [], "bvh8": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": []}
         hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in (4, 8)}
+        packet_hits = {n: os.path.join(work, "%s-packet%d.hits" % (name, n)) for n in (8, 16)}
         for _ in range(args.rounds):
             for w in (4, 8):
                 runs["bvh%d" % w].append(pathcl_rays(big, rays, w, work, hits[w]))
+            for n in (8, 16):
+                runs["packet%d" % n].append(pathcl_rays(big, rays, 8, work, packet_hits[n], lanes=n))
             for threads in (1, 2):
                 out = run([EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5", "--compare", hits[8]])
                 e = json.loads(out)
                 runs["embree-%d" % threads].append(e["rays_per_second"])
                 same = e["same_primitive_fraction"]
-        with open(hits[4], "rb") as a, open(hits[8], "rb") as b:
-            identical = a.read() == b.read()
+        records = []
+        for path in (hits[4], hits[8], packet_hits[8], packet_hits[16]):
+            with open(path, "rb") as f:
+                records.append(f.read())
+        identical = all(r == records[0] for r in records)
         med = {k: statistics.median(v) for k, v in runs.items()}
         result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
                                 "embree_same_primitive_fraction": same,
                                 "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
-                                "bvh8_over_bvh4": med["bvh8"] / med["bvh4"]}
-        print("%s rays: 4-wide %.2f, 8-wide %.2f, Embree 1 thread %.2f, 2 threads %.2f Mrays/s; 8-wide / Embree-2 "
-              "%.2f; hit records of the layouts identical: %s; same primitive as Embree: %.4f" %
-              (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["embree-1"] / 1e6, med["embree-2"] / 1e6,
-               med["bvh8"] / med["embree-2"], identical, same))
+                                "bvh8_over_bvh4": med["bvh8"] / med["bvh4"],
+                                "packet8_over_bvh8": med["packet8"] / med["bvh8"],
+                                "packet16_over_bvh8": med["packet16"] / med["bvh8"]}
+        print("%s rays: 4-wide %.2f, 8-wide %.2f, packets of 8 %.2f, of 16 %.2f, Embree 1 thread %.2f, 2 threads "
+              "%.2f Mrays/s; 8-wide / Embree-2 %.2f; hit records of the layouts and packets identical: %s; same "
+              "primitive as Embree: %.4f" %
+              (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["packet8"] / 1e6, med["packet16"] / 1e6,
+               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["bvh8"] / med["embree-2"], identical, same))
     for scene, size, spp in (("cornell-box", 256, 64), ("glass-metal", 256, 64), ("terrain", 256, 16)):
         runs = {"bvh4": [], "bvh8": []}
         file = resized(os.path.join(scenes, scene + ".json"), size, os.path.join(scenes, "%s-%d.json" % (scene, size)))

@@ -1,0 +1,240 @@
+/* Packet traversal of the 8-wide BVH (issue 15): the W = 8 or 16 rays of a lane-generic work item traced
+ * together, each node's boxes and each leaf's triangles tested against all W rays at once in vector
+ * registers. Each lane does the operations of the single-ray code (kernels/intersect.cl: the slab test,
+ * the watertight test of intersect_block, the (t, primitive) order of intersect_prim), and a lane keeps
+ * every subtree that its own ray enters, so its hit is the nearest of the same total order as the single
+ * ray's, bit for bit; traversal order, and the leaves a lane tests only because another lane entered
+ * them, cannot change a minimum. Spheres and cut-outs are tested lane by lane with the single-ray code. */
+#ifndef PATHCL_PACKET_CL
+#define PATHCL_PACKET_CL
+
+#include "intersect.cl"
+
+#ifdef PC_BVH8
+
+/* Per N lanes: the bits of a mask (bit j: lane j set), and back; the smallest and largest of the lanes. */
+#define PC_PACKET_REDUCTIONS(F, I, U, N, BITS)                                                            \
+  inline PC_OVL uint pc_lane_bits(I m) {                                                                  \
+    U b = select((U)(0u), BITS, m);                                                                       \
+    return pc_or_lanes_(b);                                                                               \
+  }                                                                                                       \
+  inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
+  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }                        \
+  inline PC_OVL float pc_max_lanes(F x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
+
+inline PC_OVL uint pc_or_lanes_(uint2 b) { return b.x | b.y; }
+inline PC_OVL uint pc_or_lanes_(uint4 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL uint pc_or_lanes_(uint8 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL uint pc_or_lanes_(uint16 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
+inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
+inline PC_OVL float pc_max_lanes(float2 x) { return fmax(x.x, x.y); }
+inline PC_OVL float pc_max_lanes(float4 x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
+PC_PACKET_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
+PC_PACKET_REDUCTIONS(float16, int16, uint16, 16,
+                     (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
+#undef PC_PACKET_REDUCTIONS
+
+/* W rays (lane3 origins and directions, tmin per lane, the primitive each leaves from or PC_INVALID, and
+ * their cut-out seeds) and their hits: t starts at the ray's tmax and is the nearest hit's, prim and slot
+ * are PC_INVALID for a miss (intersect.cl's Hit, by lane). */
+#define PC_PACKET_TYPES(V3, F, U, N)                                                                      \
+  typedef struct {                                                                                        \
+    V3 o, d;                                                                                              \
+    F tmin;                                                                                               \
+    U skip_prim, cutout_seed;                                                                             \
+  } RayPacket##N;                                                                                         \
+  typedef struct {                                                                                        \
+    F t, u, v;                                                                                            \
+    U slot, prim;                                                                                         \
+  } HitPacket##N;
+PC_PACKET_TYPES(lane3f8, float8, uint8, 8)
+PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
+#undef PC_PACKET_TYPES
+
+/* A lane of a vector by runtime index, and a vector with one lane replaced. */
+#define PC_LANE_ACCESS(T, S, N)                                                                           \
+  inline PC_OVL S pc_lane(T x, uint j) {                                                                  \
+    S a[N];                                                                                               \
+    vstore##N(x, 0, a);                                                                                   \
+    return a[j];                                                                                          \
+  }                                                                                                       \
+  inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                                    \
+    S a[N];                                                                                               \
+    vstore##N(x, 0, a);                                                                                   \
+    a[j] = value;                                                                                         \
+    return vload##N(0, a);                                                                                \
+  }
+PC_LANE_ACCESS(float8, float, 8)
+PC_LANE_ACCESS(uint8, uint, 8)
+PC_LANE_ACCESS(float16, float, 16)
+PC_LANE_ACCESS(uint16, uint, 16)
+#undef PC_LANE_ACCESS
+
+#define PC_PACKET_LANES(V3, F, I, U, N)                                                                   \
+  /* Component k (0 x, 1 y, 2 z) of v, k per lane. */                                                     \
+  inline PC_OVL F pc_axis_lanes(V3 v, U k) { return select(select(v.x, v.y, k == 1u), v.z, k == 2u); }    \
+  /* Lane j of the packet against one primitive with the single-ray code (spheres; intersect_prim).      \
+   * Returns whether lane j's hit changed. */                                                             \
+  inline PC_OVL bool packet_prim_lane(const SceneData* cut, __global const Primitive* prims, uint slot,   \
+                               const RayPacket##N* r, uint j, HitPacket##N* h) {                          \
+    Ray ray;                                                                                              \
+    ray.o = (float3)(pc_lane(r->o.x, j), pc_lane(r->o.y, j), pc_lane(r->o.z, j));                         \
+    ray.d = (float3)(pc_lane(r->d.x, j), pc_lane(r->d.y, j), pc_lane(r->d.z, j));                         \
+    ray.tmin = pc_lane(r->tmin, j);                                                                       \
+    ray.tmax = pc_lane(h->t, j);                                                                          \
+    ray.skip_prim = pc_lane(r->skip_prim, j);                                                             \
+    ray.skip_instance = PC_INVALID;                                                                       \
+    ray.cutout_seed = pc_lane(r->cutout_seed, j);                                                         \
+    RayPrecomp rp = ray_precompute(ray.d);                                                                \
+    Hit hit;                                                                                              \
+    hit.t = pc_lane(h->t, j);                                                                             \
+    hit.prim = pc_lane(h->prim, j);                                                                       \
+    if (!intersect_prim(cut, prims, slot, &ray, &rp, rp.kz, hit.t, &hit)) return false;                   \
+    h->t = pc_with_lane(h->t, j, hit.t);                                                                  \
+    h->u = pc_with_lane(h->u, j, hit.u);                                                                  \
+    h->v = pc_with_lane(h->v, j, hit.v);                                                                  \
+    h->slot = pc_with_lane(h->slot, j, hit.slot);                                                         \
+    h->prim = pc_with_lane(h->prim, j, hit.prim);                                                         \
+    return true;                                                                                          \
+  }                                                                                                       \
+  /* The packet's active lanes against a leaf reference's blocks; returns the lanes whose hit changed. */ \
+  inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,                     \
+                              __global const Primitive* prims, uint ref, const RayPacket##N* r, U kx, U ky, U kz, \
+                              F sx, F sy, F sz, I active, HitPacket##N* h) {                              \
+    uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;                                    \
+    F okx = pc_axis_lanes(r->o, kx), oky = pc_axis_lanes(r->o, ky), okz = pc_axis_lanes(r->o, kz);        \
+    I changed = (I)(0);                                                                                   \
+    for (uint bi = 0u; bi < (count + 3u) / 4u; ++bi) {                                                    \
+      __global const LeafBlock* b = blocks + first + bi;                                                  \
+      __global const float* c = (__global const float*)b; /* ax ay az bx by bz cx cy cz, 4 lanes each */ \
+      for (uint i = 0u; i < b->count; ++i) {                                                              \
+        if (b->sphere_mask & (1u << i)) {                                                                 \
+          uint bits = pc_lane_bits(active);                                                               \
+          for (uint j = 0u; j < N; ++j)                                                                   \
+            if ((bits >> j) & 1u)                                                                         \
+              if (packet_prim_lane(cut, prims, b->first_slot + i, r, j, h))                               \
+                changed = pc_lanes_of_bits(pc_lane_bits(changed) | (1u << j), changed);                   \
+          continue;                                                                                       \
+        }                                                                                                 \
+        /* The vertices' coordinates on each lane's axes: the single-ray test's (a[kx] - o[kx]) etc. */   \
+        V3 a = lane3((F)(c[i]), (F)(c[4u + i]), (F)(c[8u + i]));                                          \
+        V3 bb = lane3((F)(c[12u + i]), (F)(c[16u + i]), (F)(c[20u + i]));                                 \
+        V3 cc = lane3((F)(c[24u + i]), (F)(c[28u + i]), (F)(c[32u + i]));                                 \
+        F Akz = pc_axis_lanes(a, kz) - okz, Bkz = pc_axis_lanes(bb, kz) - okz, Ckz = pc_axis_lanes(cc, kz) - okz; \
+        F Ax = (pc_axis_lanes(a, kx) - okx) + sx * Akz, Ay = (pc_axis_lanes(a, ky) - oky) + sy * Akz;     \
+        F Bx = (pc_axis_lanes(bb, kx) - okx) + sx * Bkz, By = (pc_axis_lanes(bb, ky) - oky) + sy * Bkz;   \
+        F Cx = (pc_axis_lanes(cc, kx) - okx) + sx * Ckz, Cy = (pc_axis_lanes(cc, ky) - oky) + sy * Ckz;   \
+        F U_ = Cx * By - Cy * Bx;                                                                         \
+        F V_ = Ax * Cy - Ay * Cx;                                                                         \
+        F W_ = Bx * Ay - By * Ax;                                                                         \
+        I outside = ((U_ < 0.0f) | (V_ < 0.0f) | (W_ < 0.0f)) & ((U_ > 0.0f) | (V_ > 0.0f) | (W_ > 0.0f)); \
+        F det = U_ + V_ + W_;                                                                             \
+        F Az = sz * Akz, Bz = sz * Bkz, Cz = sz * Ckz;                                                    \
+        F T = U_ * Az + V_ * Bz + W_ * Cz;                                                                \
+        I before_tmin = select(T <= r->tmin * det, T >= r->tmin * det, det < 0.0f);                       \
+        F inv_det = 1.0f / det;                                                                           \
+        F t = T * inv_det;                                                                                \
+        uint prim = b->prim[i];                                                                           \
+        /* intersect_prim's order: nearer, or as near and a lower primitive index. */                     \
+        I accept = active & !outside & (det != 0.0f) & !before_tmin & (t <= h->t) &                       \
+                   (r->skip_prim != (U)(prim)) & ((t < h->t) | ((U)(prim) < h->prim));                    \
+        PC_PACKET_CUTOUTS(N)                                                                              \
+        if (!pc_any_(accept)) continue;                                                                   \
+        h->t = select(h->t, t, accept);                                                                   \
+        h->u = select(h->u, V_ * inv_det, accept);                                                        \
+        h->v = select(h->v, W_ * inv_det, accept);                                                        \
+        h->slot = select(h->slot, (U)(b->first_slot + i), accept);                                        \
+        h->prim = select(h->prim, (U)(prim), accept);                                                     \
+        changed |= accept;                                                                                \
+      }                                                                                                   \
+    }                                                                                                     \
+    return changed;                                                                                       \
+  }                                                                                                       \
+  /* The packet through the tree from node root (closest hit; with any_hit a lane stops at its first hit, \
+   * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's lanes    \
+   * (those whose ray entered its box) and their nearest entry: it is skipped when popped once every one \
+   * of those lanes has a hit nearer than that. */                                                        \
+  inline PC_OVL I trace_packet(const SceneData* cut, __global const Bvh8Node* nodes,                      \
+                               __global const LeafBlock* blocks, __global const Primitive* prims, uint root, \
+                               const RayPacket##N* r, I active, bool any_hit, HitPacket##N* h) {          \
+    /* ray_precompute by lane */                                                                          \
+    V3 inv_d = lane3(1.0f / r->d.x, 1.0f / r->d.y, 1.0f / r->d.z);                                        \
+    I neg_x = inv_d.x < 0.0f, neg_y = inv_d.y < 0.0f, neg_z = inv_d.z < 0.0f;                             \
+    F adx = fabs(r->d.x), ady = fabs(r->d.y), adz = fabs(r->d.z);                                         \
+    U kz = select(select((U)(2u), (U)(1u), ady > adz), select((U)(2u), (U)(0u), adx > adz), adx > ady);   \
+    U kx = select(kz + 1u, (U)(0u), kz == 2u), ky = select(kx + 1u, (U)(0u), kx == 2u);                   \
+    F dz = pc_axis_lanes(r->d, kz);                                                                       \
+    F sx = -pc_axis_lanes(r->d, kx) / dz, sy = -pc_axis_lanes(r->d, ky) / dz, sz = 1.0f / dz;             \
+    I found = (I)(0);                                                                                     \
+    uint stack[7 * PC_BVH_STACK], stack_lanes[7 * PC_BVH_STACK];                                          \
+    float stack_entry[7 * PC_BVH_STACK];                                                                  \
+    int sp = 0;                                                                                           \
+    uint ref = root;                                                                                      \
+    I lanes = active;                                                                                     \
+    for (;;) {                                                                                            \
+      if (ref & PC_BVH4_LEAF) {                                                                           \
+        I changed = packet_leaf(cut, blocks, prims, ref, r, kx, ky, kz, sx, sy, sz, lanes, h);            \
+        found |= changed;                                                                                 \
+        if (any_hit) {                                                                                    \
+          active &= !changed;                                                                             \
+          if (!pc_any_(active)) return found;                                                             \
+        }                                                                                                 \
+      } else {                                                                                            \
+        __global const Bvh8Node* n = nodes + ref;                                                         \
+        int base = sp;                                                                                    \
+        for (uint c = 0u; c < 8u; ++c) {                                                                  \
+          /* ray_boxes8's slab test, one box against each lane's ray. */                                  \
+          F lx = (n->lo_x[c] - r->o.x) * inv_d.x, hx = (n->hi_x[c] - r->o.x) * inv_d.x;                   \
+          F ly = (n->lo_y[c] - r->o.y) * inv_d.y, hy = (n->hi_y[c] - r->o.y) * inv_d.y;                   \
+          F lz = (n->lo_z[c] - r->o.z) * inv_d.z, hz = (n->hi_z[c] - r->o.z) * inv_d.z;                   \
+          F enter = slab_entry(select(lx, hx, neg_x), select(hx, lx, neg_x), select(ly, hy, neg_y),        \
+                               select(hy, ly, neg_y), select(lz, hz, neg_z), select(hz, lz, neg_z), r->tmin, h->t); \
+          I in = lanes & (enter != (F)(INFINITY));                                                        \
+          if (!pc_any_(in)) continue;                                                                     \
+          /* Onto the stack, kept sorted far to near from where this node's entries start. */            \
+          float d = pc_min_lanes(select((F)(INFINITY), enter, in));                                       \
+          int j = sp++;                                                                                   \
+          while (j > base && stack_entry[j - 1] < d) {                                                    \
+            stack[j] = stack[j - 1];                                                                      \
+            stack_lanes[j] = stack_lanes[j - 1];                                                          \
+            stack_entry[j] = stack_entry[j - 1];                                                          \
+            --j;                                                                                          \
+          }                                                                                               \
+          stack[j] = n->child[c];                                                                         \
+          stack_lanes[j] = pc_lane_bits(in);                                                              \
+          stack_entry[j] = d;                                                                             \
+        }                                                                                                 \
+      }                                                                                                   \
+      /* The next subtree some of whose lanes can still hit nearer than they have. */                    \
+      for (;;) {                                                                                          \
+        if (sp == 0) return any_hit ? found : h->slot != (U)(PC_INVALID);                                 \
+        --sp;                                                                                             \
+        lanes = pc_lanes_of_bits(stack_lanes[sp], active) & active;                                       \
+        if (pc_any_(lanes) && stack_entry[sp] <= pc_max_lanes(select((F)(-INFINITY), h->t, lanes))) break; \
+      }                                                                                                   \
+      ref = stack[sp];                                                                                    \
+    }                                                                                                     \
+  }
+
+#ifdef PC_HAS_CUTOUTS
+/* Accepted lanes keep a hit only where the cut-out stops the ray (kernels/cutout.cl), lane by lane. */
+#define PC_PACKET_CUTOUTS(N)                                                                              \
+  if (pc_any_(accept)) {                                                                                  \
+    uint bits = pc_lane_bits(accept);                                                                     \
+    for (uint j = 0u; j < N; ++j)                                                                         \
+      if (((bits >> j) & 1u) && !cutout_stops(cut, prim, pc_lane(V_ * inv_det, j), pc_lane(W_ * inv_det, j), \
+                                              pc_lane(r->cutout_seed, j)))                                \
+        bits &= ~(1u << j);                                                                               \
+    accept = pc_lanes_of_bits(bits, accept);                                                              \
+  }
+#else
+#define PC_PACKET_CUTOUTS(N)
+#endif
+PC_PACKET_LANES(lane3f8, float8, int8, uint8, 8)
+PC_PACKET_LANES(lane3f16, float16, int16, uint16, 16)
+#undef PC_PACKET_LANES
+#undef PC_PACKET_CUTOUTS
+
+#endif /* PC_BVH8 */
+#endif
