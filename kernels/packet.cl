@@ -74,10 +74,8 @@ PC_LANE_ACCESS(uint16, uint, 16)
 #define PC_PACKET_LANES(V3, F, I, U, N)                                                                   \
   /* Component k (0 x, 1 y, 2 z) of v, k per lane. */                                                     \
   inline PC_OVL F pc_axis_lanes(V3 v, U k) { return select(select(v.x, v.y, k == 1u), v.z, k == 2u); }    \
-  /* Lane j of the packet against one primitive with the single-ray code (spheres; intersect_prim).      \
-   * Returns whether lane j's hit changed. */                                                             \
-  inline PC_OVL bool packet_prim_lane(const SceneData* cut, __global const Primitive* prims, uint slot,   \
-                               const RayPacket##N* r, uint j, HitPacket##N* h) {                          \
+  /* Lane j of the packet as a single ray (its nearest hit so far as tmax), and its hit. */              \
+  inline PC_OVL Ray packet_ray_lane(const RayPacket##N* r, uint j, const HitPacket##N* h, Hit* hit) {     \
     Ray ray;                                                                                              \
     ray.o = (float3)(pc_lane(r->o.x, j), pc_lane(r->o.y, j), pc_lane(r->o.z, j));                         \
     ray.d = (float3)(pc_lane(r->d.x, j), pc_lane(r->d.y, j), pc_lane(r->d.z, j));                         \
@@ -86,16 +84,44 @@ PC_LANE_ACCESS(uint16, uint, 16)
     ray.skip_prim = pc_lane(r->skip_prim, j);                                                             \
     ray.skip_instance = PC_INVALID;                                                                       \
     ray.cutout_seed = pc_lane(r->cutout_seed, j);                                                         \
-    RayPrecomp rp = ray_precompute(ray.d);                                                                \
+    hit->t = ray.tmax;                                                                                    \
+    hit->u = pc_lane(h->u, j);                                                                            \
+    hit->v = pc_lane(h->v, j);                                                                            \
+    hit->slot = pc_lane(h->slot, j);                                                                      \
+    hit->prim = pc_lane(h->prim, j);                                                                      \
+    hit->instance = PC_INVALID;                                                                           \
+    return ray;                                                                                           \
+  }                                                                                                       \
+  inline PC_OVL void packet_set_hit_lane(HitPacket##N* h, uint j, const Hit* hit) {                       \
+    h->t = pc_with_lane(h->t, j, hit->t);                                                                 \
+    h->u = pc_with_lane(h->u, j, hit->u);                                                                 \
+    h->v = pc_with_lane(h->v, j, hit->v);                                                                 \
+    h->slot = pc_with_lane(h->slot, j, hit->slot);                                                        \
+    h->prim = pc_with_lane(h->prim, j, hit->prim);                                                        \
+  }                                                                                                       \
+  /* Lane j against one primitive with the single-ray code (spheres; intersect_prim). Returns whether    \
+   * lane j's hit changed. */                                                                             \
+  inline PC_OVL bool packet_prim_lane(const SceneData* cut, __global const Primitive* prims, uint slot,   \
+                                      const RayPacket##N* r, uint j, HitPacket##N* h) {                   \
     Hit hit;                                                                                              \
-    hit.t = pc_lane(h->t, j);                                                                             \
-    hit.prim = pc_lane(h->prim, j);                                                                       \
+    Ray ray = packet_ray_lane(r, j, h, &hit);                                                             \
+    RayPrecomp rp = ray_precompute(ray.d);                                                                \
     if (!intersect_prim(cut, prims, slot, &ray, &rp, rp.kz, hit.t, &hit)) return false;                   \
-    h->t = pc_with_lane(h->t, j, hit.t);                                                                  \
-    h->u = pc_with_lane(h->u, j, hit.u);                                                                  \
-    h->v = pc_with_lane(h->v, j, hit.v);                                                                  \
-    h->slot = pc_with_lane(h->slot, j, hit.slot);                                                         \
-    h->prim = pc_with_lane(h->prim, j, hit.prim);                                                         \
+    packet_set_hit_lane(h, j, &hit);                                                                      \
+    return true;                                                                                          \
+  }                                                                                                       \
+  /* Lane j through the subtree at node root with the single-ray traversal (trace_tree), for subtrees    \
+   * few lanes entered. Returns whether lane j's hit changed. */                                          \
+  inline PC_OVL bool packet_subtree_lane(const SceneData* cut, __global const Bvh8Node* nodes,           \
+                                         __global const LeafBlock* blocks, __global const Primitive* prims, \
+                                         uint root, const RayPacket##N* r, uint j, bool any_hit, HitPacket##N* h) { \
+    Hit hit;                                                                                              \
+    Ray ray = packet_ray_lane(r, j, h, &hit);                                                             \
+    float t = hit.t;                                                                                      \
+    uint prim = hit.prim;                                                                                 \
+    trace_tree(cut, nodes, blocks, prims, root, &ray, any_hit, &hit);                                     \
+    if (hit.t == t && hit.prim == prim) return false;                                                     \
+    packet_set_hit_lane(h, j, &hit);                                                                      \
     return true;                                                                                          \
   }                                                                                                       \
   /* The packet's active lanes against a leaf reference's blocks; returns the lanes whose hit changed. */ \
@@ -211,7 +237,20 @@ PC_LANE_ACCESS(uint16, uint, 16)
         if (sp == 0) return any_hit ? found : h->slot != (U)(PC_INVALID);                                 \
         --sp;                                                                                             \
         lanes = pc_lanes_of_bits(stack_lanes[sp], active) & active;                                       \
-        if (pc_any_(lanes) && stack_entry[sp] <= pc_max_lanes(select((F)(-INFINITY), h->t, lanes))) break; \
+        if (!pc_any_(lanes) || stack_entry[sp] > pc_max_lanes(select((F)(-INFINITY), h->t, lanes))) continue; \
+        uint bits = pc_lane_bits(lanes);                                                                  \
+        if (4u * popcount(bits) > N || (stack[sp] & PC_BVH4_LEAF)) break;                                 \
+        /* A quarter of the lanes or fewer: each alone through the subtree (the same hits; most of the    \
+         * vector work would be wasted: 3.1 against 3.8 M bounce rays/s at 8 lanes, docs/benchmarks-notes.md). */ \
+        uint changed = 0u;                                                                                \
+        for (uint j = 0u; j < N; ++j)                                                                     \
+          if (((bits >> j) & 1u) && packet_subtree_lane(cut, nodes, blocks, prims, stack[sp], r, j, any_hit, h)) \
+            changed |= 1u << j;                                                                           \
+        found |= pc_lanes_of_bits(changed, found);                                                        \
+        if (any_hit) {                                                                                    \
+          active &= !pc_lanes_of_bits(changed, active);                                                   \
+          if (!pc_any_(active)) return found;                                                             \
+        }                                                                                                 \
       }                                                                                                   \
       ref = stack[sp];                                                                                    \
     }                                                                                                     \
