@@ -3,7 +3,8 @@ BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--l
 camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
 the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
 Checks that both layouts and the packets give the same hit records as each other.
-Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts-*.json)
+Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts/*.json, beside and
+not among the peer runs that scripts/bench/report.py reads)
 """
 import argparse
 import datetime
@@ -120,8 +121,8 @@ def main():
         result["samples"][scene] = {"size": size, "spp": spp, "median_samples_per_second": med, "runs": runs}
         print("%s %dx%d, %d spp: 4-wide %.3f, 8-wide %.3f Msamples/s (%.2fx)" %
               (scene, size, size, spp, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh8"] / med["bvh4"]))
-    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
-    out = os.path.join(ROOT, "bench", "results", "layouts-%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
+    os.makedirs(os.path.join(ROOT, "bench", "results", "layouts"), exist_ok=True)
+    out = os.path.join(ROOT, "bench", "results", "layouts", "%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
     with open(out, "w") as f:
         json.dump(result, f, indent=1)
     print("results:", os.path.relpath(out, ROOT))
