@@ -48,7 +48,14 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   scene_ = std::make_unique<SceneBuffers>(cl, scene, header);
   film_ = ClBuffer(cl, CL_MEM_READ_WRITE, film_size);
   stats_ = ClBuffer(cl, CL_MEM_READ_WRITE, light() ? sizeof(SplatStats) : sizeof(UnitStats));
-  kernel_ = std::make_unique<ClKernel>(program_->kernel(bdpt ? "bdpt_pass" : light() ? "light_pass" : "render_pass"));
+  if (settings.lanes != 1 && settings.lanes != 8 && settings.lanes != 16)
+    throw UsageError("--lanes " + std::to_string(settings.lanes) + ": one path per work item (1) or 8 or 16");
+  if (settings.lanes > 1 && integrator_ != PC_INTEGRATOR_PATH)
+    throw UsageError("--lanes " + std::to_string(settings.lanes) + ": only the path integrator runs over lanes yet");
+  lanes_ = settings.lanes;
+  std::string kernel_name = bdpt ? "bdpt_pass" : light() ? "light_pass" : "render_pass";
+  if (lanes_ > 1) kernel_name += "_lanes" + std::to_string(lanes_);
+  kernel_ = std::make_unique<ClKernel>(program_->kernel(kernel_name.c_str()));
   first_unit_arg_ = scene_->bind(*kernel_);
   if (light()) {
     const LightTransportSetup& lt = *settings.light;
@@ -68,7 +75,9 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   if (settings.work_group > limit)
     throw UsageError("--work-group " + std::to_string(settings.work_group) + ": " + cl.info.name +
                      " runs the render kernel in work groups of at most " + std::to_string(limit));
-  work_group_ = settings.work_group > 0 ? settings.work_group : std::min<size_t>(64, limit);
+  // The lane kernels' work items hold 8 or 16 paths each: PoCL keeps a work group's private memory on its
+  // stack, so their groups are smaller.
+  work_group_ = settings.work_group > 0 ? settings.work_group : std::min<size_t>(lanes_ > 1 ? 8 : 64, limit);
   cl_ulong private_bytes = 0;
   CL_CHECK(clGetKernelWorkGroupInfo(kernel_->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
                                     &private_bytes, nullptr));
@@ -107,7 +116,7 @@ double DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t
   k.arg(first_unit_arg_ + 4, cl_uint(pixel_stride));
   k.arg(first_unit_arg_ + 5, cl_uint(sample_begin));
   k.arg(first_unit_arg_ + 6, cl_uint(sample_count));
-  return run_kernel(*cl_, k.k, pixel_count, work_group_);
+  return run_kernel(*cl_, k.k, (pixel_count + lanes_ - 1) / lanes_, work_group_);
 }
 
 uint64_t DeviceWorker::probe(uint32_t count, uint32_t spp) {

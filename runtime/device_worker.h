@@ -37,6 +37,7 @@ struct WorkerSettings {
   size_t work_group = 0;      // 0: 64, or the kernel's limit if lower
   DeviceFault fault;
   uint32_t integrator = PC_INTEGRATOR_PATH;
+  uint32_t lanes = 1;         // path: paths per work item, 1, 8 or 16 (render_pass_lanesN)
   const LightTransportSetup* light = nullptr;  // light, bdpt: the header and emission distribution
   uint32_t max_depth = 0;     // bdpt: the light subpath's vertex array has this many (at least 1)
   bool splat_pairs = false;   // splat with 32-bit word pairs even where 64-bit atomics exist (tests)
@@ -84,6 +85,7 @@ class DeviceWorker {
   uint32_t integrator_ = PC_INTEGRATOR_PATH;
   uint32_t pixels_ = 0;
   size_t work_group_ = 0;
+  uint32_t lanes_ = 1;
   uint64_t private_bytes_ = 0;
   cl_uint first_unit_arg_ = 0;
   DeviceFault fault_;

@@ -228,6 +228,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
     setup.settings.integrator = options.integrator;
+    setup.settings.lanes = options.lanes;
     setup.settings.light = &light_setup;
     setup.settings.splat_pairs = options.debug_splat_pairs;
     setup.settings.max_depth = options.max_depth;

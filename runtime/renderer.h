@@ -42,7 +42,10 @@ struct RenderOptions {
   uint32_t pass_spp = 0;        // samples per unit; 0 adapts units to the devices' rates
   uint32_t tile_pixels = 0;     // pixels per tile; 0: about 256 tiles
   uint32_t max_unit_pixels = 0; // 0: as the devices' rates allow
-  size_t work_group = 0;        // 0: 64 (or the kernel's limit)
+  size_t work_group = 0;        // 0: 64 (or the kernel's limit); 8 for the lane kernels
+  // Paths per work item of the path integrator: 1 (render_pass) or 8 or 16 (render_pass_lanesN, issue 15);
+  // the same pixels.
+  uint32_t lanes = 1;
 
   // Several devices.
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's
