@@ -227,11 +227,6 @@ __kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
 #define PC_STORE_LANES_1(x, p) (p)[0] = (x)
 #define PC_STORE_LANES_8(x, p) vstore8(x, 0, p)
 #define PC_STORE_LANES_16(x, p) vstore16(x, 0, p)
-/* The opening of a lane test's NAME_write_N (closed by its user): v[0 .. IN) the lanes' inputs. */
-#define PC_LANE_TEST_WRITER(name, IN, F, N, LOAD)                                                         \
-  inline void name##_write_##N(float in[IN][16], uint first, __global uint* o) {                          \
-    F v[IN];                                                                                              \
-    for (uint k = 0u; k < IN##u; ++k) v[k] = LOAD(in[k] + first);
 /* Results r[0 .. COUNT) of N lanes written as bits, lane j's at o[COUNT j ..]. */
 #define PC_WRITE_LANE_RESULTS(r, COUNT, N, STORE, o)                                                      \
   for (uint k = 0u; k < COUNT; ++k) {                                                                     \
@@ -265,7 +260,9 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
  * as bits at out[((3 i + width) 16 + j) 10 + k] (width 0: 16 lanes, 1: 8, 2: one): t, b, the offset
  * origin (3 each) and the weight. */
 #define PC_MATH_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
-  PC_LANE_TEST_WRITER(math_lanes, 14, F, N, LOAD)                                                         \
+  inline void math_lanes_write_##N(float in[14][16], uint first, __global uint* o) {                    \
+    F v[14];                                                                                              \
+    for (uint k = 0u; k < 14u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 t, b;                                                                                              \
     make_frame(lane3(v[0], v[1], v[2]), &t, &b);                                                          \
     V3 po = offset_ray_origin(lane3(v[6], v[7], v[8]), lane3(v[3], v[4], v[5]), lane3(v[0], v[1], v[2]),   \
@@ -286,7 +283,9 @@ PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
  * out[((3 i + width) 16 + j) 36 + k] (width 0: 16 lanes, 1: 8, 2: one): per lobe eval (3), pdf, the
  * sample's wi (3), pdf, weight (3) and validity (1 or 0). */
 #define PC_BSDF_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
-  PC_LANE_TEST_WRITER(bsdf_lanes, 17, F, N, LOAD)                                                         \
+  inline void bsdf_lanes_write_##N(float in[17][16], uint first, __global uint* o) {                    \
+    F v[17];                                                                                              \
+    for (uint k = 0u; k < 17u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 c = lane3(v[0], v[1], v[2]), wo = lane3(v[4], v[5], v[6]), wi = lane3(v[7], v[8], v[9]);           \
     V3 sc = lane3(v[13], v[14], v[15]);                                                                   \
     F n = v[16];                                                                                          \
@@ -316,7 +315,9 @@ PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
  * sample's wi (3), pdf, weight (3), validity, delta (1 or 0) and eta2 (the delta lobes' eval and pdf,
  * and all but the dielectric's eta2, are written as 0, 0 and 1). */
 #define PC_FRESNEL_LOBES_LANES_TEST(V3, F, I, N, LOAD, STORE)                                             \
-  PC_LANE_TEST_WRITER(fresnel_lobes_lanes, 20, F, N, LOAD)                                                \
+  inline void fresnel_lobes_lanes_write_##N(float in[20][16], uint first, __global uint* o) {             \
+    F v[20];                                                                                              \
+    for (uint k = 0u; k < 20u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 c = lane3(v[0], v[1], v[2]), eta = lane3(v[5], v[6], v[7]), kk = lane3(v[8], v[9], v[10]);         \
     V3 wo = lane3(v[11], v[12], v[13]), wi = lane3(v[14], v[15], v[16]);                                  \
     F ior = v[3], alpha = v[4];                                                                           \
@@ -344,30 +345,6 @@ PC_FRESNEL_LOBES_LANES_TEST(lane3f, float, int, 1, PC_LOAD_LANES_1, PC_STORE_LAN
 PC_FRESNEL_LOBES_LANES_TEST(lane3f8, float8, int8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
 PC_FRESNEL_LOBES_LANES_TEST(lane3f16, float16, int16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
 
-/* The geometry of light sampling over 16, 8 and one lane (lights.cl, PC_LIGHTS_LANES): lane j of item i
- * reads 30 floats at in[30 (16 i + j)]: sphere (1 or 0), a (3), b (3), c (3), 1 / area, flip, x (3), u (2),
- * a point light's position (3), emission (3), spot (1 or 0), direction (3), cos_inner, cos_outer and
- * two_sided, and writes 21 results as bits at out[((3 i + width) 16 + j) 21 + k]: the area sample's p (3),
- * p_err (3), n (3), pdf, sphere_light_pdf at p, emitted_towards x from p (3), and the point light's wi
- * (3), irradiance (3) and validity. */
-#define PC_LIGHT_LANES_TEST(V3, F, I, N, LOAD, STORE)                                                     \
-  PC_LANE_TEST_WRITER(light_lanes, 30, F, N, LOAD)                                                        \
-    V3 a = lane3(v[1], v[2], v[3]), b = lane3(v[4], v[5], v[6]), c = lane3(v[7], v[8], v[9]);             \
-    V3 x = lane3(v[12], v[13], v[14]), emission = lane3(v[20], v[21], v[22]);                             \
-    V3 p, p_err, n, wi, le;                                                                               \
-    F pdf;                                                                                                \
-    sample_area_light_lanes(v[0] != 0.0f, a, b, c, v[10], v[11] != 0.0f, x, v[15], v[16], &p, &p_err, &n, &pdf); \
-    V3 e = emitted_towards(emission, v[29] != 0.0f, n, p, x);                                             \
-    I ok = sample_point_light_lanes(lane3(v[17], v[18], v[19]), emission, v[23] != 0.0f, lane3(v[24], v[25], v[26]), \
-                                    v[27], v[28], x, &wi, &le);                                           \
-    F r[21] = {p.x, p.y, p.z, p_err.x, p_err.y, p_err.z, n.x, n.y, n.z, pdf, sphere_light_pdf(a, b.x, x, p, n), \
-               e.x, e.y, e.z, wi.x, wi.y, wi.z, le.x, le.y, le.z, select((F)(0.0f), (F)(1.0f), ok)};     \
-    PC_WRITE_LANE_RESULTS(r, 21u, N, STORE, o);                                                           \
-  }
-PC_LIGHT_LANES_TEST(lane3f, float, int, 1, PC_LOAD_LANES_1, PC_STORE_LANES_1)
-PC_LIGHT_LANES_TEST(lane3f8, float8, int8, 8, PC_LOAD_LANES_8, PC_STORE_LANES_8)
-PC_LIGHT_LANES_TEST(lane3f16, float16, int16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
-
 /* The kernel NAME_test of a lane test over float inputs: lane j of item i reads IN floats at
  * in[IN (16 i + j)], and NAME_write_N (N = 16, 8, 1) writes OUT results per lane at 16 lanes, at 8 (two
  * halves) and at one lane (each alone), item i's at out[3 i 16 OUT ..] in that order. */
@@ -386,7 +363,6 @@ PC_LIGHT_LANES_TEST(lane3f16, float16, int16, 16, PC_LOAD_LANES_16, PC_STORE_LAN
 PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 14u, 10u)
 PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 17u, 36u)
 PC_FLOAT_LANES_TEST_KERNEL(fresnel_lobes_lanes, 20u, 56u)
-PC_FLOAT_LANES_TEST_KERNEL(light_lanes, 30u, 21u)
 #undef PC_FLOAT_LANES_TEST_KERNEL
 
 /* The samplers over 16 and 8 lanes against one lane (sampler.cl, sample4_lanes): item i takes the 16 keys

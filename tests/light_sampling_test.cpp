@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -551,69 +550,4 @@ TEST(LightSampling, PointLightFollowsTheInverseSquareLaw) {
     EXPECT_NEAR(s.le(0).x, 5 / glm::dot(d, d), 1e-5 * 5 / glm::dot(d, d));
     EXPECT_NEAR(glm::length(s.wi(0) - glm::normalize(d)), 0, 1e-6);
   }
-}
-
-// The geometry of light sampling, written once over lanes (issue 15; kernels/lights.cl, PC_LIGHTS_LANES),
-// gives the one-lane bits (the integrators') at 16 and 8 lanes, with triangles and spheres side by side in
-// one vector, points inside spheres (sampled by area), near and far ones (large and small cones, the
-// small-cone series), flipped and two-sided lights, and point and spot lights seen from everywhere around
-// their cones and from their own position.
-TEST(LightLanes, LightGeometryGivesTheOneLaneBits) {
-  const size_t items = 32, lanes = 16 * items, results = 21;
-  std::vector<float> in(30 * lanes);
-  std::mt19937 rng(77);
-  std::uniform_real_distribution<float> unit(0, 1), sym(-1, 1);
-  size_t inside = 0, small_cone = 0;
-  for (size_t j = 0; j < lanes; ++j) {
-    float* v = &in[30 * j];
-    bool sphere = j % 3 == 0;
-    v[0] = sphere;
-    for (int k = 1; k < 10; ++k) v[k] = 2 * sym(rng);
-    if (sphere) v[4] = 0.05f + unit(rng);  // the radius
-    v[10] = 0.1f + unit(rng);
-    v[11] = j % 4 == 1;
-    float dist = j % 5 == 0 ? 0.5f * unit(rng) : j % 5 == 1 ? 40.0f + 400 * unit(rng) : 1 + 4 * unit(rng);
-    float dir[3] = {sym(rng), sym(rng), sym(rng)}, len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    for (int k = 0; k < 3; ++k) v[12 + k] = v[1 + k] + (sphere ? v[4] : 1.0f) * dist * dir[k] / len;
-    inside += sphere && dist < 1;
-    small_cone += sphere && dist > 38.3f;
-    v[15] = j % 7 == 0 ? 0.0f : unit(rng);
-    v[16] = j % 11 == 0 ? 0x1.fffffep-1f : unit(rng);
-    for (int k = 17; k < 20; ++k) v[k] = j % 9 == 0 ? v[12 + k - 17] : 3 * sym(rng);  // at x: no sample
-    for (int k = 20; k < 23; ++k) v[k] = 5 * unit(rng);
-    v[23] = j % 2;
-    // The spot points from its position towards x, off by up to about 60 degrees.
-    float to_x[3], l2 = 0;
-    for (int k = 0; k < 3; ++k) l2 += (to_x[k] = v[12 + k] - v[17 + k] + sym(rng) * 1.2f * std::fabs(v[12 + k] - v[17 + k])) * to_x[k];
-    for (int k = 0; k < 3; ++k) v[24 + k] = l2 > 0 ? to_x[k] / std::sqrt(l2) : (k == 2 ? 1.0f : 0.0f);
-    v[27] = 0.9f + 0.09f * unit(rng);
-    v[28] = 0.5f + 0.3f * unit(rng);
-    v[29] = j % 6 == 0;
-  }
-  ASSERT_GT(inside, 10u);
-  ASSERT_GT(small_cone, 10u);
-  std::vector<uint32_t> bits = run_float_lanes_test("light_lanes_test", in, items, 16 * results);
-  LaneComparison lc = compare_lanes(bits, items, 16 * results, [](float f) { return bool(std::isfinite(f)); });
-  EXPECT_EQ(lc.differing, 0u);
-  EXPECT_GT(lc.valid, items * 16 * results * 9 / 10);
-  // At one lane: some spot lanes get no light, some all of it and some part; some points see no light.
-  size_t dark = 0, full = 0, part = 0, no_sample = 0, unlit_back = 0;
-  for (size_t j = 0; j < lanes; ++j) {
-    float r[results];
-    std::memcpy(r, &bits[(3 * (j / 16) + 2) * 16 * results + results * (j % 16)], sizeof r);
-    const float* v = &in[30 * j];
-    no_sample += r[20] == 0;
-    unlit_back += r[11] == 0 && v[20] > 0;
-    if (!v[23] || r[20] == 0) continue;
-    float dx = v[17] - v[12], dy = v[18] - v[13], dz = v[19] - v[14], d2 = dx * dx + dy * dy + dz * dz;
-    float unspotted = v[20] / d2;
-    dark += r[17] == 0;
-    full += r[17] == unspotted;
-    part += r[17] > 0 && r[17] != unspotted;
-  }
-  EXPECT_GT(dark, lanes / 50);
-  EXPECT_GT(full, lanes / 50);
-  EXPECT_GT(part, lanes / 50);
-  EXPECT_GT(no_sample, 10u);
-  EXPECT_GT(unlit_back, lanes / 20);
 }
