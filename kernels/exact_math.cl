@@ -502,7 +502,10 @@ typedef struct { float16 x, y, z; } lane3f16;
     U a = as_uint##N(x) & 0x7fffffffu;                                                                    \
     return select(a, (U)(0u), a < 0x00800000u);                                                           \
   }                                                                                                       \
-  inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }               \
+  inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }
+/* pc_length and pc_normalize of 8 or 16 lanes; those of one lane (lane3f) are the float3 functions, whose
+ * early returns are faster than these selects and give the same bits. */
+#define PC_EM_LANES3_LENGTH(V3, F, I, U, N)                                                               \
   inline PC_OVL F pc_length(V3 v) {                                                                       \
     U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
     F vx = as_float##N(ax), vy = as_float##N(ay), vz = as_float##N(az);                                   \
@@ -542,6 +545,14 @@ typedef struct { float16 x, y, z; } lane3f16;
 PC_EM_LANES3(lane3f, float, int, uint, )
 PC_EM_LANES3(lane3f8, float8, int8, uint8, 8)
 PC_EM_LANES3(lane3f16, float16, int16, uint16, 16)
+PC_EM_LANES3_LENGTH(lane3f8, float8, int8, uint8, 8)
+PC_EM_LANES3_LENGTH(lane3f16, float16, int16, uint16, 16)
 #undef PC_EM_LANES3
+#undef PC_EM_LANES3_LENGTH
+inline PC_OVL float pc_length(lane3f v) { return pc_length((float3)(v.x, v.y, v.z)); }
+inline PC_OVL lane3f pc_normalize(lane3f v) {
+  float3 n = pc_normalize((float3)(v.x, v.y, v.z));
+  return lane3(n.x, n.y, n.z);
+}
 
 #endif
