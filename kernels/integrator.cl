@@ -238,12 +238,15 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
   add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);
 }
 
-/* ---- The lane kernels (issue 15): W = 8 or 16 paths per work item ----
+/* ---- The lane kernels (issue 15): W = PC_LANES = 8 or 16 paths per work item ----
+ * Built only where the render asks for them (-DPC_LANES, runtime/device_worker.cpp): the one-path
+ * program does not pay for them.
  * Lane j of work item i renders pixel pixel_begin + (N i + j) pixel_stride, its samples one after the
  * other as render_pass does, and starts its next sample as soon as its path ends (per-lane
  * regeneration), so the lanes stay busy until every lane's pixel is done. The rays of all lanes are
  * traced together, as one packet (kernels/packet.cl), and each lane's bounce runs path_shade: every pixel
  * gets render_pass's bits. */
+#ifdef PC_LANES
 #if defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
 #include "packet.cl"
 #define PC_LANES_PACKETS
@@ -298,8 +301,11 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
   for (uint j = 0u; j < N; ++j)                                                                           \
     if ((bits >> j) & 1u) found[j] = trace_scene(sc, sc, rays + j, any_hit, hits + j);
 #endif
+#if PC_LANES == 8
 PC_TRACE_LANES(lane3f8, float8, int8, uint8, 8)
+#else
 PC_TRACE_LANES(lane3f16, float16, int16, uint16, 16)
+#endif
 #undef PC_TRACE_LANES
 #undef PC_TRACE_LANES_BODY
 
@@ -374,6 +380,10 @@ PC_TRACE_LANES(lane3f16, float16, int16, uint16, 16)
     }                                                                                                     \
     add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);                              \
   }
+#if PC_LANES == 8
 PC_RENDER_PASS_LANES(8)
+#else
 PC_RENDER_PASS_LANES(16)
+#endif
 #undef PC_RENDER_PASS_LANES
+#endif /* PC_LANES */
