@@ -247,6 +247,9 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
  * traced together, as one packet (kernels/packet.cl), and each lane's bounce runs path_shade: every pixel
  * gets render_pass's bits. */
 #ifdef PC_LANES
+/* M(PC_LANES) with PC_LANES's value, for macros that paste it into names. */
+#define PC_FOR_LANES_(M, N) M(N)
+#define PC_FOR_LANES(M) PC_FOR_LANES_(M, PC_LANES)
 #if defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
 #include "packet.cl"
 #define PC_LANES_PACKETS
@@ -254,60 +257,20 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
 
 /* The rays of the lanes set in bits (hits[j], found[j] for each), as one packet where the device's layout
  * has packets, else each alone. */
-#define PC_TRACE_LANES(V3, F, I, U, N)                                                                    \
-  inline PC_OVL void trace_lanes##N(const SceneData* sc, const Ray* rays, uint bits, bool any_hit, Hit* hits, \
-                                    bool* found) {                                                        \
-    PC_TRACE_LANES_BODY(V3, F, I, U, N)                                                                   \
-  }
 #ifdef PC_LANES_PACKETS
-#define PC_TRACE_LANES_BODY(V3, F, I, U, N)                                                               \
-  float v[10][N];                                                                                         \
-  uint w[3][N];                                                                                           \
-  for (uint j = 0u; j < N; ++j) {                                                                         \
-    const Ray* r = rays + j;                                                                              \
-    v[0][j] = r->o.x, v[1][j] = r->o.y, v[2][j] = r->o.z, v[3][j] = r->d.x, v[4][j] = r->d.y, v[5][j] = r->d.z; \
-    v[6][j] = r->tmin, v[7][j] = r->tmax;                                                                 \
-    w[0][j] = r->skip_prim, w[1][j] = r->cutout_seed, w[2][j] = ((bits >> j) & 1u) ? 0xffffffffu : 0u;    \
-  }                                                                                                       \
-  RayPacket##N p;                                                                                         \
-  p.o = lane3(vload##N(0, v[0]), vload##N(0, v[1]), vload##N(0, v[2]));                                   \
-  p.d = lane3(vload##N(0, v[3]), vload##N(0, v[4]), vload##N(0, v[5]));                                   \
-  p.tmin = vload##N(0, v[6]);                                                                             \
-  p.skip_prim = vload##N(0, w[0]);                                                                        \
-  p.cutout_seed = vload##N(0, w[1]);                                                                      \
-  HitPacket##N h;                                                                                         \
-  h.t = vload##N(0, v[7]);                                                                                \
-  h.u = h.v = (F)(0.0f);                                                                                  \
-  h.slot = h.prim = (U)(PC_INVALID);                                                                      \
-  I hit = trace_packet(sc, sc->nodes8, sc->leaf_blocks, sc->prims, 0u, &p, as_int##N(vload##N(0, w[2])), any_hit, &h); \
-  int m[N];                                                                                               \
-  vstore##N(hit, 0, m);                                                                                   \
-  vstore##N(h.t, 0, v[0]);                                                                                \
-  vstore##N(h.u, 0, v[1]);                                                                                \
-  vstore##N(h.v, 0, v[2]);                                                                                \
-  vstore##N(h.slot, 0, w[0]);                                                                             \
-  vstore##N(h.prim, 0, w[1]);                                                                             \
-  for (uint j = 0u; j < N; ++j) {                                                                         \
-    found[j] = m[j] != 0;                                                                                 \
-    hits[j].t = v[0][j];                                                                                  \
-    hits[j].u = v[1][j];                                                                                  \
-    hits[j].v = v[2][j];                                                                                  \
-    hits[j].slot = w[0][j];                                                                               \
-    hits[j].prim = w[1][j];                                                                               \
-    hits[j].instance = PC_INVALID;                                                                        \
+#define PC_TRACE_LANES(N)                                                                                 \
+  inline void trace_lanes##N(const SceneData* sc, const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) { \
+    trace_rays_as_packet##N(sc, PC_SCENE_BVH(sc), sc->prims, rays, bits, any_hit, hits, found);           \
   }
 #else
-#define PC_TRACE_LANES_BODY(V3, F, I, U, N)                                                               \
-  for (uint j = 0u; j < N; ++j)                                                                           \
-    if ((bits >> j) & 1u) found[j] = trace_scene(sc, sc, rays + j, any_hit, hits + j);
+#define PC_TRACE_LANES(N)                                                                                 \
+  inline void trace_lanes##N(const SceneData* sc, const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) { \
+    for (uint j = 0u; j < N; ++j)                                                                         \
+      if ((bits >> j) & 1u) found[j] = trace_scene(sc, sc, rays + j, any_hit, hits + j);                  \
+  }
 #endif
-#if PC_LANES == 8
-PC_TRACE_LANES(lane3f8, float8, int8, uint8, 8)
-#else
-PC_TRACE_LANES(lane3f16, float16, int16, uint16, 16)
-#endif
+PC_FOR_LANES(PC_TRACE_LANES)
 #undef PC_TRACE_LANES
-#undef PC_TRACE_LANES_BODY
 
 #define PC_RENDER_PASS_LANES(N)                                                                           \
   __kernel void render_pass_lanes##N(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats,    \
@@ -380,10 +343,8 @@ PC_TRACE_LANES(lane3f16, float16, int16, uint16, 16)
     }                                                                                                     \
     add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);                              \
   }
-#if PC_LANES == 8
-PC_RENDER_PASS_LANES(8)
-#else
-PC_RENDER_PASS_LANES(16)
-#endif
+PC_FOR_LANES(PC_RENDER_PASS_LANES)
 #undef PC_RENDER_PASS_LANES
+#undef PC_FOR_LANES
+#undef PC_FOR_LANES_
 #endif /* PC_LANES */

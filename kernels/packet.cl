@@ -136,11 +136,11 @@ PC_LANE_ACCESS(uint16, uint, 16)
       __global const float* c = (__global const float*)b; /* ax ay az bx by bz cx cy cz, 4 lanes each */ \
       for (uint i = 0u; i < b->count; ++i) {                                                              \
         if (b->sphere_mask & (1u << i)) {                                                                 \
-          uint bits = pc_lane_bits(active);                                                               \
+          uint bits = pc_lane_bits(active), hit_bits = 0u;                                                \
           for (uint j = 0u; j < N; ++j)                                                                   \
-            if ((bits >> j) & 1u)                                                                         \
-              if (packet_prim_lane(cut, prims, b->first_slot + i, r, j, h))                               \
-                changed = pc_lanes_of_bits(pc_lane_bits(changed) | (1u << j), changed);                   \
+            if (((bits >> j) & 1u) && packet_prim_lane(cut, prims, b->first_slot + i, r, j, h))           \
+              hit_bits |= 1u << j;                                                                        \
+          changed |= pc_lanes_of_bits(hit_bits, changed);                                                 \
           continue;                                                                                       \
         }                                                                                                 \
         /* The vertices' coordinates on each lane's axes: the single-ray test's (a[kx] - o[kx]) etc. */   \
@@ -274,6 +274,52 @@ PC_PACKET_LANES(lane3f8, float8, int8, uint8, 8)
 PC_PACKET_LANES(lane3f16, float16, int16, uint16, 16)
 #undef PC_PACKET_LANES
 #undef PC_PACKET_CUTOUTS
+
+/* rays[0 .. N) through the tree at node 0 as one packet, the lanes set in bits only: hits[j] (instance
+ * PC_INVALID) and found[j] for each of those (pathcl rays' packets, the lane kernels' rays). */
+#define PC_TRACE_RAYS_AS_PACKET(V3, F, I, U, N)                                                           \
+  inline void trace_rays_as_packet##N(const SceneData* cut, __global const Bvh8Node* nodes,               \
+                                      __global const LeafBlock* blocks, __global const Primitive* prims,  \
+                                      const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) {  \
+    float v[8][N];                                                                                        \
+    uint w[3][N];                                                                                         \
+    for (uint j = 0u; j < N; ++j) {                                                                       \
+      const Ray* r = rays + j;                                                                            \
+      v[0][j] = r->o.x, v[1][j] = r->o.y, v[2][j] = r->o.z, v[3][j] = r->d.x, v[4][j] = r->d.y, v[5][j] = r->d.z; \
+      v[6][j] = r->tmin, v[7][j] = r->tmax;                                                               \
+      w[0][j] = r->skip_prim, w[1][j] = r->cutout_seed, w[2][j] = ((bits >> j) & 1u) ? 0xffffffffu : 0u;  \
+    }                                                                                                     \
+    RayPacket##N p;                                                                                       \
+    p.o = lane3(vload##N(0, v[0]), vload##N(0, v[1]), vload##N(0, v[2]));                                 \
+    p.d = lane3(vload##N(0, v[3]), vload##N(0, v[4]), vload##N(0, v[5]));                                 \
+    p.tmin = vload##N(0, v[6]);                                                                           \
+    p.skip_prim = vload##N(0, w[0]);                                                                      \
+    p.cutout_seed = vload##N(0, w[1]);                                                                    \
+    HitPacket##N h;                                                                                       \
+    h.t = vload##N(0, v[7]);                                                                              \
+    h.u = h.v = (F)(0.0f);                                                                                \
+    h.slot = h.prim = (U)(PC_INVALID);                                                                    \
+    I hit = trace_packet(cut, nodes, blocks, prims, 0u, &p, as_int##N(vload##N(0, w[2])), any_hit, &h);   \
+    int m[N];                                                                                             \
+    vstore##N(hit, 0, m);                                                                                 \
+    vstore##N(h.t, 0, v[0]);                                                                              \
+    vstore##N(h.u, 0, v[1]);                                                                              \
+    vstore##N(h.v, 0, v[2]);                                                                              \
+    vstore##N(h.slot, 0, w[0]);                                                                           \
+    vstore##N(h.prim, 0, w[1]);                                                                           \
+    for (uint j = 0u; j < N; ++j) {                                                                       \
+      found[j] = m[j] != 0;                                                                               \
+      hits[j].t = v[0][j];                                                                                \
+      hits[j].u = v[1][j];                                                                                \
+      hits[j].v = v[2][j];                                                                                \
+      hits[j].slot = w[0][j];                                                                             \
+      hits[j].prim = w[1][j];                                                                             \
+      hits[j].instance = PC_INVALID;                                                                      \
+    }                                                                                                     \
+  }
+PC_TRACE_RAYS_AS_PACKET(lane3f8, float8, int8, uint8, 8)
+PC_TRACE_RAYS_AS_PACKET(lane3f16, float16, int16, uint16, 16)
+#undef PC_TRACE_RAYS_AS_PACKET
 
 #endif /* PC_BVH8 */
 #endif
