@@ -6,6 +6,8 @@
 #ifndef PATHCL_BSDF_CL
 #define PATHCL_BSDF_CL
 
+#include "lanes.cl"
+
 typedef struct {
   float3 wi;     /* local frame */
   float3 weight; /* f cos / pdf: the factor the path throughput takes */
@@ -121,6 +123,156 @@ inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
 #undef PC_SAMPLE_CASE
   if (flipped) s->wi = flip_z(s->wi);
   return ok;
+}
+
+/* ---- The dispatch over the lanes of a work item (kernels/lanes.cl): each material type present among
+ * the lanes runs its *_lanes functions for all lanes at once, and its lanes take the results, so every lane
+ * gets the one-lane dispatch's bits. */
+
+/* A Material's parameters by lane (kernels/material.cl, material_at_lanes). */
+typedef struct {
+  LaneU type;
+  Lane3 color, specular, k;
+  LaneF alpha, sigma, exponent, ior;
+} MaterialLanes;
+
+typedef struct {
+  Lane3 wi, weight;
+  LaneF pdf, eta2;
+  LaneI delta;
+} BsdfSampleLanes;
+
+inline LaneI bsdf_is_delta_lanes(LaneU type) { return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC); }
+
+/* Where wo is on the back of a two-sided material: the lanes whose directions are mirrored to the front. */
+inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
+
+inline Lane3 flip_z_lanes(Lane3 w, LaneI flip) { return lane3(w.x, w.y, select(w.z, -w.z, flip)); }
+
+inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+  LaneI flip = bsdf_flipped_lanes(m, wo);
+  wo = flip_z_lanes(wo, flip);
+  wi = flip_z_lanes(wi, flip);
+  Lane3 f = lane3_splat((float3)(0.0f));
+  LaneI is;
+#ifdef PC_HAS_DIFFUSE
+  if (pc_any_(is = mask & (m->type == PC_MAT_DIFFUSE))) f = lane3_select(f, diffuse_eval_lanes(m->color, wi), is);
+#endif
+#ifdef PC_HAS_OREN_NAYAR
+  if (pc_any_(is = mask & (m->type == PC_MAT_OREN_NAYAR)))
+    f = lane3_select(f, oren_nayar_eval_lanes(m->color, m->sigma, wo, wi), is);
+#endif
+#ifdef PC_HAS_PHONG
+  if (pc_any_(is = mask & (m->type == PC_MAT_PHONG)))
+    f = lane3_select(f, phong_eval_lanes(m->color, m->specular, m->exponent, wo, wi), is);
+#endif
+#ifdef PC_HAS_ROUGH_CONDUCTOR
+  if (pc_any_(is = mask & (m->type == PC_MAT_ROUGH_CONDUCTOR)))
+    f = lane3_select(f, rough_conductor_eval_lanes(m->specular, m->k, m->alpha, wo, wi), is);
+#endif
+#ifdef PC_HAS_PLASTIC
+  if (pc_any_(is = mask & (m->type == PC_MAT_PLASTIC)))
+    f = lane3_select(f, plastic_eval_lanes(m->color, m->ior, m->alpha, wo, wi), is);
+#endif
+  return f;
+}
+
+inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+  LaneI flip = bsdf_flipped_lanes(m, wo);
+  wo = flip_z_lanes(wo, flip);
+  wi = flip_z_lanes(wi, flip);
+  LaneF pdf = (LaneF)(0.0f);
+  LaneI is;
+#ifdef PC_HAS_DIFFUSE
+  if (pc_any_(is = mask & (m->type == PC_MAT_DIFFUSE))) pdf = select(pdf, diffuse_pdf_lanes(wi), is);
+#endif
+#ifdef PC_HAS_OREN_NAYAR
+  if (pc_any_(is = mask & (m->type == PC_MAT_OREN_NAYAR))) pdf = select(pdf, oren_nayar_pdf_lanes(wi), is);
+#endif
+#ifdef PC_HAS_PHONG
+  if (pc_any_(is = mask & (m->type == PC_MAT_PHONG)))
+    pdf = select(pdf, phong_pdf_lanes(m->color, m->specular, m->exponent, wo, wi), is);
+#endif
+#ifdef PC_HAS_ROUGH_CONDUCTOR
+  if (pc_any_(is = mask & (m->type == PC_MAT_ROUGH_CONDUCTOR)))
+    pdf = select(pdf, rough_conductor_pdf_lanes(m->alpha, wo, wi), is);
+#endif
+#ifdef PC_HAS_PLASTIC
+  if (pc_any_(is = mask & (m->type == PC_MAT_PLASTIC)))
+    pdf = select(pdf, plastic_pdf_lanes(m->color, m->ior, m->alpha, wo, wi), is);
+#endif
+  return pdf;
+}
+
+/* u0, u1 for the direction, u2 to choose a lobe. Returns the lanes of mask with a valid sample. */
+inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
+                               BsdfSampleLanes* s) {
+  LaneI flip = bsdf_flipped_lanes(m, wo);
+  wo = flip_z_lanes(wo, flip);
+  LaneI ok = (LaneI)(0), is, valid;
+  s->wi = s->weight = lane3_splat((float3)(0.0f));
+  s->pdf = (LaneF)(0.0f);
+  s->eta2 = (LaneF)(1.0f);
+  s->delta = (LaneI)(0);
+  Lane3 wi, weight;
+  LaneF pdf;
+  /* Each type's lanes take its sample: wi, weight, pdf and the validity. */
+#define PC_TAKE_SAMPLE(IS, VALID)                                                                         \
+  s->wi = lane3_select(s->wi, wi, IS);                                                                    \
+  s->weight = lane3_select(s->weight, weight, IS);                                                        \
+  s->pdf = select(s->pdf, pdf, IS);                                                                       \
+  ok = select(ok, VALID, IS);
+#ifdef PC_HAS_DIFFUSE
+  if (pc_any_(is = mask & (m->type == PC_MAT_DIFFUSE))) {
+    valid = diffuse_sample_lanes(m->color, u0, u1, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
+  }
+#endif
+#ifdef PC_HAS_OREN_NAYAR
+  if (pc_any_(is = mask & (m->type == PC_MAT_OREN_NAYAR))) {
+    valid = oren_nayar_sample_lanes(m->color, m->sigma, wo, u0, u1, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
+  }
+#endif
+#ifdef PC_HAS_PHONG
+  if (pc_any_(is = mask & (m->type == PC_MAT_PHONG))) {
+    valid = phong_sample_lanes(m->color, m->specular, m->exponent, wo, u0, u1, u2, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
+  }
+#endif
+#ifdef PC_HAS_MIRROR
+  if (pc_any_(is = mask & (m->type == PC_MAT_MIRROR))) {
+    valid = mirror_sample_lanes(m->color, wo, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
+    s->delta |= is;
+  }
+#endif
+#ifdef PC_HAS_DIELECTRIC
+  if (pc_any_(is = mask & (m->type == PC_MAT_DIELECTRIC))) {
+    LaneF eta2;
+    valid = dielectric_sample_lanes(m->color, m->ior, wo, u2, &wi, &pdf, &weight, &eta2);
+    PC_TAKE_SAMPLE(is, valid)
+    s->eta2 = select(s->eta2, eta2, is);
+    s->delta |= is;
+  }
+#endif
+#ifdef PC_HAS_ROUGH_CONDUCTOR
+  if (pc_any_(is = mask & (m->type == PC_MAT_ROUGH_CONDUCTOR))) {
+    valid = rough_conductor_sample_lanes(m->specular, m->k, m->alpha, wo, u0, u1, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
+  }
+#endif
+#ifdef PC_HAS_PLASTIC
+  if (pc_any_(is = mask & (m->type == PC_MAT_PLASTIC))) {
+    LaneI delta;
+    valid = plastic_sample_lanes(m->color, m->ior, m->alpha, wo, u0, u1, u2, &wi, &pdf, &weight, &delta);
+    PC_TAKE_SAMPLE(is, valid)
+    s->delta = select(s->delta, delta, is);
+  }
+#endif
+#undef PC_TAKE_SAMPLE
+  s->wi = flip_z_lanes(s->wi, flip);
+  return ok & mask;
 }
 
 #endif

@@ -11,6 +11,7 @@
 #define PATHCL_ENVIRONMENT_CL
 
 #include "texture.cl"
+#include "lanes.cl"
 
 inline float3 env_direction(float2 uv) {
   float phi = 2.0f * PC_PI * uv.x, theta = PC_PI * uv.y;
@@ -94,6 +95,30 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
   *pdf = 0.25f * PC_INV_PI;
   *le = light.emission.xyz;
   return sample_uniform_sphere(u);
+}
+
+/* env_radiance and env_pdf by lane (kernels/lanes.cl), for the lanes in m: a constant for all lanes at
+ * once, a map lane by lane. */
+inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, __global const uint* texels, Lane3 d,
+                                LaneI m) {
+  Lane3 le = lane3_splat(light.emission.xyz);
+#ifdef PC_HAS_ENVIRONMENT_MAP
+  if (light.texture != PC_INVALID) {
+    PC_EACH_LANE(j, pc_lane_bits(m)) le = lane3_with(le, j, env_radiance(light, textures, texels, lane3_at(d, j)));
+  }
+#endif
+  return le;
+}
+
+inline LaneF env_pdf_lanes(Light light, __global const Texture* textures, __global const float* dist, Lane3 d,
+                           LaneI m) {
+  LaneF pdf = (LaneF)(0.25f * PC_INV_PI);
+#ifdef PC_HAS_ENVIRONMENT_MAP
+  if (light.texture != PC_INVALID) {
+    PC_EACH_LANE(j, pc_lane_bits(m)) pdf = pc_with_lane(pdf, j, env_pdf(light, textures, dist, lane3_at(d, j)));
+  }
+#endif
+  return pdf;
 }
 
 #endif

@@ -1,5 +1,9 @@
-/* The megakernel: one work item renders sample_count samples of one pixel, whole paths each, and adds
- * them to the film one by one (so any split into passes sums in the same order). */
+/* The megakernel of the path integrator: a work item renders W = PC_LANES pixels at once, one per lane
+ * (kernels/lanes.cl: 1 on GPUs, 16 or 8 on CPU devices), each lane its pixel's samples one after the other,
+ * whole paths each, added to the pixel's accumulators one by one (so any split into passes sums in the
+ * same order). A lane starts its next sample as soon as its path ends, so the lanes stay busy until each
+ * has done its pixel. Every lane does the one-lane program's operations: the pixels are the same bits at
+ * every W. */
 #include "shared/types.h"
 #include "math.cl"
 #include "rng.cl"
@@ -15,186 +19,282 @@
 #include "lights.cl"
 #include "material.cl"
 #include "counters.cl"
+#include "lanes.cl"
+#include "trace_lanes.cl"
 
-/* Light along a ray that escaped: the environment, weighted against light sampling by MIS. */
-inline float3 escaped_radiance(const SceneData* sc, float3 x, float3 d, float prev_bsdf_pdf, bool prev_delta) {
+/* Light along the rays of the lanes in m that escaped: the environment, weighted against light sampling
+ * by MIS. */
+inline Lane3 escaped_radiance_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneF prev_bsdf_pdf, LaneI prev_delta,
+                                    LaneI m) {
 #ifdef PC_HAS_ENVIRONMENT
   if (sc->h->env_light != PC_INVALID) {
     Light env = sc->lights[sc->h->env_light];
-    float3 le = env_radiance(env, sc->textures, sc->texels, d);
-    if (prev_delta) return le;
-    return le * power_heuristic(prev_bsdf_pdf, environment_light_pdf(sc, x, d));
+    Lane3 le = env_radiance_lanes(env, sc->textures, sc->texels, d, m);
+    LaneI weighted = m & !prev_delta;
+    if (!pc_any_(weighted)) return le;
+    LaneF w = power_heuristic(prev_bsdf_pdf, environment_light_pdf_lanes(sc, x, d, weighted));
+    return lane3_select(lane3_scale(le, w), le, prev_delta);
   }
 #endif
-  return (float3)(0.0f);
+  return lane3_splat((float3)(0.0f));
 }
 
-/* A path in flight, bounce by bounce (path_begin, path_shade, then its shadow ray's result): the same
- * steps for one path per work item (trace_path) and for a lane of the lane kernels (render_pass_lanes8,
- * render_pass_lanes16), so every path gets the same bits whichever kernel runs it. */
+/* The paths in flight of a work item's lanes, bounce by bounce (path_begin_lanes, path_shade_lanes, then
+ * the shadow rays' results). */
 typedef struct {
-  Ray ray;           /* the next ray to trace */
-  float3 throughput, radiance;
-  float3 nee;        /* the light sample's contribution, added when its shadow ray is not blocked */
-  float3 prev_p;     /* the previous vertex */
-  float eta_scale;   /* product of the (n_t / n_i)^2 that refraction divided the throughput by */
-  float prev_bsdf_pdf;
-  uint depth;
-  bool prev_delta;   /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
-} PathState;
+  RayLanes ray;      /* the next ray to trace */
+  Lane3 throughput, radiance;
+  Lane3 nee;         /* the light sample's contribution, added when its shadow ray is not blocked */
+  Lane3 prev_p;      /* the previous vertex */
+  LaneF eta_scale;   /* product of the (n_t / n_i)^2 that refraction divided the throughput by */
+  LaneF prev_bsdf_pdf;
+  LaneU depth;
+  LaneI prev_delta;  /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
+} PathLanes;
 
-inline void path_begin(const SceneData* sc, SampleKey key, uint px, uint py, PathState* st) {
+/* The cut-out seed of ray ray_index of each lane's path (kernels/cutout.cl: 0 the camera ray, then
+ * 2 depth + 1 the shadow ray and 2 depth + 2 the next ray of scattering event depth). */
+inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, LaneU sample, LaneU ray_index) {
+  return hash4(pixel, sample, (LaneU)(h->seed ^ 0x3c6ef372u), ray_index);
+}
+
+/* New paths: the camera rays of sample `sample` of each lane's pixel, taken where m is set. */
+inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
   __constant const SceneHeader* h = sc->h;
-  camera_ray(h, px, py, sample4(h, key, 0), &st->ray.o, &st->ray.d);
+  LaneF u0, u1, u2, u3;
+  sample4_lanes(h, pixel, sample, h->seed, (LaneU)(0u), &u0, &u1, &u2, &u3);
+  PathLanes n;
+  camera_ray_lanes(h, pixel % h->width, pixel / h->width, u0, u1, u2, u3, &n.ray.o, &n.ray.d);
 #ifdef PC_DEBUG_PERTURB
   /* Test builds only (DeviceFault::perturb): one operation rounded the other way, as a device of another
    * arithmetic class would, so that the start-up probe must tell the device apart. */
-  st->ray.d.x = nextafter(st->ray.d.x, INFINITY);
+  n.ray.d.x = nextafter(n.ray.d.x, (LaneF)(INFINITY));
 #endif
-  st->ray.tmin = 0.0f;
-  st->ray.tmax = INFINITY;
-  st->ray.skip_prim = PC_INVALID;
-  st->ray.skip_instance = PC_INVALID;
-  st->ray.cutout_seed = 0u;
+  n.ray.tmin = (LaneF)(0.0f);
+  n.ray.tmax = (LaneF)(INFINITY);
+  n.ray.skip_prim = n.ray.skip_instance = (LaneU)(PC_INVALID);
+  n.ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  st->ray.cutout_seed = cutout_seed(key, 0u);
+  n.ray.cutout_seed = cutout_seed_lanes(h, pixel, sample, (LaneU)(0u));
 #endif
-  st->throughput = (float3)(1.0f);
-  st->radiance = (float3)(0.0f);
-  st->nee = (float3)(0.0f);
-  st->eta_scale = 1.0f;
-  st->prev_bsdf_pdf = 0.0f;
-  st->prev_delta = true;
-  st->prev_p = st->ray.o;
-  st->depth = 0u;
+  Lane3 zero = lane3_splat((float3)(0.0f));
+  n.throughput = lane3_splat((float3)(1.0f));
+  n.radiance = n.nee = zero;
+  n.eta_scale = (LaneF)(1.0f);
+  n.prev_bsdf_pdf = (LaneF)(0.0f);
+  n.prev_delta = (LaneI)(-1);
+  n.prev_p = n.ray.o;
+  n.depth = (LaneU)(0u);
+  st->ray.o = lane3_select(st->ray.o, n.ray.o, m);
+  st->ray.d = lane3_select(st->ray.d, n.ray.d, m);
+  st->ray.tmin = select(st->ray.tmin, n.ray.tmin, m);
+  st->ray.tmax = select(st->ray.tmax, n.ray.tmax, m);
+  st->ray.skip_prim = select(st->ray.skip_prim, n.ray.skip_prim, m);
+  st->ray.skip_instance = select(st->ray.skip_instance, n.ray.skip_instance, m);
+  st->ray.cutout_seed = select(st->ray.cutout_seed, n.ray.cutout_seed, m);
+  st->throughput = lane3_select(st->throughput, n.throughput, m);
+  st->radiance = lane3_select(st->radiance, n.radiance, m);
+  st->nee = lane3_select(st->nee, n.nee, m);
+  st->prev_p = lane3_select(st->prev_p, n.prev_p, m);
+  st->eta_scale = select(st->eta_scale, n.eta_scale, m);
+  st->prev_bsdf_pdf = select(st->prev_bsdf_pdf, n.prev_bsdf_pdf, m);
+  st->depth = select(st->depth, n.depth, m);
+  st->prev_delta = select(st->prev_delta, n.prev_delta, m);
 }
 
-/* One bounce at the hit of st->ray (found) or where it escaped: adds the light seen there; when a light
- * sample wants a shadow ray, sets *shadow, st->nee and *has_shadow (the caller adds st->nee if the shadow
- * ray is not blocked, before the next bounce); samples the BSDF for st->ray's successor. Returns whether
- * the path goes on. */
-inline bool path_shade(const SceneData* sc, SampleKey key, PathState* st, bool found, const Hit* hit, Ray* shadow,
-                       bool* has_shadow) {
+/* One bounce of the lanes in m, at the hit of st->ray (found) or where it escaped: adds the light seen
+ * there; where a light sample wants a shadow ray, sets *shadow, st->nee and the lane in *has_shadow (the
+ * caller adds st->nee where the shadow ray is not blocked, before the next bounce); samples the BSDF for
+ * st->ray's successor. Returns the lanes whose paths go on. */
+inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, PathLanes* st, LaneI m, LaneI found,
+                              const HitLanes* hit, RayLanes* shadow, LaneI* has_shadow) {
   __constant const SceneHeader* h = sc->h;
-  *has_shadow = false;
-  if (!found) {
-    st->radiance += st->throughput * escaped_radiance(sc, st->prev_p, st->ray.d, st->prev_bsdf_pdf, st->prev_delta);
-    return false;
+  *has_shadow = (LaneI)(0);
+  LaneI escaped = m & !found;
+  if (pc_any_(escaped)) {
+    Lane3 le = escaped_radiance_lanes(sc, st->prev_p, st->ray.d, st->prev_bsdf_pdf, st->prev_delta, escaped);
+    st->radiance = lane3_select(st->radiance, lane3_add(st->radiance, lane3_mul(st->throughput, le)), escaped);
   }
-  uint depth = st->depth;
-  Surface s = scene_surface(sc, &st->ray, hit);
-  PrimShading sh = sc->shading[s.prim];
-  float3 wo = -st->ray.d;
+  LaneI live = m & found;
+  if (!pc_any_(live)) return live;
+  LaneU depth = st->depth;
+  ShadingLanes sh;
+  SurfaceLanes s = scene_surface_lanes(sc, &st->ray, hit, live, &sh);
+  Lane3 wo = lane3_neg(st->ray.d);
 #ifdef PC_HAS_AREA_LIGHTS
-  if (sh.light != PC_INVALID) {
-    float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, st->ray.o);
-    float w = st->prev_delta ? 1.0f : power_heuristic(st->prev_bsdf_pdf, light_pdf(sc, sh.light, st->prev_p, s.p, s.ng));
-    st->radiance += st->throughput * le * w;
+  LaneI lit = live & (sh.light != PC_INVALID);
+  if (pc_any_(lit)) {
+    LightLanes light;
+    gather_lights(sc->lights, sh.light, lit, &light);
+    Lane3 le = emitted_towards_lanes(light.emission, sh.flags, s.ng, s.p, st->ray.o);
+    LaneI weighted = lit & !st->prev_delta;
+    LaneF w = (LaneF)(1.0f);
+    if (pc_any_(weighted))
+      w = select(w, power_heuristic(st->prev_bsdf_pdf, light_pdf_lanes(sc, sh.light, st->prev_p, s.p, s.ng, weighted)),
+                 weighted);
+    st->radiance = lane3_select(st->radiance, lane3_add(st->radiance, lane3_scale(lane3_mul(st->throughput, le), w)), lit);
   }
 #endif
-  if (depth >= h->max_depth) return false;
+  live &= depth < h->max_depth;
+  if (!pc_any_(live)) return live;
 
-  Material m = material_at(sc, sh.material, &s, hit);
+  MaterialLanes mat = material_at_lanes(sc, sh.material, &s, &sh, hit, live);
   /* Local shading frame about the front-side shading normal. */
-  float3 t, b;
+  Lane3 t, b;
   make_frame(s.ns, &t, &b);
-  float3 wo_local = (float3)(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
-  float wo_ng = pc_dot(wo, s.ng);
-  float4 u_light = sample4(h, key, 1 + 2 * depth);
-  float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
+  Lane3 wo_local = lane3(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
+  LaneF wo_ng = pc_dot(wo, s.ng);
+  LaneF ul0, ul1, ul2, ul3, ub0, ub1, ub2, ub3;
+  sample4_lanes(h, pixel, sample, h->seed, 1u + 2u * depth, &ul0, &ul1, &ul2, &ul3);
+  sample4_lanes(h, pixel, sample, h->seed, 2u + 2u * depth, &ub0, &ub1, &ub2, &ub3);
 
   /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
-  LightSample ls;
-  if (h->light_count > 0 && !bsdf_is_delta(m) && sample_light(sc, s.p, u_light.xyz, &ls)) {
-    float3 wi_local = (float3)(pc_dot(ls.wi, t), pc_dot(ls.wi, b), pc_dot(ls.wi, s.ns));
-    float3 f = bsdf_eval(m, wo_local, wi_local);
-    /* Only reflection here (no transmissive material takes light samples): the light must be on
-       wo's side of the geometric surface, so shading normals cannot leak light through it. */
-    if (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
-      if (ls.infinite) {
-        *shadow = spawn_ray(&s, ls.wi);
-      } else {
-        *shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n);
-      }
+  LaneI nee = live & !bsdf_is_delta_lanes(mat.type);
+  if (h->light_count > 0u && pc_any_(nee)) {
+    LightSampleLanes ls;
+    nee &= sample_light_lanes(sc, s.p, ul0, ul1, ul2, nee, &ls);
+    if (pc_any_(nee)) {
+      Lane3 wi_local = lane3(pc_dot(ls.wi, t), pc_dot(ls.wi, b), pc_dot(ls.wi, s.ns));
+      Lane3 f = bsdf_eval_lanes(&mat, wo_local, wi_local, nee);
+      /* Only reflection here (no transmissive material takes light samples): the light must be on
+         wo's side of the geometric surface, so shading normals cannot leak light through it. */
+      nee &= (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f) & lane3_any_positive(f);
+      if (pc_any_(nee)) {
+        RayLanes to_light;
+        spawn_ray_lanes(&s, ls.wi, &to_light);
+        LaneI finite = nee & !ls.infinite;
+        if (pc_any_(finite)) {
+          RayLanes to_point;
+          spawn_ray_to_lanes(&s, ls.p, ls.p_err, ls.n, &to_point);
+          to_light.o = lane3_select(to_light.o, to_point.o, finite);
+          to_light.d = lane3_select(to_light.d, to_point.d, finite);
+          to_light.tmax = select(to_light.tmax, to_point.tmax, finite);
+        }
+        to_light.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-      shadow->cutout_seed = cutout_seed(key, 2u * depth + 1u);
+        to_light.cutout_seed = cutout_seed_lanes(h, pixel, sample, 2u * depth + 1u);
 #endif
-      float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
-      st->nee = st->throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
-      *has_shadow = true;
+        *shadow = to_light;
+        LaneF w = select(power_heuristic(ls.pdf, bsdf_pdf_lanes(&mat, wo_local, wi_local, nee)), (LaneF)(1.0f), ls.delta);
+        Lane3 contribution = lane3_scale(lane3_mul(lane3_mul(st->throughput, f), ls.Le), fabs(wi_local.z) * w / ls.pdf);
+        st->nee = lane3_select(st->nee, contribution, nee);
+        *has_shadow = nee;
+      }
     }
   }
 
-  BsdfSample bs;
-  if (!bsdf_sample(m, wo_local, u_bsdf.xyz, &bs)) return false;
-  float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
+  BsdfSampleLanes bs;
+  live &= bsdf_sample_lanes(&mat, wo_local, ub0, ub1, ub2, live, &bs);
+  Lane3 wi = lane3_add(lane3_add(lane3_scale(t, bs.wi.x), lane3_scale(b, bs.wi.y)), lane3_scale(s.ns, bs.wi.z));
   /* Reflection must stay on wo's side of the geometric surface and transmission must cross it:
      with shading normals the two can disagree, and then the path stops rather than leak light. */
-  bool transmitted = bs.wi.z * wo_local.z < 0.0f;
-  if ((pc_dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) return false;
-  st->throughput *= bs.weight;
-  st->eta_scale *= bs.eta2;
-  st->prev_bsdf_pdf = bs.pdf;
-  st->prev_delta = bs.delta;
-  st->prev_p = s.p;
-  if (depth + 1 > h->rr_depth) {
-    /* Russian roulette: survive with probability min(1, max throughput), reweighted to stay unbiased.
-     * The throughput is taken without the radiance scaling of refraction (pbrt-v4's etaScale): inside
-     * glass it is (n_i / n_t)^2 = 0.44 times lower only until the path leaves again, and killing paths
-     * for it there made glass scenes noisier (peer benchmark, glass-metal). */
-    float q = fmin(1.0f, max_component(st->throughput) * st->eta_scale);
-    if (u_light.w >= q) return false;
-    st->throughput /= q;
+  LaneI transmitted = bs.wi.z * wo_local.z < 0.0f;
+  live &= (pc_dot(wi, s.ng) * wo_ng > 0.0f) != transmitted;
+  if (!pc_any_(live)) return live;
+  st->throughput = lane3_select(st->throughput, lane3_mul(st->throughput, bs.weight), live);
+  st->eta_scale = select(st->eta_scale, st->eta_scale * bs.eta2, live);
+  st->prev_bsdf_pdf = select(st->prev_bsdf_pdf, bs.pdf, live);
+  st->prev_delta = select(st->prev_delta, bs.delta, live);
+  st->prev_p = lane3_select(st->prev_p, s.p, live);
+  /* Russian roulette: survive with probability min(1, max throughput), reweighted to stay unbiased.
+   * The throughput is taken without the radiance scaling of refraction (pbrt-v4's etaScale): inside
+   * glass it is (n_i / n_t)^2 = 0.44 times lower only until the path leaves again, and killing paths
+   * for it there made glass scenes noisier (peer benchmark, glass-metal). */
+  LaneI roulette = live & (depth + 1u > h->rr_depth);
+  if (pc_any_(roulette)) {
+    LaneF q = fmin(1.0f, lane3_max_component(st->throughput) * st->eta_scale);
+    live &= !(roulette & (ul3 >= q));
+    roulette &= live;
+    st->throughput = lane3_select(st->throughput, lane3_div(st->throughput, q), roulette);
   }
-  st->ray = spawn_ray(&s, wi);
+  RayLanes next;
+  spawn_ray_lanes(&s, wi, &next);
+  next.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  st->ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
+  next.cutout_seed = cutout_seed_lanes(h, pixel, sample, 2u * depth + 2u);
 #endif
-  st->depth = depth + 1u;
-  return true;
+  st->ray.o = lane3_select(st->ray.o, next.o, live);
+  st->ray.d = lane3_select(st->ray.d, next.d, live);
+  st->ray.tmin = select(st->ray.tmin, next.tmin, live);
+  st->ray.tmax = select(st->ray.tmax, next.tmax, live);
+  st->ray.skip_prim = select(st->ray.skip_prim, next.skip_prim, live);
+  st->ray.skip_instance = select(st->ray.skip_instance, next.skip_instance, live);
+  st->ray.cutout_seed = select(st->ray.cutout_seed, next.cutout_seed, live);
+  st->depth = select(st->depth, depth + 1u, live);
+  return live;
 }
 
-inline float3 trace_path(const SceneData* sc, SampleKey key, uint px, uint py, uint* rays) {
-  PathState st;
-  path_begin(sc, key, px, py, &st);
-  for (;;) {
-    Hit hit;
-    ++*rays;
-    bool found = trace_scene(sc, sc, &st.ray, false, &hit);
-    Ray shadow;
-    bool has_shadow;
-    bool more = path_shade(sc, key, &st, found, &hit, &shadow, &has_shadow);
-    if (has_shadow) {
-      Hit blocker;
-      ++*rays;
-      if (!trace_scene(sc, sc, &shadow, true, &blocker)) st.radiance += st.nee;
-    }
-    if (!more) return st.radiance;
-  }
-}
+/* Film accumulators of the lanes' pixels: the sums of the even-numbered and of the odd-numbered samples
+ * (w counts them) and the sum of squares, as the film holds them (three float4 per pixel). */
+typedef struct {
+  Lane3 sum[2], squares;
+  LaneF count[2], squares_w;
+} PixelLanes;
 
-/* Adds sample s's radiance to a pixel's accumulators (even and odd half sums, squares). A sample that is
- * not a finite non-negative radiance is counted and dropped: it is a bug to find. */
-inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
-                              uint* inf_samples, uint* negative_samples) {
+/* Adds each lane's sample (index s, radiance L) to its pixel's accumulators, for the lanes in m. A sample
+ * that is not a finite non-negative radiance is counted and dropped: it is a bug to find. */
+inline void accumulate_sample_lanes(Lane3 L, LaneU s, LaneI m, PixelLanes* acc, uint* nan_samples,
+                                    uint* inf_samples, uint* negative_samples) {
 #ifdef PC_DEBUG_INJECT_HAZARDS
   /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
-  if (s % 7u == 3u) L.x = NAN;
-  if (s % 11u == 5u) L.y = INFINITY;
-  if (s % 13u == 6u) L.z = -1.0f;
+  L.x = select(L.x, (LaneF)(NAN), s % 7u == 3u);
+  L.y = select(L.y, (LaneF)(INFINITY), s % 11u == 5u);
+  L.z = select(L.z, (LaneF)(-1.0f), s % 13u == 6u);
 #endif
-  if (isnan(L.x) || isnan(L.y) || isnan(L.z)) {
-    ++*nan_samples;
-    L = (float3)(0.0f);
-  } else if (isinf(L.x) || isinf(L.y) || isinf(L.z)) {
-    ++*inf_samples;
-    L = (float3)(0.0f);
-  } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
-    ++*negative_samples;
-    L = (float3)(0.0f);
+  LaneI nan = isnan(L.x) | isnan(L.y) | isnan(L.z);
+  LaneI inf = (isinf(L.x) | isinf(L.y) | isinf(L.z)) & !nan;
+  LaneI negative = ((L.x < 0.0f) | (L.y < 0.0f) | (L.z < 0.0f)) & !nan & !inf;
+  *nan_samples += lane_count(m & nan);
+  *inf_samples += lane_count(m & inf);
+  *negative_samples += lane_count(m & negative);
+  L = lane3_select(L, lane3_splat((float3)(0.0f)), nan | inf | negative);
+  LaneI odd = (s & 1u) != 0u;
+  for (int k = 0; k < 2; ++k) {
+    LaneI add = m & (k ? odd : !odd);
+    acc->sum[k] = lane3_select(acc->sum[k], lane3_add(acc->sum[k], L), add);
+    acc->count[k] = select(acc->count[k], acc->count[k] + 1.0f, add);
   }
-  half_sum[s & 1u] += (float4)(L, 1.0f);
-  squares->xyz += L * L;
+  acc->squares = lane3_select(acc->squares, lane3_add(acc->squares, lane3_mul(L, L)), m);
+}
+
+/* The accumulators of pixels pixel (film: three float4 per pixel) of the lanes in m, and back. */
+inline PixelLanes load_pixels(__global const float4* film, LaneU pixel, LaneI m) {
+  uint at[PC_LANES];
+  float v[12][PC_LANES];
+  lane_gather_indices(pixel, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    for (uint k = 0u; k < 3u; ++k) {
+      float4 a = film[3u * at[j] + k];
+      v[4u * k][j] = a.x, v[4u * k + 1u][j] = a.y, v[4u * k + 2u][j] = a.z, v[4u * k + 3u][j] = a.w;
+    }
+  }
+  PixelLanes p;
+  p.sum[0] = lane3_load(v[0], v[1], v[2]);
+  p.count[0] = lane_load(v[3]);
+  p.sum[1] = lane3_load(v[4], v[5], v[6]);
+  p.count[1] = lane_load(v[7]);
+  p.squares = lane3_load(v[8], v[9], v[10]);
+  p.squares_w = lane_load(v[11]);
+  return p;
+}
+
+/* The lanes m of *acc from *from. */
+inline void select_pixels(PixelLanes* acc, const PixelLanes* from, LaneI m) {
+  for (int k = 0; k < 2; ++k) {
+    acc->sum[k] = lane3_select(acc->sum[k], from->sum[k], m);
+    acc->count[k] = select(acc->count[k], from->count[k], m);
+  }
+  acc->squares = lane3_select(acc->squares, from->squares, m);
+  acc->squares_w = select(acc->squares_w, from->squares_w, m);
+}
+
+inline void store_pixels(__global float4* film, LaneU pixel, LaneI m, const PixelLanes* p) {
+  PC_EACH_LANE(j, pc_lane_bits(m)) {
+    uint at = 3u * pc_lane(pixel, j);
+    film[at] = (float4)(lane3_at(p->sum[0], j), pc_lane(p->count[0], j));
+    film[at + 1u] = (float4)(lane3_at(p->sum[1], j), pc_lane(p->count[1], j));
+    film[at + 2u] = (float4)(lane3_at(p->squares, j), pc_lane(p->squares_w, j));
+  }
 }
 
 /* The unit's counters into stats (UnitStats) with integer atomics. */
@@ -208,143 +308,74 @@ inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_sample
 }
 
 /* One work unit: samples [sample_begin, sample_begin + sample_count) of pixels pixel_begin + i * pixel_stride,
- * i < pixel_count (stride 1 for the render's units, larger for the start-up probe). Each work item carries
- * its pixel's accumulators from the film and adds the samples one by one, so any split into units, on any
- * device, sums in the same order.
+ * i < pixel_count (stride 1 for the render's units, larger for the start-up probe). Work item g renders
+ * i = G g .. G g + G - 1 (G = PC_ITEM_PIXELS: W, times PC_LANE_PIXELS where W > 1), each lane one pixel at
+ * a time: when a lane has done its pixel it takes the work item's next, so the lanes of a unit with few
+ * samples per pixel do not wait for the slowest one's pixel. Each lane carries its pixel's accumulators
+ * from the film and adds the samples one by one, so any split into units, on any device, at any W, sums
+ * in the same order.
  * The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself.
  * stats (UnitStats): rays (64 bits) and hazard counts, added with integer atomics. */
+#if PC_LANES > 1
+#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
+#else
+#define PC_ITEM_PIXELS 1u
+#endif
 __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats, uint pixel_begin,
                           uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
   SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
-  if (item >= pixel_count) return;
-  uint pixel = pixel_begin + item * pixel_stride;
-  uint px = pixel % h->width, py = pixel / h->width;
-  SampleKey key;
-  key.pixel = pixel;
-  key.seed = h->seed;
+  uint first = get_global_id(0) * PC_ITEM_PIXELS;
+  if (first >= pixel_count || sample_count == 0u) return;
+  uint end = min(first + PC_ITEM_PIXELS, pixel_count), next = first + PC_LANES;
+  LaneU item = first + PC_LANE_INDEX;
+  LaneI active = item < end;
+  LaneU pixel = pixel_begin + select((LaneU)(first), item, active) * pixel_stride;
   uint rays = 0u, nan_samples = 0u, inf_samples = 0u, negative_samples = 0u;
-  float4 half_sum[2] = {film[3 * pixel], film[3 * pixel + 1]};
-  float4 squares = film[3 * pixel + 2];
-  for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
-    key.sample = s;
-    accumulate_sample(trace_path(&sc, key, px, py, &rays), s, half_sum, &squares, &nan_samples, &inf_samples,
-                      &negative_samples);
+  PixelLanes acc = load_pixels(film, pixel, active);
+  LaneU sample = (LaneU)(sample_begin);
+  PathLanes st;
+  path_begin_lanes(&sc, pixel, sample, (LaneI)(-1), &st);
+  while (pc_any_(active)) {
+    HitLanes hit;
+    LaneI found = trace_lanes(&sc, &st.ray, active, false, &hit);
+    rays += lane_count(active);
+    RayLanes shadow;
+    LaneI has_shadow;
+    LaneI more = path_shade_lanes(&sc, pixel, sample, &st, active, found, &hit, &shadow, &has_shadow);
+    if (pc_any_(has_shadow)) {
+      HitLanes blocker;
+      LaneI blocked = trace_lanes(&sc, &shadow, has_shadow, true, &blocker);
+      rays += lane_count(has_shadow);
+      st.radiance = lane3_select(st.radiance, lane3_add(st.radiance, st.nee), has_shadow & !blocked);
+    }
+    LaneI ended = active & !more;
+    if (!pc_any_(ended)) continue;
+    accumulate_sample_lanes(st.radiance, sample, ended, &acc, &nan_samples, &inf_samples, &negative_samples);
+    sample = select(sample, sample + 1u, ended);
+    LaneI done = ended & (sample >= sample_begin + sample_count), take = (LaneI)(0);
+    if (pc_any_(done)) {
+      /* Pixels done: into the film, and their lanes take the work item's next pixels. */
+      store_pixels(film, pixel, done, &acc);
+      uint items[PC_LANES], taken = 0u;
+      lane_store(item, items);
+      PC_EACH_LANE(j, pc_lane_bits(done)) {
+        if (next >= end) break;
+        items[j] = next++;
+        taken |= 1u << j;
+      }
+      take = pc_lanes_of_bits(taken, done);
+      active = (active & !done) | take;
+      if (pc_any_(take)) {
+        item = lane_load(items);
+        pixel = select(pixel, pixel_begin + item * pixel_stride, take);
+        sample = select(sample, (LaneU)(sample_begin), take);
+        PixelLanes loaded = load_pixels(film, pixel, take);
+        select_pixels(&acc, &loaded, take);
+      }
+    }
+    LaneI start = (ended & !done) | take;
+    if (pc_any_(start)) path_begin_lanes(&sc, pixel, sample, start, &st);
   }
-  film[3 * pixel] = half_sum[0];
-  film[3 * pixel + 1] = half_sum[1];
-  film[3 * pixel + 2] = squares;
   add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);
 }
-
-/* ---- The lane kernels (issue 15): W = PC_LANES = 8 or 16 paths per work item ----
- * Built only where the render asks for them (-DPC_LANES, runtime/device_worker.cpp): the one-path
- * program does not pay for them.
- * Lane j of work item i renders pixel pixel_begin + (N i + j) pixel_stride, its samples one after the
- * other as render_pass does, and starts its next sample as soon as its path ends (per-lane
- * regeneration), so the lanes stay busy until every lane's pixel is done. The rays of all lanes are
- * traced together, as one packet (kernels/packet.cl), and each lane's bounce runs path_shade: every pixel
- * gets render_pass's bits. */
-#ifdef PC_LANES
-/* M(PC_LANES) with PC_LANES's value, for macros that paste it into names. */
-#define PC_FOR_LANES_(M, N) M(N)
-#define PC_FOR_LANES(M) PC_FOR_LANES_(M, PC_LANES)
-#if defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
-#include "packet.cl"
-#define PC_LANES_PACKETS
-#endif
-
-/* The rays of the lanes set in bits (hits[j], found[j] for each), as one packet where the device's layout
- * has packets, else each alone. */
-#ifdef PC_LANES_PACKETS
-#define PC_TRACE_LANES(N)                                                                                 \
-  inline void trace_lanes##N(const SceneData* sc, const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) { \
-    trace_rays_as_packet##N(sc, PC_SCENE_BVH(sc), sc->prims, rays, bits, any_hit, hits, found);           \
-  }
-#else
-#define PC_TRACE_LANES(N)                                                                                 \
-  inline void trace_lanes##N(const SceneData* sc, const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) { \
-    for (uint j = 0u; j < N; ++j)                                                                         \
-      if ((bits >> j) & 1u) found[j] = trace_scene(sc, sc, rays + j, any_hit, hits + j);                  \
-  }
-#endif
-PC_FOR_LANES(PC_TRACE_LANES)
-#undef PC_TRACE_LANES
-
-#define PC_RENDER_PASS_LANES(N)                                                                           \
-  __kernel void render_pass_lanes##N(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats,    \
-                                     uint pixel_begin, uint pixel_count, uint pixel_stride, uint sample_begin, \
-                                     uint sample_count) {                                                 \
-    SceneData sc = PC_SCENE_DATA;                                                                         \
-    uint first = get_global_id(0) * N;                                                                    \
-    if (first >= pixel_count) return;                                                                     \
-    uint rays = 0u, nan_samples = 0u, inf_samples = 0u, negative_samples = 0u;                            \
-    PathState st[N];                                                                                      \
-    SampleKey key[N];                                                                                     \
-    uint pixel[N];                                                                                        \
-    float4 half_sum[N][2], squares[N];                                                                    \
-    uint active = 0u; /* bit j: lane j has a path in flight */                                           \
-    for (uint j = 0u; j < N; ++j) {                                                                       \
-      if (first + j >= pixel_count || sample_count == 0u) continue;                                      \
-      pixel[j] = pixel_begin + (first + j) * pixel_stride;                                                \
-      key[j].pixel = pixel[j];                                                                            \
-      key[j].seed = h->seed;                                                                              \
-      key[j].sample = sample_begin;                                                                       \
-      half_sum[j][0] = film[3 * pixel[j]];                                                                \
-      half_sum[j][1] = film[3 * pixel[j] + 1];                                                            \
-      squares[j] = film[3 * pixel[j] + 2];                                                                \
-      path_begin(&sc, key[j], pixel[j] % h->width, pixel[j] / h->width, st + j);                          \
-      active |= 1u << j;                                                                                  \
-    }                                                                                                     \
-    uint used = active;                                                                                   \
-    while (active != 0u) {                                                                                \
-      Ray r[N], shadow[N];                                                                                \
-      Hit hit[N];                                                                                         \
-      bool found[N], has_shadow[N], more[N];                                                              \
-      for (uint j = 0u; j < N; ++j) r[j] = st[j].ray;                                                     \
-      trace_lanes##N(&sc, r, active, false, hit, found);                                                  \
-      uint shadows = 0u;                                                                                  \
-      for (uint j = 0u; j < N; ++j) {                                                                     \
-        if (!((active >> j) & 1u)) continue;                                                              \
-        ++rays;                                                                                           \
-        more[j] = path_shade(&sc, key[j], st + j, found[j], hit + j, shadow + j, has_shadow + j);         \
-        if (has_shadow[j]) shadows |= 1u << j;                                                            \
-      }                                                                                                   \
-      if (shadows != 0u) {                                                                                \
-        bool blocked[N];                                                                                  \
-        for (uint j = 0u; j < N; ++j)                                                                     \
-          if (!((shadows >> j) & 1u)) shadow[j] = r[j]; /* any ray: the lane is not traced */             \
-        trace_lanes##N(&sc, shadow, shadows, true, hit, blocked);                                         \
-        for (uint j = 0u; j < N; ++j) {                                                                   \
-          if (!((shadows >> j) & 1u)) continue;                                                           \
-          ++rays;                                                                                         \
-          if (!blocked[j]) st[j].radiance += st[j].nee;                                                   \
-        }                                                                                                 \
-      }                                                                                                   \
-      for (uint j = 0u; j < N; ++j) {                                                                     \
-        if (!((active >> j) & 1u) || more[j]) continue;                                                   \
-        uint s = key[j].sample;                                                                           \
-        accumulate_sample(st[j].radiance, s, half_sum[j], squares + j, &nan_samples, &inf_samples,       \
-                          &negative_samples);                                                             \
-        if (s + 1u < sample_begin + sample_count) {                                                       \
-          key[j].sample = s + 1u;                                                                         \
-          path_begin(&sc, key[j], pixel[j] % h->width, pixel[j] / h->width, st + j);                      \
-        } else {                                                                                          \
-          active &= ~(1u << j);                                                                           \
-        }                                                                                                 \
-      }                                                                                                   \
-    }                                                                                                     \
-    for (uint j = 0u; j < N; ++j) {                                                                       \
-      if (!((used >> j) & 1u)) continue;                                                                  \
-      film[3 * pixel[j]] = half_sum[j][0];                                                                \
-      film[3 * pixel[j] + 1] = half_sum[j][1];                                                            \
-      film[3 * pixel[j] + 2] = squares[j];                                                                \
-    }                                                                                                     \
-    add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);                              \
-  }
-PC_FOR_LANES(PC_RENDER_PASS_LANES)
-#undef PC_RENDER_PASS_LANES
-#undef PC_FOR_LANES
-#undef PC_FOR_LANES_
-#endif /* PC_LANES */

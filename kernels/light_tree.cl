@@ -18,6 +18,7 @@
 #include "math.cl"
 #include "sampling.cl"
 #include "scene.cl"
+#include "lanes.cl"
 
 /* a's share of a + b: 1/2 when both are 0, all or nothing when the sum overflows. */
 inline float share_of(float a, float b) {
@@ -116,6 +117,143 @@ inline float light_choice(const SceneData* sc, float3 x, uint target, float u, u
 inline float light_choice_pdf(const SceneData* sc, float3 x, uint index) {
   uint unused;
   return light_choice(sc, x, index, 0.0f, &unused);
+}
+
+/* ---- light_choice by lane (kernels/lanes.cl): each lane does the one-lane walk's operations; where
+ * the lanes' walks are at the same node (the top of the tree, or a tree of few lights) it is loaded once. */
+
+PC_LANE_INLINE LaneF share_of_lanes(LaneF a, LaneF b) {
+  LaneF total = a + b;
+  LaneF infinite = select((LaneF)(0.0f), select((LaneF)(1.0f), (LaneF)(0.5f), isinf(b)), isinf(a));
+  return select(select(a / total, infinite, isinf(total)), (LaneF)(0.5f), !(total > 0.0f));
+}
+
+PC_LANE_INLINE LaneF cos_of_difference_clamped_lanes(LaneF cos_a, LaneF sin_a, LaneF cos_b, LaneF sin_b, LaneF* sin_out) {
+  LaneI none = cos_a >= cos_b;
+  *sin_out = select(fmax(0.0f, sin_a * cos_b - cos_a * sin_b), (LaneF)(0.0f), none);
+  return select(cos_a * cos_b + sin_a * sin_b, (LaneF)(1.0f), none);
+}
+
+/* light_bounds_importance of node[index] at x, for the lanes in m (the others: any value). */
+PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* nodes, LaneU index, Lane3 x, LaneI m) {
+  Lane3 lo, hi, axis;
+  LaneF power, cos_o, cos_e;
+  LaneI two_sided;
+  uint one = lane_uniform_index(index, m);
+  if (one != PC_INVALID) {
+    LightBvhNode nd = nodes[one];
+    lo = lane3_splat(nd.lo.xyz), hi = lane3_splat(nd.hi.xyz), axis = lane3_splat(nd.axis.xyz);
+    power = (LaneF)(nd.lo.w), cos_o = (LaneF)(nd.hi.w), cos_e = (LaneF)(nd.axis.w);
+    two_sided = (LaneI)(nd.two_sided != 0u ? -1 : 0);
+  } else {
+    uint at[PC_LANES], ts[PC_LANES];
+    float v[12][PC_LANES];
+    lane_gather_indices(index, m, at);
+    for (uint j = 0u; j < PC_LANES; ++j) {
+      LightBvhNode nd = nodes[at[j]];
+      v[0][j] = nd.lo.x, v[1][j] = nd.lo.y, v[2][j] = nd.lo.z, v[3][j] = nd.lo.w;
+      v[4][j] = nd.hi.x, v[5][j] = nd.hi.y, v[6][j] = nd.hi.z, v[7][j] = nd.hi.w;
+      v[8][j] = nd.axis.x, v[9][j] = nd.axis.y, v[10][j] = nd.axis.z, v[11][j] = nd.axis.w;
+      ts[j] = nd.two_sided;
+    }
+    lo = lane3_load(v[0], v[1], v[2]), hi = lane3_load(v[4], v[5], v[6]), axis = lane3_load(v[8], v[9], v[10]);
+    power = lane_load(v[3]), cos_o = lane_load(v[7]), cos_e = lane_load(v[11]);
+    two_sided = lane_load(ts) != 0u;
+  }
+  Lane3 half_extent = lane3_scale(lane3_sub(hi, lo), 0.5f);
+  Lane3 d = lane3_sub(x, lane3_add(lo, half_extent));
+  LaneF r2 = pc_dot(half_extent, half_extent), d2 = pc_dot(d, d);
+  LaneI outside = d2 > r2;
+  LaneF sin2_b = r2 / d2;
+  LaneF sin_b = select((LaneF)(0.0f), sqrt(sin2_b), outside), cos_b = select((LaneF)(-1.0f), sqrt(1.0f - sin2_b), outside);
+  LaneF cos_w = select((LaneF)(1.0f), pc_dot(axis, d) / sqrt(d2), d2 > 0.0f);
+  cos_w = select(cos_w, fabs(cos_w), two_sided);
+  cos_w = fmin(1.0f, fmax(-1.0f, cos_w));
+  LaneF sin_w = sqrt(fmax(0.0f, 1.0f - cos_w * cos_w));
+  LaneF sin_o = sqrt(fmax(0.0f, 1.0f - cos_o * cos_o));
+  LaneF sin_x, sin_p;
+  LaneF cos_x = cos_of_difference_clamped_lanes(cos_w, sin_w, cos_o, sin_o, &sin_x);
+  LaneF cos_p = cos_of_difference_clamped_lanes(cos_x, sin_x, cos_b, sin_b, &sin_p);
+  Lane3 nearest = lane3(fmax(fabs(d.x) - half_extent.x, 0.0f), fmax(fabs(d.y) - half_extent.y, 0.0f),
+                        fmax(fabs(d.z) - half_extent.z, 0.0f));
+  Lane3 farthest = lane3_add(lane3_abs(d), half_extent);
+  LaneF thinnest = fmin(half_extent.x, fmin(half_extent.y, half_extent.z));
+  LaneF dmin2 = fmax(fmax(pc_dot(nearest, nearest), thinnest * thinnest), FLT_MIN);
+  LaneF dmax2 = fmax(pc_dot(farthest, farthest), FLT_MIN);
+  LaneF importance = power * 0.5f * (1.0f / dmin2 + 1.0f / dmax2) * cos_p;
+  return select(importance, (LaneF)(0.0f), (cos_p < cos_e) | !(cos_p > 0.0f));
+}
+
+/* node[index].second, or .light, for the lanes in m (the others: the first such lane's). */
+PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, LaneU index, LaneI m, bool light) {
+  uint one = lane_uniform_index(index, m);
+  if (one != PC_INVALID) return (LaneU)(light ? nodes[one].light : nodes[one].second);
+  uint at[PC_LANES], out[PC_LANES];
+  lane_gather_indices(index, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) out[j] = light ? nodes[at[j]].light : nodes[at[j]].second;
+  return lane_load(out);
+}
+
+/* light_choice for the lanes in m: where target is PC_INVALID chooses a light with u (into *chosen),
+ * elsewhere follows the choice of light target; the probability of that choice from x. */
+inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, LaneF u, LaneI m, LaneU* chosen) {
+  __constant const SceneHeader* h = sc->h;
+  *chosen = target;
+  if (!pc_any_(m)) return (LaneF)(0.0f);
+  uint tree_count = h->tree_light_count, infinite_count = h->light_count - tree_count;
+  LaneI sampling = target == PC_INVALID;
+  LaneF p_infinite = (LaneF)(infinite_count == 0u ? 0.0f : 1.0f);
+  if (infinite_count != 0u && tree_count != 0u)
+    p_infinite = share_of_lanes((LaneF)(h->infinite_irradiance),
+                                light_bounds_importance_lanes(sc->light_bvh, (LaneU)(0u), x, m));
+  LaneI infinite = m & select(target >= tree_count, u < p_infinite, sampling);
+  LaneF p = (LaneF)(0.0f);
+  if (pc_any_(infinite)) {
+    LaneF v = fmin(u / p_infinite, PC_ONE_MINUS_EPSILON);
+    uint found[PC_LANES];
+    lane_store(target, found);
+    PC_EACH_LANE(j, pc_lane_bits(infinite & sampling)) {
+      found[j] = tree_count + find_interval(sc->light_cdf, infinite_count, pc_lane(v, j));
+    }
+    LaneU index = lane_load(found);
+    uint at[PC_LANES];
+    float share[PC_LANES];
+    lane_gather_indices(index, infinite, at);
+    for (uint j = 0u; j < PC_LANES; ++j) share[j] = sc->lights[at[j]].infinite_share;
+    p = select(p, p_infinite * lane_load(share), infinite);
+    *chosen = select(*chosen, index, infinite);
+  }
+  LaneI tree = m & !infinite;
+  if (pc_any_(tree)) {
+    u = select(u, fmin((u - p_infinite) / (1.0f - p_infinite), PC_ONE_MINUS_EPSILON), sampling);
+    LaneU leaf = (LaneU)(0u);
+    LaneI following = tree & !sampling;
+    if (pc_any_(following)) {
+      uint at[PC_LANES], leaves[PC_LANES];
+      lane_gather_indices(target, following, at);
+      for (uint j = 0u; j < PC_LANES; ++j) leaves[j] = sc->lights[at[j]].tree_leaf;
+      leaf = select(leaf, lane_load(leaves), following);
+    }
+    LaneF p_tree = 1.0f - p_infinite;
+    LaneU node = (LaneU)(0u);
+    for (LaneI walking = tree;;) {
+      LaneU second = light_node_field_lanes(sc->light_bvh, node, walking, false);
+      walking &= second != PC_INVALID;
+      if (!pc_any_(walking)) break;
+      LaneF p_first = share_of_lanes(light_bounds_importance_lanes(sc->light_bvh, node + 1u, x, walking),
+                                     light_bounds_importance_lanes(sc->light_bvh, second, x, walking));
+      /* Depth-first order: the first child's subtree is [node + 1, second). */
+      LaneI first = select(leaf < second, u < p_first, sampling);
+      u = select(u, fmin(select((u - p_first) / (1.0f - p_first), u / p_first, first), PC_ONE_MINUS_EPSILON),
+                 walking & sampling);
+      p_tree = select(p_tree, p_tree * select(1.0f - p_first, p_first, first), walking);
+      node = select(node, select(second, node + 1u, first), walking);
+    }
+    p = select(p, p_tree, tree);
+    LaneI chose = tree & sampling;
+    if (pc_any_(chose)) *chosen = select(*chosen, light_node_field_lanes(sc->light_bvh, node, chose, true), chose);
+  }
+  return p;
 }
 
 #endif

@@ -205,4 +205,263 @@ inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* o
   return out->pdf > 0.0f && isfinite(out->pdf) && (out->Le.x > 0.0f || out->Le.y > 0.0f || out->Le.z > 0.0f);
 }
 
+/* ---- The same by lane (kernels/lanes.cl): every lane does the operations of the one-lane functions
+ * above, each light type for the lanes that chose one, all of them at once. */
+
+typedef struct {
+  Lane3 p, p_err, n, wi, Le;
+  LaneF pdf;
+  LaneI delta, infinite;
+  LaneU light;
+} LightSampleLanes;
+
+/* A Light by lane. */
+typedef struct {
+  Lane3 emission, position, direction;
+  LaneU type, prim, slot;
+  LaneF area, cos_inner, cos_outer;
+} LightLanes;
+
+/* lights[index] for the lanes in m (the others get the first such lane's). */
+PC_LANE_INLINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
+  uint at[PC_LANES], type[PC_LANES], prim[PC_LANES], slot[PC_LANES];
+  float v[12][PC_LANES];
+  lane_gather_indices(index, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    Light l = lights[at[j]];
+    v[0][j] = l.emission.x, v[1][j] = l.emission.y, v[2][j] = l.emission.z;
+    v[3][j] = l.position.x, v[4][j] = l.position.y, v[5][j] = l.position.z;
+    v[6][j] = l.direction.x, v[7][j] = l.direction.y, v[8][j] = l.direction.z;
+    v[9][j] = l.area, v[10][j] = l.cos_inner, v[11][j] = l.cos_outer;
+    type[j] = l.type, prim[j] = l.prim, slot[j] = l.slot;
+  }
+  out->emission = lane3_load(v[0], v[1], v[2]);
+  out->position = lane3_load(v[3], v[4], v[5]);
+  out->direction = lane3_load(v[6], v[7], v[8]);
+  out->area = lane_load(v[9]);
+  out->cos_inner = lane_load(v[10]);
+  out->cos_outer = lane_load(v[11]);
+  out->type = lane_load(type);
+  out->prim = lane_load(prim);
+  out->slot = lane_load(slot);
+}
+
+/* The primitives (vertices a, b, c; a sphere's centre a and radius b.x) at the slots of the lanes in m. */
+PC_LANE_INLINE void gather_primitive_shapes(__global const Primitive* prims, LaneU slot, LaneI m, Lane3* a, Lane3* b, Lane3* c,
+                                    LaneI* sphere) {
+  uint at[PC_LANES], kind[PC_LANES];
+  float v[9][PC_LANES];
+  lane_gather_indices(slot, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    Primitive p = prims[at[j]];
+    v[0][j] = p.a.x, v[1][j] = p.a.y, v[2][j] = p.a.z, v[3][j] = p.b.x, v[4][j] = p.b.y, v[5][j] = p.b.z;
+    v[6][j] = p.c.x, v[7][j] = p.c.y, v[8][j] = p.c.z;
+    kind[j] = prim_kind_of(p);
+  }
+  *a = lane3_load(v[0], v[1], v[2]);
+  *b = lane3_load(v[3], v[4], v[5]);
+  *c = lane3_load(v[6], v[7], v[8]);
+  *sphere = m & (lane_load(kind) == PC_PRIM_SPHERE);
+}
+
+inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny, Lane3 y, Lane3 x) {
+  LaneI lit = ((flags & PC_FLAG_TWO_SIDED) != 0u) | (pc_dot(ny, lane3_sub(x, y)) > 0.0f);
+  return lane3_select(lane3_splat((float3)(0.0f)), emission, lit);
+}
+
+inline LaneF area_to_solid_angle_lanes(Lane3 x, Lane3 y, Lane3 ny, LaneF area_pdf) {
+  Lane3 d = lane3_sub(y, x);
+  LaneF dist2 = pc_dot(d, d);
+  LaneF cos_y = fabs(pc_dot(ny, d)) / sqrt(dist2);
+  return select((LaneF)(0.0f), area_pdf * dist2 / cos_y, cos_y > 0.0f);
+}
+
+inline LaneI sphere_sampled_by_area_lanes(Lane3 x, Lane3 c, LaneF r) {
+  Lane3 d = lane3_sub(x, c);
+  return pc_dot(d, d) <= r * r * 1.0001f;
+}
+
+inline LaneF sphere_cone_one_minus_cos_lanes(LaneF sin2_max) {
+  return select(1.0f - sqrt(fmax(0.0f, 1.0f - sin2_max)), 0.5f * sin2_max, sin2_max < 0.00068523f);
+}
+
+inline LaneF sphere_light_pdf_lanes(Lane3 c, LaneF r, Lane3 x, Lane3 y, Lane3 ny) {
+  Lane3 d = lane3_sub(c, x);
+  LaneF cone = 1.0f / (2.0f * PC_PI * sphere_cone_one_minus_cos_lanes(r * r / pc_dot(d, d)));
+  return select(cone, area_to_solid_angle_lanes(x, y, ny, 1.0f / (4.0f * PC_PI * r * r)),
+                sphere_sampled_by_area_lanes(x, c, r));
+}
+
+/* light_pdf by lane, for the lanes in m. */
+inline LaneF light_pdf_lanes(const SceneData* sc, LaneU light_index, Lane3 x, Lane3 y, Lane3 ny, LaneI m) {
+  LaneU unused;
+  LaneF choice = light_choice_lanes(sc, x, light_index, (LaneF)(0.0f), m, &unused);
+  LightLanes light;
+  gather_lights(sc->lights, light_index, m, &light);
+  LaneF pdf = area_to_solid_angle_lanes(x, y, ny, 1.0f / light.area);
+#ifdef PC_HAS_SPHERES
+  Lane3 a, b, c;
+  LaneI sphere;
+  gather_primitive_shapes(sc->prims, light.slot, m, &a, &b, &c, &sphere);
+  if (pc_any_(sphere)) pdf = select(pdf, sphere_light_pdf_lanes(a, b.x, x, y, ny), sphere);
+#endif
+  return choice * pdf;
+}
+
+#ifdef PC_HAS_ENVIRONMENT
+inline LaneF environment_light_pdf_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneI m) {
+  LaneU unused;
+  Light env = sc->lights[sc->h->env_light];
+  return light_choice_lanes(sc, x, (LaneU)(sc->h->env_light), (LaneF)(0.0f), m, &unused) *
+         env_pdf_lanes(env, sc->textures, sc->env_dist, d, m);
+}
+#endif
+
+/* sample_sphere_cone by lane: a point on the sphere (centre c, radius r) seen from x. */
+inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF u1, LaneF* pdf) {
+  Lane3 d = lane3_sub(x, c);
+  LaneF dc2 = pc_dot(d, d), dc = sqrt(dc2);
+  LaneF sin2_max = r * r / dc2;
+  LaneF one_minus_cos_max = sphere_cone_one_minus_cos_lanes(sin2_max);
+  LaneF cos_theta = 1.0f - u0 * one_minus_cos_max;
+  LaneF sin2_theta = 1.0f - cos_theta * cos_theta;
+  LaneI small = sin2_max < 0.00068523f; /* small cone: avoid cancellation */
+  LaneF small_sin2 = sin2_max * u0;
+  cos_theta = select(cos_theta, sqrt(1.0f - small_sin2), small);
+  sin2_theta = select(sin2_theta, small_sin2, small);
+  LaneF cos_alpha = sin2_theta / sqrt(sin2_max) + cos_theta * sqrt(fmax(0.0f, 1.0f - sin2_theta / sin2_max));
+  LaneF sin_alpha = sqrt(fmax(0.0f, 1.0f - cos_alpha * cos_alpha));
+  LaneF phi = 2.0f * PC_PI * u1;
+  Lane3 w = lane3_div(d, dc), t, b;
+  make_frame(w, &t, &b);
+  *pdf = 1.0f / (2.0f * PC_PI * one_minus_cos_max);
+  LaneF cos_phi, sin_phi = pc_sincos(phi, &cos_phi);
+  return lane3(c.x + r * (cos_alpha * w.x + sin_alpha * (cos_phi * t.x + sin_phi * b.x)),
+               c.y + r * (cos_alpha * w.y + sin_alpha * (cos_phi * t.y + sin_phi * b.y)),
+               c.z + r * (cos_alpha * w.z + sin_alpha * (cos_phi * t.z + sin_phi * b.z)));
+}
+
+/* sample_area_light by lane, into the lanes m of out. */
+inline void sample_area_light_lanes(const SceneData* sc, const LightLanes* light, LaneF choice, Lane3 x, LaneF u0,
+                                    LaneF u1, LaneI m, LightSampleLanes* out) {
+  Lane3 a, b, c, p = x, p_err = x, ny = x;
+  LaneI sphere;
+  LaneF pdf = (LaneF)(0.0f);
+  gather_primitive_shapes(sc->prims, light->slot, m, &a, &b, &c, &sphere);
+  uint at[PC_LANES], flag_bits[PC_LANES];
+  lane_gather_indices(light->prim, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) flag_bits[j] = sc->shading[at[j]].flags;
+  LaneU flags = lane_load(flag_bits);
+  if (pc_any_(m & !sphere)) {
+    LaneF ba, bb;
+    sample_uniform_triangle_lanes(u0, u1, &ba, &bb);
+    Lane3 pa = lane3_scale(a, ba), pb = lane3_scale(b, bb), pc = lane3_scale(c, 1.0f - ba - bb);
+    p = lane3_add(lane3_add(pa, pb), pc);
+    p_err = lane3_scale(lane3_add(lane3_add(lane3_abs(pa), lane3_abs(pb)), lane3_abs(pc)), error_gamma(7));
+    ny = pc_normalize(pc_cross(lane3_sub(b, a), lane3_sub(c, a)));
+    pdf = area_to_solid_angle_lanes(x, p, ny, 1.0f / light->area);
+  }
+#ifdef PC_HAS_SPHERES
+  if (pc_any_(sphere)) {
+    LaneF r = b.x, sphere_pdf = (LaneF)(0.0f);
+    LaneI by_area = sphere_sampled_by_area_lanes(x, a, r);
+    Lane3 q = x;
+    if (pc_any_(sphere & !by_area)) q = sample_sphere_cone_lanes(a, r, x, u0, u1, &sphere_pdf);
+    if (pc_any_(sphere & by_area)) {
+      LaneF sx, sy, sz;
+      sample_uniform_sphere_lanes(u0, u1, &sx, &sy, &sz);
+      q = lane3_select(q, lane3_add(a, lane3_scale(lane3(sx, sy, sz), r)), by_area);
+    }
+    Lane3 n = lane3_div(lane3_sub(q, a), r); /* sphere_normal */
+    n = lane3_select(n, lane3_neg(n), (flags & PC_FLAG_FLIP_NORMAL) != 0u);
+    if (pc_any_(sphere & by_area))
+      sphere_pdf = select(sphere_pdf, area_to_solid_angle_lanes(x, q, n, 1.0f / (4.0f * PC_PI * r * r)), by_area);
+    p = lane3_select(p, q, sphere);
+    p_err = lane3_select(
+        p_err, lane3_add(lane3_scale(lane3_abs(lane3_sub(q, a)), error_gamma(5)), lane3_scale(lane3_abs(q), error_gamma(1))),
+        sphere);
+    ny = lane3_select(ny, n, sphere);
+    pdf = select(pdf, sphere_pdf, sphere);
+  }
+#endif
+  out->p = lane3_select(out->p, p, m);
+  out->p_err = lane3_select(out->p_err, p_err, m);
+  out->n = lane3_select(out->n, ny, m);
+  out->wi = lane3_select(out->wi, pc_normalize(lane3_sub(p, x)), m);
+  out->pdf = select(out->pdf, choice * pdf, m);
+  out->Le = lane3_select(out->Le, emitted_towards_lanes(light->emission, flags, ny, p, x), m);
+}
+
+/* sample_light by lane, for the lanes in m: u0 chooses the light, u1, u2 the point on it. Returns the
+ * lanes with a sample (as sample_light's result). */
+inline LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, LaneF u1, LaneF u2, LaneI m,
+                                LightSampleLanes* out) {
+  LaneU index;
+  LaneF choice = light_choice_lanes(sc, x, (LaneU)(PC_INVALID), u0, m, &index);
+  LightLanes light;
+  gather_lights(sc->lights, index, m, &light);
+  Lane3 zero = lane3_splat((float3)(0.0f));
+  out->light = index;
+  out->delta = out->infinite = (LaneI)(0);
+  out->p = x;
+  out->n = out->p_err = out->wi = out->Le = zero;
+  out->pdf = (LaneF)(0.0f);
+  LaneI valid = (LaneI)(0), is;
+#ifdef PC_HAS_AREA_LIGHTS
+  if (pc_any_(is = m & (light.type == PC_LIGHT_AREA))) {
+    sample_area_light_lanes(sc, &light, choice, x, u1, u2, is, out);
+    valid |= is;
+  }
+#endif
+#ifdef PC_HAS_POINT_LIGHTS
+  if (pc_any_(is = m & ((light.type == PC_LIGHT_POINT) | (light.type == PC_LIGHT_SPOT)))) {
+    Lane3 d = lane3_sub(light.position, x);
+    LaneF dist2 = pc_dot(d, d);
+    Lane3 wi = lane3_div(d, sqrt(dist2));
+    Lane3 le = lane3_div(light.emission, dist2);
+    LaneI spot = is & (light.type == PC_LIGHT_SPOT);
+    if (pc_any_(spot)) {
+      /* spot_falloff */
+      LaneF c = pc_dot(light.direction, lane3_neg(wi));
+      LaneF t = (c - light.cos_outer) / (light.cos_inner - light.cos_outer);
+      LaneF falloff = select(select(t * t * (3.0f - 2.0f * t), (LaneF)(0.0f), c <= light.cos_outer), (LaneF)(1.0f),
+                             c >= light.cos_inner);
+      le = lane3_select(le, lane3_scale(le, falloff), spot);
+    }
+    out->p = lane3_select(out->p, light.position, is);
+    out->wi = lane3_select(out->wi, wi, is);
+    out->n = lane3_select(out->n, lane3_neg(wi), is);
+    out->Le = lane3_select(out->Le, le, is);
+    out->pdf = select(out->pdf, choice, is);
+    out->delta |= is;
+    valid |= is & (dist2 > 0.0f); /* not where the shading point is the light's position */
+  }
+#endif
+#ifdef PC_HAS_DIRECTIONAL_LIGHTS
+  if (pc_any_(is = m & (light.type == PC_LIGHT_DIRECTIONAL))) {
+    out->wi = lane3_select(out->wi, lane3_neg(light.direction), is);
+    out->Le = lane3_select(out->Le, light.emission, is);
+    out->pdf = select(out->pdf, choice, is);
+    out->delta |= is;
+    out->infinite |= is;
+    valid |= is;
+  }
+#endif
+#ifdef PC_HAS_ENVIRONMENT
+  if (pc_any_(is = m & (light.type == PC_LIGHT_ENVIRONMENT))) {
+    PC_EACH_LANE(j, pc_lane_bits(is)) {
+      float pdf;
+      float3 le, wi = env_sample(sc->lights[pc_lane(index, j)], sc->textures, sc->texels, sc->env_dist, (float2)(pc_lane(u1, j), pc_lane(u2, j)),
+                                 &pdf, &le);
+      out->wi = lane3_with(out->wi, j, wi);
+      out->Le = lane3_with(out->Le, j, le);
+      out->pdf = pc_with_lane(out->pdf, j, pc_lane(choice, j) * pdf);
+    }
+    out->infinite |= is;
+    valid |= is;
+  }
+#endif
+  return valid & (out->pdf > 0.0f) & isfinite(out->pdf) & lane3_any_positive(out->Le);
+}
+
 #endif

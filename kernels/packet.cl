@@ -9,31 +9,9 @@
 #define PATHCL_PACKET_CL
 
 #include "intersect.cl"
+#include "lanes.cl"
 
 #ifdef PC_BVH8
-
-/* Per N lanes: the bits of a mask (bit j: lane j set), and back; the smallest and largest of the lanes. */
-#define PC_PACKET_REDUCTIONS(F, I, U, N, BITS)                                                            \
-  inline PC_OVL uint pc_lane_bits(I m) {                                                                  \
-    U b = select((U)(0u), BITS, m);                                                                       \
-    return pc_or_lanes_(b);                                                                               \
-  }                                                                                                       \
-  inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
-  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }                        \
-  inline PC_OVL float pc_max_lanes(F x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
-
-inline PC_OVL uint pc_or_lanes_(uint2 b) { return b.x | b.y; }
-inline PC_OVL uint pc_or_lanes_(uint4 b) { return pc_or_lanes_(b.lo | b.hi); }
-inline PC_OVL uint pc_or_lanes_(uint8 b) { return pc_or_lanes_(b.lo | b.hi); }
-inline PC_OVL uint pc_or_lanes_(uint16 b) { return pc_or_lanes_(b.lo | b.hi); }
-inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
-inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
-inline PC_OVL float pc_max_lanes(float2 x) { return fmax(x.x, x.y); }
-inline PC_OVL float pc_max_lanes(float4 x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
-PC_PACKET_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
-PC_PACKET_REDUCTIONS(float16, int16, uint16, 16,
-                     (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
-#undef PC_PACKET_REDUCTIONS
 
 /* W rays (lane3 origins and directions, tmin per lane, the primitive each leaves from or PC_INVALID, and
  * their cut-out seeds) and their hits: t starts at the ray's tmax and is the nearest hit's, prim and slot
@@ -51,25 +29,6 @@ PC_PACKET_REDUCTIONS(float16, int16, uint16, 16,
 PC_PACKET_TYPES(lane3f8, float8, uint8, 8)
 PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
 #undef PC_PACKET_TYPES
-
-/* A lane of a vector by runtime index, and a vector with one lane replaced. */
-#define PC_LANE_ACCESS(T, S, N)                                                                           \
-  inline PC_OVL S pc_lane(T x, uint j) {                                                                  \
-    S a[N];                                                                                               \
-    vstore##N(x, 0, a);                                                                                   \
-    return a[j];                                                                                          \
-  }                                                                                                       \
-  inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                                    \
-    S a[N];                                                                                               \
-    vstore##N(x, 0, a);                                                                                   \
-    a[j] = value;                                                                                         \
-    return vload##N(0, a);                                                                                \
-  }
-PC_LANE_ACCESS(float8, float, 8)
-PC_LANE_ACCESS(uint8, uint, 8)
-PC_LANE_ACCESS(float16, float, 16)
-PC_LANE_ACCESS(uint16, uint, 16)
-#undef PC_LANE_ACCESS
 
 #define PC_PACKET_LANES(V3, F, I, U, N)                                                                   \
   /* Component k (0 x, 1 y, 2 z) of v, k per lane. */                                                     \
@@ -178,9 +137,9 @@ PC_LANE_ACCESS(uint16, uint, 16)
     return changed;                                                                                       \
   }                                                                                                       \
   /* The packet through the tree from node root (closest hit; with any_hit a lane stops at its first hit, \
-   * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's lanes    \
-   * (those whose ray entered its box) and their nearest entry: it is skipped when popped once every one \
-   * of those lanes has a hit nearer than that. */                                                        \
+   * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's entry   \
+   * distance per lane (NaN where the lane's ray missed its box): when popped, a lane enters it where the  \
+   * single ray would, where that distance is no farther than its nearest hit so far. */                  \
   inline PC_OVL I trace_packet(const SceneData* cut, __global const Bvh8Node* nodes,                      \
                                __global const LeafBlock* blocks, __global const Primitive* prims, uint root, \
                                const RayPacket##N* r, I active, bool any_hit, HitPacket##N* h) {          \
@@ -193,8 +152,9 @@ PC_LANE_ACCESS(uint16, uint, 16)
     F dz = pc_axis_lanes(r->d, kz);                                                                       \
     F sx = -pc_axis_lanes(r->d, kx) / dz, sy = -pc_axis_lanes(r->d, ky) / dz, sz = 1.0f / dz;             \
     I found = (I)(0);                                                                                     \
-    uint stack[7 * PC_BVH_STACK], stack_lanes[7 * PC_BVH_STACK];                                          \
-    float stack_entry[7 * PC_BVH_STACK];                                                                  \
+    uint stack[7 * PC_BVH_STACK];                                                                         \
+    float stack_key[7 * PC_BVH_STACK];                                                                    \
+    F stack_entry[7 * PC_BVH_STACK]; /* per lane; NaN for a lane that did not enter */                   \
     int sp = 0;                                                                                           \
     uint ref = root;                                                                                      \
     I lanes = active;                                                                                     \
@@ -218,28 +178,31 @@ PC_LANE_ACCESS(uint16, uint, 16)
                                select(hy, ly, neg_y), select(lz, hz, neg_z), select(hz, lz, neg_z), r->tmin, h->t); \
           I in = lanes & (enter != (F)(INFINITY));                                                        \
           if (!pc_any_(in)) continue;                                                                     \
-          /* Onto the stack, kept sorted far to near from where this node's entries start. */            \
+          /* Onto the stack, kept sorted far to near (by the nearest lane's entry) from where this node's \
+           * entries start. */                                                                            \
+          F e = select((F)(NAN), enter, in);                                                              \
           float d = pc_min_lanes(select((F)(INFINITY), enter, in));                                       \
           int j = sp++;                                                                                   \
-          while (j > base && stack_entry[j - 1] < d) {                                                    \
+          while (j > base && stack_key[j - 1] < d) {                                   \
             stack[j] = stack[j - 1];                                                                      \
-            stack_lanes[j] = stack_lanes[j - 1];                                                          \
+            stack_key[j] = stack_key[j - 1];                                                              \
             stack_entry[j] = stack_entry[j - 1];                                                          \
             --j;                                                                                          \
           }                                                                                               \
           stack[j] = n->child[c];                                                                         \
-          stack_lanes[j] = pc_lane_bits(in);                                                              \
-          stack_entry[j] = d;                                                                             \
+          stack_key[j] = d;                                                                               \
+          stack_entry[j] = e;                                                                             \
         }                                                                                                 \
       }                                                                                                   \
       /* The next subtree some of whose lanes can still hit nearer than they have. */                    \
       for (;;) {                                                                                          \
         if (sp == 0) return any_hit ? found : h->slot != (U)(PC_INVALID);                                 \
         --sp;                                                                                             \
-        lanes = pc_lanes_of_bits(stack_lanes[sp], active) & active;                                       \
-        if (!pc_any_(lanes) || stack_entry[sp] > pc_max_lanes(select((F)(-INFINITY), h->t, lanes))) continue; \
+        /* The lanes that entered it no farther than their nearest hit (the single ray's test). */       \
+        lanes = active & (stack_entry[sp] <= h->t);                                                       \
+        if (!pc_any_(lanes)) continue;                                                                    \
         uint bits = pc_lane_bits(lanes);                                                                  \
-        if (4u * popcount(bits) > N || (stack[sp] & PC_BVH4_LEAF)) break;                                 \
+        if (4u * popcount(bits) > N || (stack[sp] & PC_BVH4_LEAF)) break;                               \
         /* A quarter of the lanes or fewer: each alone through the subtree (the same hits; most of the    \
          * vector work would be wasted: 3.1 against 3.8 M bounce rays/s at 8 lanes, docs/benchmarks-notes.md). */ \
         uint changed = 0u;                                                                                \

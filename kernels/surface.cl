@@ -2,6 +2,9 @@
 #ifndef PATHCL_SURFACE_CL
 #define PATHCL_SURFACE_CL
 
+#include "math.cl"
+#include "trace_lanes.cl"
+
 typedef struct {
   float3 p;     /* hit point */
   float3 p_err; /* bound on the absolute error of p, per axis */
@@ -124,6 +127,130 @@ inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instan
   r.skip_prim = prim;
   r.skip_instance = instance;
   return r;
+}
+
+/* ---- The same over the lanes of a work item (kernels/lanes.cl): every lane does the operations of the
+ * one-lane functions above. */
+
+/* Surface by lane, and the PrimShading of its primitive. */
+typedef struct {
+  Lane3 p, p_err, ng, ns;
+  LaneU prim, instance;
+} SurfaceLanes;
+
+typedef struct {
+  LaneU material, light, flags;
+} ShadingLanes;
+
+/* The surfaces at the hits of the lanes in m (the others get the first such lane's). */
+inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
+                                        ShadingLanes* shading) {
+  uint at[PC_LANES], material[PC_LANES], light[PC_LANES], flags[PC_LANES], prim[PC_LANES], kind[PC_LANES];
+  float ax[PC_LANES], ay[PC_LANES], az[PC_LANES], bx[PC_LANES], by[PC_LANES], bz[PC_LANES], cx[PC_LANES],
+      cy[PC_LANES], cz[PC_LANES];
+  lane_gather_indices(hit->slot, m, at);
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    Primitive p = sc->prims[at[j]];
+    ax[j] = p.a.x, ay[j] = p.a.y, az[j] = p.a.z, bx[j] = p.b.x, by[j] = p.b.y, bz[j] = p.b.z;
+    cx[j] = p.c.x, cy[j] = p.c.y, cz[j] = p.c.z;
+    prim[j] = prim_index_of(p);
+    kind[j] = prim_kind_of(p);
+    PrimShading sh = sc->shading[prim[j]];
+    material[j] = sh.material, light[j] = sh.light, flags[j] = sh.flags;
+  }
+  Lane3 a = lane3_load(ax, ay, az), b = lane3_load(bx, by, bz), c = lane3_load(cx, cy, cz);
+  shading->material = lane_load(material);
+  shading->light = lane_load(light);
+  shading->flags = lane_load(flags);
+  SurfaceLanes s;
+  s.prim = lane_load(prim);
+  s.instance = (LaneU)(0u);
+  s.p = s.p_err = s.ng = s.ns = lane3_splat((float3)(0.0f));
+  LaneF b0 = 1.0f - hit->u - hit->v;
+  LaneI sphere = (LaneI)(0);
+#ifdef PC_HAS_SPHERES
+  sphere = m & (lane_load(kind) == PC_PRIM_SPHERE);
+#endif
+  if (pc_any_(m & !sphere)) {
+    Lane3 pa = lane3_scale(a, b0), pb = lane3_scale(b, hit->u), pc = lane3_scale(c, hit->v);
+    s.p = lane3_add(lane3_add(pa, pb), pc);
+    s.p_err = lane3_scale(lane3_add(lane3_add(lane3_abs(pa), lane3_abs(pb)), lane3_abs(pc)), error_gamma(7));
+    s.ng = pc_normalize(pc_cross(lane3_sub(b, a), lane3_sub(c, a)));
+    s.ns = s.ng;
+  }
+#ifdef PC_HAS_SPHERES
+  if (pc_any_(sphere)) {
+    /* surface_at's re-projection onto the sphere (centre a, radius b.x) */
+    Lane3 rel = lane3_sub(lane3_add(ray->o, lane3_scale(ray->d, hit->t)), a);
+    rel = lane3_scale(rel, b.x / pc_length(rel));
+    Lane3 p = lane3_add(a, rel);
+    s.p = lane3_select(s.p, p, sphere);
+    s.p_err = lane3_select(
+        s.p_err, lane3_add(lane3_scale(lane3_abs(rel), error_gamma(5)), lane3_scale(lane3_abs(p), error_gamma(1))), sphere);
+    Lane3 n = lane3_div(lane3_sub(p, a), b.x);
+    n = lane3_select(n, lane3_neg(n), (shading->flags & PC_FLAG_FLIP_NORMAL) != 0u);
+    s.ng = lane3_select(s.ng, n, sphere);
+    s.ns = s.ng;
+  }
+#endif
+#ifdef PC_HAS_SMOOTH_NORMALS
+  LaneI smooth = m & !sphere & ((shading->flags & PC_FLAG_SMOOTH) != 0u);
+  if (pc_any_(smooth)) {
+    float nx[3][PC_LANES], ny[3][PC_LANES], nz[3][PC_LANES];
+    lane_gather_indices(s.prim, smooth, at);
+    for (uint j = 0u; j < PC_LANES; ++j) {
+      for (uint k = 0u; k < 3u; ++k) {
+        float4 n = sc->normals[3u * at[j] + k];
+        nx[k][j] = n.x, ny[k][j] = n.y, nz[k][j] = n.z;
+      }
+    }
+    Lane3 n = lane3_add(lane3_add(lane3_scale(lane3_load(nx[0], ny[0], nz[0]), b0),
+                                  lane3_scale(lane3_load(nx[1], ny[1], nz[1]), hit->u)),
+                        lane3_scale(lane3_load(nx[2], ny[2], nz[2]), hit->v));
+    LaneF len = pc_length(n);
+    Lane3 unit = lane3_div(lane3_select(n, lane3_neg(n), pc_dot(n, s.ng) < 0.0f), len);
+    s.ns = lane3_select(s.ns, unit, smooth & (len > 0.0f));
+  }
+#endif
+#ifdef PC_HAS_INSTANCES
+  s.instance = hit->instance;
+  PC_EACH_LANE(j, pc_lane_bits(m)) {
+    uint k = pc_lane(hit->instance, j);
+    if (sc->instances[k].flags & PC_INSTANCE_IDENTITY) continue;
+    Surface one;
+    one.p = lane3_at(s.p, j);
+    one.p_err = lane3_at(s.p_err, j);
+    one.ng = lane3_at(s.ng, j);
+    one.ns = lane3_at(s.ns, j);
+    place_surface(&one, sc->instances + k);
+    s.p = lane3_with(s.p, j, one.p);
+    s.p_err = lane3_with(s.p_err, j, one.p_err);
+    s.ng = lane3_with(s.ng, j, one.ng);
+    s.ns = lane3_with(s.ns, j, one.ns);
+  }
+#endif
+  return s;
+}
+
+/* spawn_ray and spawn_ray_to by lane, into *r (the cut-out seed is the caller's). The forced inlines of the
+ * lane code write through pointers rather than return structs: an inlined struct return leaves an
+ * intrinsic (noalias scope) that Oclgrind cannot execute. */
+PC_LANE_INLINE void spawn_ray_lanes(const SurfaceLanes* s, Lane3 w, RayLanes* r) {
+  r->o = offset_ray_origin(s->p, s->p_err, s->ng, w);
+  r->d = w;
+  r->tmin = (LaneF)(0.0f);
+  r->tmax = (LaneF)(INFINITY);
+  r->skip_prim = s->prim;
+  r->skip_instance = s->instance;
+}
+
+PC_LANE_INLINE void spawn_ray_to_lanes(const SurfaceLanes* s, Lane3 q, Lane3 q_err, Lane3 nq, RayLanes* r) {
+  r->o = offset_ray_origin(s->p, s->p_err, s->ng, lane3_sub(q, s->p));
+  r->d = lane3_sub(offset_ray_origin(q, q_err, nq, lane3_sub(r->o, q)), r->o);
+  r->tmin = (LaneF)(0.0f);
+  r->tmax = (LaneF)(1.0f - PC_SHADOW_EPSILON);
+  r->skip_prim = s->prim;
+  r->skip_instance = s->instance;
 }
 
 #endif

@@ -55,7 +55,6 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   film_ = ClBuffer(cl, CL_MEM_READ_WRITE, film_size);
   stats_ = ClBuffer(cl, CL_MEM_READ_WRITE, light() ? sizeof(SplatStats) : sizeof(UnitStats));
   std::string kernel_name = bdpt ? "bdpt_pass" : light() ? "light_pass" : "render_pass";
-  if (lanes_ > 1) kernel_name += "_lanes" + std::to_string(lanes_);
   kernel_ = std::make_unique<ClKernel>(program_->kernel(kernel_name.c_str()));
   first_unit_arg_ = scene_->bind(*kernel_);
   if (light()) {
@@ -117,7 +116,8 @@ double DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t
   k.arg(first_unit_arg_ + 4, cl_uint(pixel_stride));
   k.arg(first_unit_arg_ + 5, cl_uint(sample_begin));
   k.arg(first_unit_arg_ + 6, cl_uint(sample_count));
-  return run_kernel(*cl_, k.k, (pixel_count + lanes_ - 1) / lanes_, work_group_);
+  const uint32_t item_pixels = lanes_ > 1 ? lanes_ * PC_LANE_PIXELS : 1;  // kernels/integrator.cl, PC_ITEM_PIXELS
+  return run_kernel(*cl_, k.k, (pixel_count + item_pixels - 1) / item_pixels, work_group_);
 }
 
 uint64_t DeviceWorker::probe(uint32_t count, uint32_t spp) {

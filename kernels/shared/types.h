@@ -19,6 +19,10 @@ typedef uint32_t pc_uint;
 
 #define PC_INVALID 0xffffffffu
 
+/* The path integrator over W > 1 lanes (PC_LANES, kernels/lanes.cl): a work item renders W x
+ * PC_LANE_PIXELS pixels of a unit, each lane taking the item's next pixel when it has done one. */
+#define PC_LANE_PIXELS 4u
+
 /* Primitive kinds (PrimShading.kind). */
 #define PC_PRIM_TRIANGLE 0u
 #define PC_PRIM_SPHERE 1u

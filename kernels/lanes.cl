@@ -1,0 +1,161 @@
+/* Lanes (issue 15): a work item of the path integrator renders W = PC_LANES paths at once, one per lane
+ * of the OpenCL vector types (16 or 8 on CPU devices, whose vector units then take every lane in one
+ * instruction; 1 on GPUs, where the vector types are scalars and the code is the one-path kernel). A
+ * program is built for one W (-DPC_LANES, runtime/device_worker.cpp; 1 when it is not set), and the code
+ * above the building blocks (the bounce, light choice and sampling, the surface, the material and the BSDF
+ * dispatch) is written once over this program's lane types:
+ *   LaneF, LaneI, LaneU   float, int, uint for W = 1; floatW, intW, uintW otherwise
+ *   Lane3                 a 3-vector by component (exact_math.cl's lane3f, lane3f8, lane3f16)
+ * Every lane does the operations of the one-lane program, so a pixel is the same bits at every W.
+ * Masks follow exact_math.cl: comparisons give 1 (W = 1) or -1 (vectors), select() takes both, and
+ * & | ! keep both (never ~ on a mask). The building blocks below (lane bits, lane access, reductions) are
+ * defined for every width, the rest for this program's. */
+#ifndef PATHCL_LANES_CL
+#define PATHCL_LANES_CL
+
+#include "exact_math.cl"
+
+/* ---- For every width: a mask as bits (bit j: lane j set) and back, one lane by runtime index, the
+ * smallest and largest lane ------------------------------------------------------------------------- */
+inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
+inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
+inline PC_OVL float pc_lane(float x, uint j) { return x; }
+inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
+inline PC_OVL int pc_lane(int x, uint j) { return x; }
+inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
+inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
+inline PC_OVL int pc_with_lane(int x, uint j, int value) { return value; }
+inline PC_OVL float pc_min_lanes(float x) { return x; }
+inline PC_OVL float pc_max_lanes(float x) { return x; }
+
+inline PC_OVL uint pc_or_lanes_(uint2 b) { return b.x | b.y; }
+inline PC_OVL uint pc_or_lanes_(uint4 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL uint pc_or_lanes_(uint8 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL uint pc_or_lanes_(uint16 b) { return pc_or_lanes_(b.lo | b.hi); }
+inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
+inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
+inline PC_OVL float pc_max_lanes(float2 x) { return fmax(x.x, x.y); }
+inline PC_OVL float pc_max_lanes(float4 x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
+
+#define PC_LANE_REDUCTIONS(F, I, U, N, BITS)                                                              \
+  inline PC_OVL uint pc_lane_bits(I m) {                                                                  \
+    U b = select((U)(0u), BITS, m);                                                                       \
+    return pc_or_lanes_(b);                                                                               \
+  }                                                                                                       \
+  inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
+  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }                        \
+  inline PC_OVL float pc_max_lanes(F x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
+PC_LANE_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
+PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
+                   (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
+#undef PC_LANE_REDUCTIONS
+
+/* A lane of a vector by runtime index, and a vector with one lane replaced. */
+#define PC_LANE_ACCESS(T, S, N)                                                                           \
+  inline PC_OVL S pc_lane(T x, uint j) {                                                                  \
+    S a[N];                                                                                               \
+    vstore##N(x, 0, a);                                                                                   \
+    return a[j];                                                                                          \
+  }                                                                                                       \
+  inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                                    \
+    S a[N];                                                                                               \
+    vstore##N(x, 0, a);                                                                                   \
+    a[j] = value;                                                                                         \
+    return vload##N(0, a);                                                                                \
+  }
+PC_LANE_ACCESS(float8, float, 8)
+PC_LANE_ACCESS(uint8, uint, 8)
+PC_LANE_ACCESS(int8, int, 8)
+PC_LANE_ACCESS(float16, float, 16)
+PC_LANE_ACCESS(uint16, uint, 16)
+PC_LANE_ACCESS(int16, int, 16)
+#undef PC_LANE_ACCESS
+
+/* Functions of the lane code that PoCL would otherwise call rather than inline: a call passes their
+ * vectors through memory. */
+#define PC_LANE_INLINE __attribute__((always_inline)) inline
+
+/* ---- This program's lanes --------------------------------------------------------------------------- */
+#ifndef PC_LANES
+#define PC_LANES 1
+#endif
+#if PC_LANES == 1
+typedef float LaneF;
+typedef int LaneI;
+typedef uint LaneU;
+typedef lane3f Lane3;
+/* The lanes from PC_LANES consecutive values, and back. */
+#define lane_load(p) (*(p))
+#define lane_store(v, p) (*(p) = (v))
+#define PC_LANE_INDEX 0u
+#elif PC_LANES == 8
+typedef float8 LaneF;
+typedef int8 LaneI;
+typedef uint8 LaneU;
+typedef lane3f8 Lane3;
+#define lane_load(p) vload8(0, p)
+#define lane_store(v, p) vstore8(v, 0, p)
+#define PC_LANE_INDEX (uint8)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u)
+#elif PC_LANES == 16
+typedef float16 LaneF;
+typedef int16 LaneI;
+typedef uint16 LaneU;
+typedef lane3f16 Lane3;
+#define lane_load(p) vload16(0, p)
+#define lane_store(v, p) vstore16(v, 0, p)
+#define PC_LANE_INDEX (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u)
+#else
+#error "PC_LANES: 1, 8 or 16 paths per work item"
+#endif
+
+/* Each lane j set in bits, in order: for (...) PC_EACH_LANE(j, bits) { ... } runs the body once per lane
+ * (for per-lane work with the one-lane code: textures, instances, the environment map). */
+#define PC_EACH_LANE(j, bits) for (uint j = 0u; j < PC_LANES; ++j) if (((bits) >> j) & 1u)
+
+inline uint lane_count(LaneI m) { return popcount(pc_lane_bits(m)); }
+
+/* The first lane set in m (m must have one). */
+inline uint lane_first(LaneI m) {
+  uint bits = pc_lane_bits(m);
+  return 31u - clz(bits & (0u - bits));
+}
+
+/* index where m is set, the first set lane's elsewhere: an index at which a gather may read for every
+ * lane (each read is of a valid element). */
+inline LaneU lane_safe_index(LaneU index, LaneI m) { return select((LaneU)(pc_lane(index, lane_first(m))), index, m); }
+
+/* lane_safe_index as PC_LANES values, for a loop that loads each lane's element. */
+inline void lane_gather_indices(LaneU index, LaneI m, uint* at) { lane_store(lane_safe_index(index, m), at); }
+
+/* Where every lane of m has the same index: it (a gather of one element, loaded once); else PC_INVALID. */
+inline uint lane_uniform_index(LaneU index, LaneI m) {
+  uint first = pc_lane(index, lane_first(m));
+  return pc_lane_bits(m & (index != first)) == 0u ? first : PC_INVALID;
+}
+
+/* Lane3 arithmetic, component by component: each is the float3 operation of one lane. */
+inline Lane3 lane3_splat(float3 v) { return lane3((LaneF)(v.x), (LaneF)(v.y), (LaneF)(v.z)); }
+inline Lane3 lane3_add(Lane3 a, Lane3 b) { return lane3(a.x + b.x, a.y + b.y, a.z + b.z); }
+inline Lane3 lane3_sub(Lane3 a, Lane3 b) { return lane3(a.x - b.x, a.y - b.y, a.z - b.z); }
+inline Lane3 lane3_mul(Lane3 a, Lane3 b) { return lane3(a.x * b.x, a.y * b.y, a.z * b.z); }
+inline Lane3 lane3_scale(Lane3 a, LaneF s) { return lane3(a.x * s, a.y * s, a.z * s); }
+inline Lane3 lane3_div(Lane3 a, LaneF s) { return lane3(a.x / s, a.y / s, a.z / s); }
+inline Lane3 lane3_neg(Lane3 a) { return lane3(-a.x, -a.y, -a.z); }
+inline Lane3 lane3_abs(Lane3 a) { return lane3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+inline Lane3 lane3_select(Lane3 a, Lane3 b, LaneI m) {
+  return lane3(select(a.x, b.x, m), select(a.y, b.y, m), select(a.z, b.z, m));
+}
+inline LaneI lane3_any_positive(Lane3 a) { return (a.x > 0.0f) | (a.y > 0.0f) | (a.z > 0.0f); }
+inline LaneF lane3_max_component(Lane3 a) { return fmax(a.x, fmax(a.y, a.z)); }
+
+/* Lane j of a Lane3 as a float3, a Lane3 with lane j replaced, and a Lane3 from per-lane arrays of
+ * components. */
+inline float3 lane3_at(Lane3 a, uint j) { return (float3)(pc_lane(a.x, j), pc_lane(a.y, j), pc_lane(a.z, j)); }
+inline Lane3 lane3_with(Lane3 a, uint j, float3 v) {
+  return lane3(pc_with_lane(a.x, j, v.x), pc_with_lane(a.y, j, v.y), pc_with_lane(a.z, j, v.z));
+}
+inline Lane3 lane3_load(const float* x, const float* y, const float* z) {
+  return lane3(lane_load(x), lane_load(y), lane_load(z));
+}
+
+#endif
