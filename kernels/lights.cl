@@ -224,26 +224,16 @@ typedef struct {
 
 /* lights[index] for the lanes in m (the others get the first such lane's). */
 PC_LANE_INLINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
-  uint at[PC_LANES], type[PC_LANES], prim[PC_LANES], slot[PC_LANES];
-  float v[12][PC_LANES];
-  lane_gather_indices(index, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) {
-    Light l = lights[at[j]];
-    v[0][j] = l.emission.x, v[1][j] = l.emission.y, v[2][j] = l.emission.z;
-    v[3][j] = l.position.x, v[4][j] = l.position.y, v[5][j] = l.position.z;
-    v[6][j] = l.direction.x, v[7][j] = l.direction.y, v[8][j] = l.direction.z;
-    v[9][j] = l.area, v[10][j] = l.cos_inner, v[11][j] = l.cos_outer;
-    type[j] = l.type, prim[j] = l.prim, slot[j] = l.slot;
-  }
-  out->emission = lane3_load(v[0], v[1], v[2]);
-  out->position = lane3_load(v[3], v[4], v[5]);
-  out->direction = lane3_load(v[6], v[7], v[8]);
-  out->area = lane_load(v[9]);
-  out->cos_inner = lane_load(v[10]);
-  out->cos_outer = lane_load(v[11]);
-  out->type = lane_load(type);
-  out->prim = lane_load(prim);
-  out->slot = lane_load(slot);
+  LaneU at = lane_safe_index(index, m);
+  out->emission = lane_gather3(PC_FIELD_F(lights, emission), at);
+  out->position = lane_gather3(PC_FIELD_F(lights, position), at);
+  out->direction = lane_gather3(PC_FIELD_F(lights, direction), at);
+  out->type = lane_gather_uint(PC_FIELD_U(lights, type), at);
+  out->prim = lane_gather_uint(PC_FIELD_U(lights, prim), at);
+  out->slot = lane_gather_uint(PC_FIELD_U(lights, slot), at);
+  out->area = lane_gather_float(PC_FIELD_F(lights, area), at);
+  out->cos_inner = lane_gather_float(PC_FIELD_F(lights, cos_inner), at);
+  out->cos_outer = lane_gather_float(PC_FIELD_F(lights, cos_outer), at);
 }
 
 /* The primitives (vertices a, b, c; a sphere's centre a and radius b.x) at the slots of the lanes in m. */

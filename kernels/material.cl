@@ -55,29 +55,21 @@ inline Material material_at(const SceneData* sc, uint material, const Surface* s
  * lane's), every field as the one-lane function gives it (MaterialLanes: kernels/bsdf.cl). */
 inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
                                        const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
-  uint at[PC_LANES], type[PC_LANES], texture[PC_LANES];
-  float c[3][PC_LANES], sp[3][PC_LANES], k[3][PC_LANES], alpha[PC_LANES], sigma[PC_LANES], exponent[PC_LANES],
-      ior[PC_LANES];
-  lane_gather_indices(material, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) {
-    Material one = sc->materials[at[j]];
-    type[j] = one.type, texture[j] = one.color_texture;
-    c[0][j] = one.color.x, c[1][j] = one.color.y, c[2][j] = one.color.z;
-    sp[0][j] = one.specular.x, sp[1][j] = one.specular.y, sp[2][j] = one.specular.z;
-    k[0][j] = one.k.x, k[1][j] = one.k.y, k[2][j] = one.k.z;
-    alpha[j] = one.alpha, sigma[j] = one.sigma, exponent[j] = one.exponent, ior[j] = one.ior;
-  }
+  /* Fields a program's material types do not read are dead code here, and their gathers with them. */
+  LaneU at = lane_safe_index(material, m);
+  __global const Material* all = sc->materials;
   MaterialLanes out;
-  out.type = lane_load(type);
-  out.color = lane3_load(c[0], c[1], c[2]);
-  out.specular = lane3_load(sp[0], sp[1], sp[2]);
-  out.k = lane3_load(k[0], k[1], k[2]);
-  out.alpha = lane_load(alpha);
-  out.sigma = lane_load(sigma);
-  out.exponent = lane_load(exponent);
-  out.ior = lane_load(ior);
+  out.type = lane_gather_uint(PC_FIELD_U(all, type), at);
+  out.color = lane_gather3(PC_FIELD_F(all, color), at);
+  out.specular = lane_gather3(PC_FIELD_F(all, specular), at);
+  out.k = lane_gather3(PC_FIELD_F(all, k), at);
+  out.alpha = lane_gather_float(PC_FIELD_F(all, alpha), at);
+  out.sigma = lane_gather_float(PC_FIELD_F(all, sigma), at);
+  out.exponent = lane_gather_float(PC_FIELD_F(all, exponent), at);
+  out.ior = lane_gather_float(PC_FIELD_F(all, ior), at);
 #ifdef PC_HAS_TEXTURES
-  LaneI textured = m & (lane_load(texture) != PC_INVALID);
+  LaneU texture = lane_gather_uint(PC_FIELD_U(all, color_texture), at);
+  LaneI textured = m & (texture != PC_INVALID);
   PC_EACH_LANE(j, pc_lane_bits(textured)) {
     Surface one;
     one.p = lane3_at(s->p, j);
@@ -86,24 +78,19 @@ inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, cons
     h.slot = pc_lane(hit->slot, j);
     h.u = pc_lane(hit->u, j);
     h.v = pc_lane(hit->v, j);
-    float3 color = lane3_at(out.color, j) * texture_lookup(sc->textures, sc->texels, texture[j], surface_uv(sc, &one, &h));
+    float3 color =
+        lane3_at(out.color, j) * texture_lookup(sc->textures, sc->texels, pc_lane(texture, j), surface_uv(sc, &one, &h));
     out.color = lane3_with(out.color, j, color);
   }
 #endif
 #ifdef PC_HAS_VERTEX_COLORS
   LaneI colored = m & ((shading->flags & PC_FLAG_VERTEX_COLORS) != 0u);
   if (pc_any_(colored)) {
-    float vc[3][3][PC_LANES];
-    lane_gather_indices(s->prim, colored, at);
-    for (uint j = 0u; j < PC_LANES; ++j) {
-      for (uint i = 0u; i < 3u; ++i) {
-        float4 corner = sc->colors[3u * at[j] + i];
-        vc[i][0][j] = corner.x, vc[i][1][j] = corner.y, vc[i][2][j] = corner.z;
-      }
-    }
-    Lane3 blend = lane3_add(lane3_add(lane3_scale(lane3_load(vc[0][0], vc[0][1], vc[0][2]), 1.0f - hit->u - hit->v),
-                                      lane3_scale(lane3_load(vc[1][0], vc[1][1], vc[1][2]), hit->u)),
-                            lane3_scale(lane3_load(vc[2][0], vc[2][1], vc[2][2]), hit->v));
+    __global const float* colors = (__global const float*)sc->colors; /* 3 float4 per primitive */
+    LaneU prim = lane_safe_index(s->prim, colored);
+    Lane3 blend = lane3_add(lane3_add(lane3_scale(lane_gather3(colors, 12u, prim), 1.0f - hit->u - hit->v),
+                                      lane3_scale(lane_gather3(colors + 4, 12u, prim), hit->u)),
+                            lane3_scale(lane_gather3(colors + 8, 12u, prim), hit->v));
     out.color = lane3_select(out.color, lane3_mul(out.color, blend), colored);
   }
 #endif

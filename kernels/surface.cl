@@ -145,31 +145,20 @@ typedef struct {
 /* The surfaces at the hits of the lanes in m (the others get the first such lane's). */
 inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
                                         ShadingLanes* shading) {
-  uint at[PC_LANES], material[PC_LANES], light[PC_LANES], flags[PC_LANES], prim[PC_LANES], kind[PC_LANES];
-  float ax[PC_LANES], ay[PC_LANES], az[PC_LANES], bx[PC_LANES], by[PC_LANES], bz[PC_LANES], cx[PC_LANES],
-      cy[PC_LANES], cz[PC_LANES];
-  lane_gather_indices(hit->slot, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) {
-    Primitive p = sc->prims[at[j]];
-    ax[j] = p.a.x, ay[j] = p.a.y, az[j] = p.a.z, bx[j] = p.b.x, by[j] = p.b.y, bz[j] = p.b.z;
-    cx[j] = p.c.x, cy[j] = p.c.y, cz[j] = p.c.z;
-    prim[j] = prim_index_of(p);
-    kind[j] = prim_kind_of(p);
-    PrimShading sh = sc->shading[prim[j]];
-    material[j] = sh.material, light[j] = sh.light, flags[j] = sh.flags;
-  }
-  Lane3 a = lane3_load(ax, ay, az), b = lane3_load(bx, by, bz), c = lane3_load(cx, cy, cz);
-  shading->material = lane_load(material);
-  shading->light = lane_load(light);
-  shading->flags = lane_load(flags);
+  LaneU slot = lane_safe_index(hit->slot, m);
+  Lane3 a = lane_gather3(PC_FIELD_F(sc->prims, a), slot), b = lane_gather3(PC_FIELD_F(sc->prims, b), slot);
+  Lane3 c = lane_gather3(PC_FIELD_F(sc->prims, c), slot);
   SurfaceLanes s;
-  s.prim = lane_load(prim);
+  s.prim = lane_gather_uint(PC_FIELD_U_AT(sc->prims, a, 3), slot); /* prim_index_of */
+  shading->material = lane_gather_uint(PC_FIELD_U(sc->shading, material), s.prim);
+  shading->light = lane_gather_uint(PC_FIELD_U(sc->shading, light), s.prim);
+  shading->flags = lane_gather_uint(PC_FIELD_U(sc->shading, flags), s.prim);
   s.instance = (LaneU)(0u);
   s.p = s.p_err = s.ng = s.ns = lane3_splat((float3)(0.0f));
   LaneF b0 = 1.0f - hit->u - hit->v;
   LaneI sphere = (LaneI)(0);
 #ifdef PC_HAS_SPHERES
-  sphere = m & (lane_load(kind) == PC_PRIM_SPHERE);
+  sphere = m & (lane_gather_uint(PC_FIELD_U_AT(sc->prims, b, 3), slot) == PC_PRIM_SPHERE); /* prim_kind_of */
 #endif
   if (pc_any_(m & !sphere)) {
     Lane3 pa = lane3_scale(a, b0), pb = lane3_scale(b, hit->u), pc = lane3_scale(c, hit->v);
@@ -196,17 +185,11 @@ inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray
 #ifdef PC_HAS_SMOOTH_NORMALS
   LaneI smooth = m & !sphere & ((shading->flags & PC_FLAG_SMOOTH) != 0u);
   if (pc_any_(smooth)) {
-    float nx[3][PC_LANES], ny[3][PC_LANES], nz[3][PC_LANES];
-    lane_gather_indices(s.prim, smooth, at);
-    for (uint j = 0u; j < PC_LANES; ++j) {
-      for (uint k = 0u; k < 3u; ++k) {
-        float4 n = sc->normals[3u * at[j] + k];
-        nx[k][j] = n.x, ny[k][j] = n.y, nz[k][j] = n.z;
-      }
-    }
-    Lane3 n = lane3_add(lane3_add(lane3_scale(lane3_load(nx[0], ny[0], nz[0]), b0),
-                                  lane3_scale(lane3_load(nx[1], ny[1], nz[1]), hit->u)),
-                        lane3_scale(lane3_load(nx[2], ny[2], nz[2]), hit->v));
+    __global const float* normals = (__global const float*)sc->normals; /* 3 float4 per primitive */
+    LaneU prim = lane_safe_index(s.prim, smooth);
+    Lane3 n = lane3_add(lane3_add(lane3_scale(lane_gather3(normals, 12u, prim), b0),
+                                  lane3_scale(lane_gather3(normals + 4, 12u, prim), hit->u)),
+                        lane3_scale(lane_gather3(normals + 8, 12u, prim), hit->v));
     LaneF len = pc_length(n);
     Lane3 unit = lane3_div(lane3_select(n, lane3_neg(n), pc_dot(n, s.ng) < 0.0f), len);
     s.ns = lane3_select(s.ns, unit, smooth & (len > 0.0f));
