@@ -224,77 +224,28 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
   return live;
 }
 
-/* Film accumulators of the lanes' pixels: the sums of the even-numbered and of the odd-numbered samples
- * (w counts them) and the sum of squares, as the film holds them (three float4 per pixel). */
-typedef struct {
-  Lane3 sum[2], squares;
-  LaneF count[2], squares_w;
-} PixelLanes;
-
-/* Adds each lane's sample (index s, radiance L) to its pixel's accumulators, for the lanes in m. A sample
- * that is not a finite non-negative radiance is counted and dropped: it is a bug to find. */
-inline void accumulate_sample_lanes(Lane3 L, LaneU s, LaneI m, PixelLanes* acc, uint* nan_samples,
-                                    uint* inf_samples, uint* negative_samples) {
+/* Adds sample s's radiance to a pixel's accumulators (even and odd half sums, squares). A sample that is
+ * not a finite non-negative radiance is counted and dropped: it is a bug to find. */
+inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
+                              uint* inf_samples, uint* negative_samples) {
 #ifdef PC_DEBUG_INJECT_HAZARDS
   /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
-  L.x = select(L.x, (LaneF)(NAN), s % 7u == 3u);
-  L.y = select(L.y, (LaneF)(INFINITY), s % 11u == 5u);
-  L.z = select(L.z, (LaneF)(-1.0f), s % 13u == 6u);
+  if (s % 7u == 3u) L.x = NAN;
+  if (s % 11u == 5u) L.y = INFINITY;
+  if (s % 13u == 6u) L.z = -1.0f;
 #endif
-  LaneI nan = isnan(L.x) | isnan(L.y) | isnan(L.z);
-  LaneI inf = (isinf(L.x) | isinf(L.y) | isinf(L.z)) & !nan;
-  LaneI negative = ((L.x < 0.0f) | (L.y < 0.0f) | (L.z < 0.0f)) & !nan & !inf;
-  *nan_samples += lane_count(m & nan);
-  *inf_samples += lane_count(m & inf);
-  *negative_samples += lane_count(m & negative);
-  L = lane3_select(L, lane3_splat((float3)(0.0f)), nan | inf | negative);
-  LaneI odd = (s & 1u) != 0u;
-  for (int k = 0; k < 2; ++k) {
-    LaneI add = m & (k ? odd : !odd);
-    acc->sum[k] = lane3_select(acc->sum[k], lane3_add(acc->sum[k], L), add);
-    acc->count[k] = select(acc->count[k], acc->count[k] + 1.0f, add);
+  if (isnan(L.x) || isnan(L.y) || isnan(L.z)) {
+    ++*nan_samples;
+    L = (float3)(0.0f);
+  } else if (isinf(L.x) || isinf(L.y) || isinf(L.z)) {
+    ++*inf_samples;
+    L = (float3)(0.0f);
+  } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
+    ++*negative_samples;
+    L = (float3)(0.0f);
   }
-  acc->squares = lane3_select(acc->squares, lane3_add(acc->squares, lane3_mul(L, L)), m);
-}
-
-/* The accumulators of pixels pixel (film: three float4 per pixel) of the lanes in m, and back. */
-inline PixelLanes load_pixels(__global const float4* film, LaneU pixel, LaneI m) {
-  uint at[PC_LANES];
-  float v[12][PC_LANES];
-  lane_gather_indices(pixel, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) {
-    for (uint k = 0u; k < 3u; ++k) {
-      float4 a = film[3u * at[j] + k];
-      v[4u * k][j] = a.x, v[4u * k + 1u][j] = a.y, v[4u * k + 2u][j] = a.z, v[4u * k + 3u][j] = a.w;
-    }
-  }
-  PixelLanes p;
-  p.sum[0] = lane3_load(v[0], v[1], v[2]);
-  p.count[0] = lane_load(v[3]);
-  p.sum[1] = lane3_load(v[4], v[5], v[6]);
-  p.count[1] = lane_load(v[7]);
-  p.squares = lane3_load(v[8], v[9], v[10]);
-  p.squares_w = lane_load(v[11]);
-  return p;
-}
-
-/* The lanes m of *acc from *from. */
-inline void select_pixels(PixelLanes* acc, const PixelLanes* from, LaneI m) {
-  for (int k = 0; k < 2; ++k) {
-    acc->sum[k] = lane3_select(acc->sum[k], from->sum[k], m);
-    acc->count[k] = select(acc->count[k], from->count[k], m);
-  }
-  acc->squares = lane3_select(acc->squares, from->squares, m);
-  acc->squares_w = select(acc->squares_w, from->squares_w, m);
-}
-
-inline void store_pixels(__global float4* film, LaneU pixel, LaneI m, const PixelLanes* p) {
-  PC_EACH_LANE(j, pc_lane_bits(m)) {
-    uint at = 3u * pc_lane(pixel, j);
-    film[at] = (float4)(lane3_at(p->sum[0], j), pc_lane(p->count[0], j));
-    film[at + 1u] = (float4)(lane3_at(p->sum[1], j), pc_lane(p->count[1], j));
-    film[at + 2u] = (float4)(lane3_at(p->squares, j), pc_lane(p->squares_w, j));
-  }
+  half_sum[s & 1u] += (float4)(L, 1.0f);
+  squares->xyz += L * L;
 }
 
 /* The unit's counters into stats (UnitStats) with integer atomics. */
@@ -309,34 +260,60 @@ inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_sample
 
 /* One work unit: samples [sample_begin, sample_begin + sample_count) of pixels pixel_begin + i * pixel_stride,
  * i < pixel_count (stride 1 for the render's units, larger for the start-up probe). Work item g renders
- * i = G g .. G g + G - 1 (G = PC_ITEM_PIXELS: W, times PC_LANE_PIXELS where W > 1), each lane one pixel at
- * a time: when a lane has done its pixel it takes the work item's next, so the lanes of a unit with few
- * samples per pixel do not wait for the slowest one's pixel. Each lane carries its pixel's accumulators
- * from the film and adds the samples one by one, so any split into units, on any device, at any W, sums
- * in the same order.
+ * the samples of i = G g .. G g + G - 1 (G = PC_ITEM_PIXELS: 1 where W = 1, W x PC_LANE_PIXELS otherwise) as
+ * tasks in order (pixel by pixel, sample by sample). A lane whose path has ended takes the next task, so
+ * every lane stays busy until the work item's last tasks; a finished sample waits in a ring of
+ * PC_RESULTS radiances until the samples before it are added, and a lane waits while the ring is full.
+ * So each pixel's samples are added one by one, in order, to the accumulators it carries from the film:
+ * any split into units, on any device, at any W, sums in the same order.
  * The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself.
  * stats (UnitStats): rays (64 bits) and hazard counts, added with integer atomics. */
 #if PC_LANES > 1
 #define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
+#define PC_RESULTS (4u * PC_LANES) /* at most 64: a bit each in `ready` */
 #else
 #define PC_ITEM_PIXELS 1u
+#define PC_RESULTS 1u
 #endif
 __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats, uint pixel_begin,
                           uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
   SceneData sc = PC_SCENE_DATA;
   uint first = get_global_id(0) * PC_ITEM_PIXELS;
   if (first >= pixel_count || sample_count == 0u) return;
-  uint end = min(first + PC_ITEM_PIXELS, pixel_count), next = first + PC_LANES;
-  LaneU item = first + PC_LANE_INDEX;
-  LaneI active = item < end;
-  LaneU pixel = pixel_begin + select((LaneU)(first), item, active) * pixel_stride;
+  uint tasks = (min(first + PC_ITEM_PIXELS, pixel_count) - first) * sample_count;
   uint rays = 0u, nan_samples = 0u, inf_samples = 0u, negative_samples = 0u;
-  PixelLanes acc = load_pixels(film, pixel, active);
-  LaneU sample = (LaneU)(sample_begin);
+  /* Tasks handed out (the next one's pixel item and sample), added to the film, and those finished
+     beyond the added ones (bit k % PC_RESULTS of ready, radiance in result). */
+  uint issued = 0u, next_item = first, next_sample = sample_begin, added = 0u;
+  ulong ready = 0ul;
+  float3 result[PC_RESULTS];
+  float4 half_sum[2], squares; /* the accumulators of the pixel being added to */
+  uint task_of[PC_LANES], pixel_of[PC_LANES], sample_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) task_of[j] = pixel_of[j] = sample_of[j] = 0u;
+  LaneU pixel = lane_load(pixel_of), sample = lane_load(sample_of);
+  LaneI active = (LaneI)(0);
   PathLanes st;
-  path_begin_lanes(&sc, pixel, sample, (LaneI)(-1), &st);
-  while (pc_any_(active)) {
+  path_begin_lanes(&sc, pixel, sample, (LaneI)(-1), &st); /* every lane's state defined */
+  for (uint idle = (1u << (PC_LANES - 1u) << 1u) - 1u;;) {
+    /* Idle lanes take the next tasks while the ring has room for their results. */
+    uint taken = 0u;
+    PC_EACH_LANE(j, idle) {
+      if (issued == tasks || issued == added + PC_RESULTS) break;
+      task_of[j] = issued++;
+      pixel_of[j] = pixel_begin + next_item * pixel_stride;
+      sample_of[j] = next_sample;
+      if (++next_sample == sample_begin + sample_count) next_sample = sample_begin, ++next_item;
+      taken |= 1u << j;
+    }
+    if (taken != 0u) {
+      LaneI take = pc_lanes_of_bits(taken, active);
+      pixel = lane_load(pixel_of);
+      sample = lane_load(sample_of);
+      path_begin_lanes(&sc, pixel, sample, take, &st);
+      active |= take;
+    }
+    if (!pc_any_(active)) break;
     HitLanes hit;
     LaneI found = trace_lanes(&sc, &st.ray, active, false, &hit);
     rays += lane_count(active);
@@ -350,32 +327,31 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
       st.radiance = lane3_select(st.radiance, lane3_add(st.radiance, st.nee), has_shadow & !blocked);
     }
     LaneI ended = active & !more;
-    if (!pc_any_(ended)) continue;
-    accumulate_sample_lanes(st.radiance, sample, ended, &acc, &nan_samples, &inf_samples, &negative_samples);
-    sample = select(sample, sample + 1u, ended);
-    LaneI done = ended & (sample >= sample_begin + sample_count), take = (LaneI)(0);
-    if (pc_any_(done)) {
-      /* Pixels done: into the film, and their lanes take the work item's next pixels. */
-      store_pixels(film, pixel, done, &acc);
-      uint items[PC_LANES], taken = 0u;
-      lane_store(item, items);
-      PC_EACH_LANE(j, pc_lane_bits(done)) {
-        if (next >= end) break;
-        items[j] = next++;
-        taken |= 1u << j;
-      }
-      take = pc_lanes_of_bits(taken, done);
-      active = (active & !done) | take;
-      if (pc_any_(take)) {
-        item = lane_load(items);
-        pixel = select(pixel, pixel_begin + item * pixel_stride, take);
-        sample = select(sample, (LaneU)(sample_begin), take);
-        PixelLanes loaded = load_pixels(film, pixel, take);
-        select_pixels(&acc, &loaded, take);
-      }
+    idle = pc_lane_bits(ended);
+    if (idle == 0u) continue;
+    active &= !ended;
+    /* Finished samples into the ring, then every sample whose predecessors are in, in order. */
+    PC_EACH_LANE(j, idle) {
+      uint slot = task_of[j] % PC_RESULTS;
+      result[slot] = lane3_at(st.radiance, j);
+      ready |= 1ul << slot;
     }
-    LaneI start = (ended & !done) | take;
-    if (pc_any_(start)) path_begin_lanes(&sc, pixel, sample, start, &st);
+    for (uint slot = added % PC_RESULTS; (ready >> slot) & 1ul; slot = added % PC_RESULTS) {
+      uint s = sample_begin + added % sample_count, at = 3u * (pixel_begin + (first + added / sample_count) * pixel_stride);
+      if (s == sample_begin) {
+        half_sum[0] = film[at];
+        half_sum[1] = film[at + 1u];
+        squares = film[at + 2u];
+      }
+      accumulate_sample(result[slot], s, half_sum, &squares, &nan_samples, &inf_samples, &negative_samples);
+      if (s + 1u == sample_begin + sample_count) {
+        film[at] = half_sum[0];
+        film[at + 1u] = half_sum[1];
+        film[at + 2u] = squares;
+      }
+      ready &= ~(1ul << slot);
+      ++added;
+    }
   }
   add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);
 }

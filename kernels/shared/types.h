@@ -21,7 +21,7 @@ typedef uint32_t pc_uint;
 
 /* The path integrator over W > 1 lanes (PC_LANES, kernels/lanes.cl): a work item renders W x
  * PC_LANE_PIXELS pixels of a unit, each lane taking the item's next pixel when it has done one. */
-#define PC_LANE_PIXELS 4u
+#define PC_LANE_PIXELS 16u
 
 /* Primitive kinds (PrimShading.kind). */
 #define PC_PRIM_TRIANGLE 0u
