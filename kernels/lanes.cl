@@ -143,33 +143,33 @@ inline uint lane_uniform_index(LaneU index, LaneI m) {
 #define PC_FIELD_U(array, member) PC_FIELD_U_AT(array, member, 0)
 #define PC_FIELD_U_AT(array, member, k) (__global const uint*)&(array)->member + (k), (uint)(sizeof(*(array)) / 4u)
 #if PC_LANES == 1
-inline float lane_gather_float(__global const float* base, uint stride, uint index) { return base[index * stride]; }
-inline uint lane_gather_uint(__global const uint* base, uint stride, uint index) { return base[index * stride]; }
+PC_LANE_INLINE float lane_gather_float(__global const float* base, uint stride, uint index) { return base[index * stride]; }
+PC_LANE_INLINE uint lane_gather_uint(__global const uint* base, uint stride, uint index) { return base[index * stride]; }
 #elif PC_LANES == 8
-inline float8 lane_gather_float(__global const float* base, uint stride, uint8 index) {
+PC_LANE_INLINE float8 lane_gather_float(__global const float* base, uint stride, uint8 index) {
   uint8 o = index * stride;
   return (float8)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7]);
 }
-inline uint8 lane_gather_uint(__global const uint* base, uint stride, uint8 index) {
+PC_LANE_INLINE uint8 lane_gather_uint(__global const uint* base, uint stride, uint8 index) {
   uint8 o = index * stride;
   return (uint8)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7]);
 }
 #else
-inline float16 lane_gather_float(__global const float* base, uint stride, uint16 index) {
+PC_LANE_INLINE float16 lane_gather_float(__global const float* base, uint stride, uint16 index) {
   uint16 o = index * stride;
   return (float16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7], base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
 }
-inline uint16 lane_gather_uint(__global const uint* base, uint stride, uint16 index) {
+PC_LANE_INLINE uint16 lane_gather_uint(__global const uint* base, uint stride, uint16 index) {
   uint16 o = index * stride;
   return (uint16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7], base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
 }
 #endif
 
 /* The x, y, z at base[0, 1, 2] (a float4 or three floats of a struct) of every lane. */
-inline Lane3 lane_gather3(__global const float* base, uint stride, LaneU index) {
-  return lane3(lane_gather_float(base, stride, index), lane_gather_float(base + 1, stride, index),
-               lane_gather_float(base + 2, stride, index));
-}
+#define lane_gather3(...) PC_GATHER3_(__VA_ARGS__)
+#define PC_GATHER3_(base, stride, index)                                                                 \
+  lane3(lane_gather_float((base), stride, index), lane_gather_float((base) + 1, stride, index),           \
+        lane_gather_float((base) + 2, stride, index))
 
 /* Lane3 arithmetic, component by component: each is the float3 operation of one lane. */
 inline Lane3 lane3_splat(float3 v) { return lane3((LaneF)(v.x), (LaneF)(v.y), (LaneF)(v.z)); }
