@@ -29,14 +29,4 @@ PC_DIELECTRIC_LANES(lane3f8, float8, int8)
 PC_DIELECTRIC_LANES(lane3f16, float16, int16)
 #undef PC_DIELECTRIC_LANES
 
-inline float3 dielectric_eval(Material m, float3 wo, float3 wi) { return (float3)(0.0f); }
-inline float dielectric_pdf(Material m, float3 wo, float3 wi) { return 0.0f; }
-
-inline bool dielectric_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = dielectric_sample_lanes(lane3_of(m.color.xyz), m.ior, lane3_of(wo), u.z, &wi, &pdf, &weight, &s->eta2);
-  return lobe_sample(valid, wi, pdf, weight, 1, s);
-}
-
 #endif

@@ -10,8 +10,8 @@
 #endif
 
 /* Written once over lanes (V3 lane3f/lane3f8/lane3f16, F, I their float and int types; issue 15): c is the
- * reflectance per lane, branches are per-lane selects, and the Material functions below are the one-lane
- * instances, so every lane gets their bits (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+ * reflectance per lane and branches are per-lane selects, so every lane gets the one-lane bits
+ * (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits); bsdf.cl dispatches to these at every width, one included. */
 #define PC_DIFFUSE_LANES(V3, F, I)                                                                        \
   inline PC_OVL V3 diffuse_eval_lanes(V3 c, V3 wi) {                                                      \
     I above = wi.z > 0.0f;                                                                                \
@@ -33,18 +33,5 @@ PC_DIFFUSE_LANES(lane3f, float, int)
 PC_DIFFUSE_LANES(lane3f8, float8, int8)
 PC_DIFFUSE_LANES(lane3f16, float16, int16)
 #undef PC_DIFFUSE_LANES
-
-inline float3 diffuse_eval(Material m, float3 wo, float3 wi) {
-  return float3_of(diffuse_eval_lanes(lane3_of(m.color.xyz), lane3_of(wi)));
-}
-
-inline float diffuse_pdf(Material m, float3 wo, float3 wi) { return diffuse_pdf_lanes(lane3_of(wi)); }
-
-inline bool diffuse_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = diffuse_sample_lanes(lane3_of(m.color.xyz), u.x, u.y, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, 0, s);
-}
 
 #endif

@@ -15,14 +15,4 @@ PC_MIRROR_LANES(lane3f8, float8, int8)
 PC_MIRROR_LANES(lane3f16, float16, int16)
 #undef PC_MIRROR_LANES
 
-inline float3 mirror_eval(Material m, float3 wo, float3 wi) { return (float3)(0.0f); }
-inline float mirror_pdf(Material m, float3 wo, float3 wi) { return 0.0f; }
-
-inline bool mirror_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = mirror_sample_lanes(lane3_of(m.color.xyz), lane3_of(wo), &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, 1, s);
-}
-
 #endif

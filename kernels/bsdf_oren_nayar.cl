@@ -3,8 +3,8 @@
 #ifndef PATHCL_BSDF_OREN_NAYAR_CL
 #define PATHCL_BSDF_OREN_NAYAR_CL
 
-/* Written once over lanes, as bsdf_diffuse.cl's lobes (sigma per lane); the Material functions below are
- * the one-lane instances (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+/* Written once over lanes, as bsdf_diffuse.cl's lobes (sigma per lane); bsdf.cl dispatches to
+ * them at every width (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_OREN_NAYAR_LANES(V3, F, I)                                                                     \
   inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {                                   \
     F s2 = sigma * sigma;                                                                                 \
@@ -39,18 +39,5 @@ PC_OREN_NAYAR_LANES(lane3f, float, int)
 PC_OREN_NAYAR_LANES(lane3f8, float8, int8)
 PC_OREN_NAYAR_LANES(lane3f16, float16, int16)
 #undef PC_OREN_NAYAR_LANES
-
-inline float3 oren_nayar_eval(Material m, float3 wo, float3 wi) {
-  return float3_of(oren_nayar_eval_lanes(lane3_of(m.color.xyz), m.sigma, lane3_of(wo), lane3_of(wi)));
-}
-
-inline float oren_nayar_pdf(Material m, float3 wo, float3 wi) { return oren_nayar_pdf_lanes(lane3_of(wi)); }
-
-inline bool oren_nayar_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = oren_nayar_sample_lanes(lane3_of(m.color.xyz), m.sigma, lane3_of(wo), u.x, u.y, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, 0, s);
-}
 
 #endif

@@ -7,8 +7,8 @@
 #define PATHCL_BSDF_PHONG_CL
 
 /* Written once over lanes, as bsdf_diffuse.cl's lobes (colour, specular colour and exponent per lane; the
- * lobe choice a per-lane select between both directions); the Material functions below are the one-lane
- * instances (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+ * lobe choice a per-lane select between both directions); bsdf.cl dispatches to them at every width
+ * (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_PHONG_LANES(V3, F, I)                                                                          \
   inline PC_OVL F phong_specular_probability_lanes(V3 color, V3 specular) {                               \
     F d = luminance_lanes(color), s = luminance_lanes(specular);                                          \
@@ -60,21 +60,5 @@ PC_PHONG_LANES(lane3f, float, int)
 PC_PHONG_LANES(lane3f8, float8, int8)
 PC_PHONG_LANES(lane3f16, float16, int16)
 #undef PC_PHONG_LANES
-
-inline float3 phong_eval(Material m, float3 wo, float3 wi) {
-  return float3_of(phong_eval_lanes(lane3_of(m.color.xyz), lane3_of(m.specular.xyz), m.exponent, lane3_of(wo), lane3_of(wi)));
-}
-
-inline float phong_pdf(Material m, float3 wo, float3 wi) {
-  return phong_pdf_lanes(lane3_of(m.color.xyz), lane3_of(m.specular.xyz), m.exponent, lane3_of(wo), lane3_of(wi));
-}
-
-inline bool phong_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = phong_sample_lanes(lane3_of(m.color.xyz), lane3_of(m.specular.xyz), m.exponent, lane3_of(wo), u.x, u.y,
-                                 u.z, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, 0, s);
-}
 
 #endif

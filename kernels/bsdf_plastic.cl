@@ -7,8 +7,8 @@
 #define PATHCL_BSDF_PLASTIC_CL
 
 /* Written once over lanes, as bsdf_diffuse.cl's lobes (colour, ior and alpha per lane; smooth or rough
- * coat and the lobe choice per-lane selects); the Material functions below are the one-lane instances
- * (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+ * coat and the lobe choice per-lane selects); bsdf.cl dispatches to them at every
+ * width (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_PLASTIC_LANES(V3, F, I)                                                                        \
   inline PC_OVL F plastic_coat_probability_lanes(V3 c, F ior, V3 wo) {                                    \
     F f = fresnel_dielectric(wo.z, ior);                                                                  \
@@ -59,22 +59,5 @@ PC_PLASTIC_LANES(lane3f, float, int)
 PC_PLASTIC_LANES(lane3f8, float8, int8)
 PC_PLASTIC_LANES(lane3f16, float16, int16)
 #undef PC_PLASTIC_LANES
-
-inline float3 plastic_eval(Material m, float3 wo, float3 wi) {
-  return float3_of(plastic_eval_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), lane3_of(wi)));
-}
-
-inline float plastic_pdf(Material m, float3 wo, float3 wi) {
-  return plastic_pdf_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), lane3_of(wi));
-}
-
-inline bool plastic_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int delta;
-  int valid = plastic_sample_lanes(lane3_of(m.color.xyz), m.ior, m.alpha, lane3_of(wo), u.x, u.y, u.z, &wi, &pdf,
-                                   &weight, &delta);
-  return lobe_sample(valid, wi, pdf, weight, delta, s);
-}
 
 #endif

@@ -4,8 +4,8 @@
 #ifndef PATHCL_BSDF_ROUGH_CONDUCTOR_CL
 #define PATHCL_BSDF_ROUGH_CONDUCTOR_CL
 
-/* Written once over lanes, as bsdf_diffuse.cl's lobes (eta, k and alpha per lane); the Material functions
- * below are the one-lane instances (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
+/* Written once over lanes, as bsdf_diffuse.cl's lobes (eta, k and alpha per lane); bsdf.cl dispatches
+ * to them at every width (tests/bsdf_test.cpp, LobesGiveTheOneLaneBits). */
 #define PC_ROUGH_CONDUCTOR_LANES(V3, F, I)                                                                \
   inline PC_OVL V3 rough_conductor_eval_lanes(V3 eta, V3 k, F alpha, V3 wo, V3 wi) {                      \
     V3 h = pc_normalize(lane3(wo.x + wi.x, wo.y + wi.y, wo.z + wi.z));                                    \
@@ -30,22 +30,5 @@ PC_ROUGH_CONDUCTOR_LANES(lane3f, float, int)
 PC_ROUGH_CONDUCTOR_LANES(lane3f8, float8, int8)
 PC_ROUGH_CONDUCTOR_LANES(lane3f16, float16, int16)
 #undef PC_ROUGH_CONDUCTOR_LANES
-
-inline float3 rough_conductor_eval(Material m, float3 wo, float3 wi) {
-  return float3_of(rough_conductor_eval_lanes(lane3_of(m.specular.xyz), lane3_of(m.k.xyz), m.alpha, lane3_of(wo),
-                                              lane3_of(wi)));
-}
-
-inline float rough_conductor_pdf(Material m, float3 wo, float3 wi) {
-  return rough_conductor_pdf_lanes(m.alpha, lane3_of(wo), lane3_of(wi));
-}
-
-inline bool rough_conductor_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
-  lane3f wi, weight;
-  float pdf;
-  int valid = rough_conductor_sample_lanes(lane3_of(m.specular.xyz), lane3_of(m.k.xyz), m.alpha, lane3_of(wo), u.x,
-                                           u.y, &wi, &pdf, &weight);
-  return lobe_sample(valid, wi, pdf, weight, 0, s);
-}
 
 #endif

@@ -478,7 +478,10 @@ PC_EM_GEOMETRIC(float4, uint4, 4)
  * float3 function above (the same products, sums and their order, the same flushes); its branches are
  * selects per lane. So lane j of pc_normalize(lane3f8 v) is pc_normalize of lane j's float3, bit for bit
  * (tests/exact_math_test.cpp, LaneGeometryGivesTheFloat3Bits). */
-typedef struct { float x, y, z; } lane3f;
+/* One lane is a float3: its operations are the float3 functions above (on CPU devices one SSE register
+ * per vector, on GPUs scalars), with lane3(x, y, z) its constructor. */
+typedef float3 lane3f;
+inline PC_OVL float3 lane3(float x, float y, float z) { return (float3)(x, y, z); }
 typedef struct { float8 x, y, z; } lane3f8;
 typedef struct { float16 x, y, z; } lane3f16;
 
@@ -509,8 +512,8 @@ typedef struct { float16 x, y, z; } lane3f16;
     return select(a, (U)(0u), a < 0x00800000u);                                                           \
   }                                                                                                       \
   inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }
-/* pc_length and pc_normalize of 8 or 16 lanes; those of one lane (lane3f) are the float3 functions, whose
- * early returns are faster than these selects and give the same bits. */
+/* pc_length and pc_normalize of 8 or 16 lanes; those of one lane are the float3 functions, whose early
+ * returns are faster than these selects and give the same bits. */
 #define PC_EM_LANES3_LENGTH(V3, F, I, U, N)                                                               \
   inline PC_OVL F pc_length(V3 v) {                                                                       \
     U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
@@ -548,17 +551,11 @@ typedef struct { float16 x, y, z; } lane3f16;
     return lane3(select(select(qx, v0x, zero), nan_value, nan), select(select(qy, v0y, zero), nan_value, nan), \
                  select(select(qz, v0z, zero), nan_value, nan));                                          \
   }
-PC_EM_LANES3(lane3f, float, int, uint, )
 PC_EM_LANES3(lane3f8, float8, int8, uint8, 8)
 PC_EM_LANES3(lane3f16, float16, int16, uint16, 16)
 PC_EM_LANES3_LENGTH(lane3f8, float8, int8, uint8, 8)
 PC_EM_LANES3_LENGTH(lane3f16, float16, int16, uint16, 16)
 #undef PC_EM_LANES3
 #undef PC_EM_LANES3_LENGTH
-inline PC_OVL float pc_length(lane3f v) { return pc_length((float3)(v.x, v.y, v.z)); }
-inline PC_OVL lane3f pc_normalize(lane3f v) {
-  float3 n = pc_normalize((float3)(v.x, v.y, v.z));
-  return lane3(n.x, n.y, n.z);
-}
 
 #endif

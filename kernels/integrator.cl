@@ -161,11 +161,11 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
       nee &= (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f) & lane3_any_positive(f);
       if (pc_any_(nee)) {
         RayLanes to_light;
-        spawn_ray_lanes(&s, ls.wi, &to_light);
+        spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, ls.wi, &to_light);
         LaneI finite = nee & !ls.infinite;
         if (pc_any_(finite)) {
           RayLanes to_point;
-          spawn_ray_to_lanes(&s, ls.p, ls.p_err, ls.n, &to_point);
+          spawn_ray_to_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n, &to_point);
           to_light.o = lane3_select(to_light.o, to_point.o, finite);
           to_light.d = lane3_select(to_light.d, to_point.d, finite);
           to_light.tmax = select(to_light.tmax, to_point.tmax, finite);
@@ -208,7 +208,7 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
     st->throughput = lane3_select(st->throughput, lane3_div(st->throughput, q), roulette);
   }
   RayLanes next;
-  spawn_ray_lanes(&s, wi, &next);
+  spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &next);
   next.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
   next.cutout_seed = cutout_seed_lanes(h, pixel, sample, 2u * depth + 2u);

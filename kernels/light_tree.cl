@@ -20,121 +20,29 @@
 #include "scene.cl"
 #include "lanes.cl"
 
-/* a's share of a + b: 1/2 when both are 0, all or nothing when the sum overflows. */
-inline float share_of(float a, float b) {
-  float total = a + b;
-  if (!(total > 0.0f)) return 0.5f;
-  if (isinf(total)) return isinf(a) ? (isinf(b) ? 0.5f : 1.0f) : 0.0f;
-  return a / total;
-}
-
-/* cos and sin of max(0, a - b) from the cosines and sines of angles a, b in [0, pi]. */
-inline float cos_of_difference_clamped(float cos_a, float sin_a, float cos_b, float sin_b, float* sin_out) {
-  if (cos_a >= cos_b) {
-    *sin_out = 0.0f;
-    return 1.0f;
-  }
-  *sin_out = fmax(0.0f, sin_a * cos_b - cos_a * sin_b);
-  return cos_a * cos_b + sin_a * sin_b;
-}
-
-/* The node's importance at x (see the top of the file). From inside the node's bounding sphere every
- * direction is possible and the distance is that sphere's radius. */
-inline float light_bounds_importance(LightBvhNode nd, float3 x) {
-  float3 half_extent = 0.5f * (nd.hi.xyz - nd.lo.xyz);
-  float3 d = x - (nd.lo.xyz + half_extent);
-  float r2 = pc_dot(half_extent, half_extent), d2 = pc_dot(d, d);
-  /* theta_b: half the angle the bounding sphere subtends at x */
-  float cos_b = -1.0f, sin_b = 0.0f;
-  if (d2 > r2) {
-    float sin2_b = r2 / d2;
-    sin_b = sqrt(sin2_b);
-    cos_b = sqrt(1.0f - sin2_b);
-  }
-  /* theta_w: between the cone's axis and the direction from the node's centre to x */
-  float cos_w = d2 > 0.0f ? pc_dot(nd.axis.xyz, d) / sqrt(d2) : 1.0f;
-  if (nd.two_sided) cos_w = fabs(cos_w);
-  cos_w = fmin(1.0f, fmax(-1.0f, cos_w));
-  float sin_w = sqrt(fmax(0.0f, 1.0f - cos_w * cos_w));
-  float cos_o = nd.hi.w, sin_o = sqrt(fmax(0.0f, 1.0f - cos_o * cos_o));
-  /* theta' = max(0, theta_w - theta_o - theta_b) */
-  float sin_x, sin_p;
-  float cos_x = cos_of_difference_clamped(cos_w, sin_w, cos_o, sin_o, &sin_x);
-  float cos_p = cos_of_difference_clamped(cos_x, sin_x, cos_b, sin_b, &sin_p);
-  if (cos_p < nd.axis.w || !(cos_p > 0.0f)) return 0.0f; /* beyond theta_e: no light of the node reaches x */
-  /* Distances to the box's nearest and farthest points: the intensity over their squares bounds the
-     irradiance from above and below, and the mean of the two (as Cycles' light tree takes) is the
-     estimate, exact for a point light. Unlike the distance to the centre (pbrt-v4's), it tells which of
-     two large nodes is near (a thousand emitters over a floor: relMSE 0.006 against 0.04). The nearest
-     distance is at least the box's thinnest half extent, so that from inside a room-sized node the
-     estimate stays finite and the lights at infinity keep their share. */
-  float3 nearest = fmax(fabs(d) - half_extent, 0.0f), farthest = fabs(d) + half_extent;
-  float thinnest = fmin(half_extent.x, fmin(half_extent.y, half_extent.z));
-  float dmin2 = fmax(fmax(pc_dot(nearest, nearest), thinnest * thinnest), FLT_MIN), dmax2 = fmax(pc_dot(farthest, farthest), FLT_MIN);
-  return nd.lo.w * 0.5f * (1.0f / dmin2 + 1.0f / dmax2) * cos_p;
-}
-
 /* The largest float below 1: where a rescaled u must stay. */
 #define PC_ONE_MINUS_EPSILON 0x1.fffffep-1f
 
-/* With target == PC_INVALID: chooses a light with u and stores its index in *chosen. Otherwise follows
- * the choice of light target. Returns the probability of that choice from x (0: never chosen from x). */
-inline float light_choice(const SceneData* sc, float3 x, uint target, float u, uint* chosen) {
-  __constant const SceneHeader* h = sc->h;
-  uint tree_count = h->tree_light_count, infinite_count = h->light_count - tree_count;
-  bool sampling = target == PC_INVALID;
-  float p_infinite = infinite_count == 0 ? 0.0f
-                     : tree_count == 0   ? 1.0f
-                                         : share_of(h->infinite_irradiance, light_bounds_importance(sc->light_bvh[0], x));
-  if (sampling ? u < p_infinite : target >= tree_count) {
-    if (sampling) {
-      float v = fmin(u / p_infinite, PC_ONE_MINUS_EPSILON);
-      target = tree_count + find_interval(sc->light_cdf, infinite_count, v);
-      *chosen = target;
-    }
-    return p_infinite * sc->lights[target].infinite_share;
-  }
-  if (sampling) u = fmin((u - p_infinite) / (1.0f - p_infinite), PC_ONE_MINUS_EPSILON);
-  uint leaf = sampling ? 0u : sc->lights[target].tree_leaf;
-  float p = 1.0f - p_infinite;
-  uint node = 0;
-  for (;;) {
-    uint second = sc->light_bvh[node].second;
-    if (second == PC_INVALID) break;
-    float p_first =
-        share_of(light_bounds_importance(sc->light_bvh[node + 1], x), light_bounds_importance(sc->light_bvh[second], x));
-    /* Depth-first order: the first child's subtree is [node + 1, second). */
-    bool first = sampling ? u < p_first : leaf < second;
-    if (sampling) u = fmin(first ? u / p_first : (u - p_first) / (1.0f - p_first), PC_ONE_MINUS_EPSILON);
-    p *= first ? p_first : 1.0f - p_first;
-    node = first ? node + 1 : second;
-  }
-  if (sampling) *chosen = sc->light_bvh[node].light;
-  return p;
-}
+/* Written once over the program's lanes (kernels/lanes.cl): each lane walks the tree on its own; where the
+ * lanes' walks are at the same node (the top of the tree, or a tree of few lights) it is loaded once. */
 
-/* The probability that sample_light from x chooses light index. */
-inline float light_choice_pdf(const SceneData* sc, float3 x, uint index) {
-  uint unused;
-  return light_choice(sc, x, index, 0.0f, &unused);
-}
-
-/* ---- light_choice by lane (kernels/lanes.cl): each lane does the one-lane walk's operations; where
- * the lanes' walks are at the same node (the top of the tree, or a tree of few lights) it is loaded once. */
-
+/* a's share of a + b: 1/2 when both are 0, all or nothing when the sum overflows. */
 PC_LANE_INLINE LaneF share_of_lanes(LaneF a, LaneF b) {
   LaneF total = a + b;
   LaneF infinite = select((LaneF)(0.0f), select((LaneF)(1.0f), (LaneF)(0.5f), isinf(b)), isinf(a));
   return select(select(a / total, infinite, isinf(total)), (LaneF)(0.5f), !(total > 0.0f));
 }
 
+/* cos and sin of max(0, a - b) from the cosines and sines of angles a, b in [0, pi]. */
 PC_LANE_INLINE LaneF cos_of_difference_clamped_lanes(LaneF cos_a, LaneF sin_a, LaneF cos_b, LaneF sin_b, LaneF* sin_out) {
   LaneI none = cos_a >= cos_b;
   *sin_out = select(fmax(0.0f, sin_a * cos_b - cos_a * sin_b), (LaneF)(0.0f), none);
   return select(cos_a * cos_b + sin_a * sin_b, (LaneF)(1.0f), none);
 }
 
-/* light_bounds_importance of node[index] at x, for the lanes in m (the others: any value). */
+/* The importance of node[index] at x (see the top of the file), for the lanes in m (the others: any value).
+ * From inside the node's bounding sphere every direction is possible and the distance is that sphere's
+ * radius. */
 PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* nodes, LaneU index, Lane3 x, LaneI m) {
   Lane3 lo, hi, axis;
   LaneF power, cos_o, cos_e;
@@ -163,17 +71,26 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
   Lane3 half_extent = lane3_scale(lane3_sub(hi, lo), 0.5f);
   Lane3 d = lane3_sub(x, lane3_add(lo, half_extent));
   LaneF r2 = pc_dot(half_extent, half_extent), d2 = pc_dot(d, d);
+  /* theta_b: half the angle the bounding sphere subtends at x */
   LaneI outside = d2 > r2;
   LaneF sin2_b = r2 / d2;
   LaneF sin_b = select((LaneF)(0.0f), sqrt(sin2_b), outside), cos_b = select((LaneF)(-1.0f), sqrt(1.0f - sin2_b), outside);
+  /* theta_w: between the cone's axis and the direction from the node's centre to x */
   LaneF cos_w = select((LaneF)(1.0f), pc_dot(axis, d) / sqrt(d2), d2 > 0.0f);
   cos_w = select(cos_w, fabs(cos_w), two_sided);
   cos_w = fmin(1.0f, fmax(-1.0f, cos_w));
   LaneF sin_w = sqrt(fmax(0.0f, 1.0f - cos_w * cos_w));
   LaneF sin_o = sqrt(fmax(0.0f, 1.0f - cos_o * cos_o));
+  /* theta' = max(0, theta_w - theta_o - theta_b) */
   LaneF sin_x, sin_p;
   LaneF cos_x = cos_of_difference_clamped_lanes(cos_w, sin_w, cos_o, sin_o, &sin_x);
   LaneF cos_p = cos_of_difference_clamped_lanes(cos_x, sin_x, cos_b, sin_b, &sin_p);
+  /* Distances to the box's nearest and farthest points: the intensity over their squares bounds the
+     irradiance from above and below, and the mean of the two (as Cycles' light tree takes) is the
+     estimate, exact for a point light. Unlike the distance to the centre (pbrt-v4's), it tells which of
+     two large nodes is near (a thousand emitters over a floor: relMSE 0.006 against 0.04). The nearest
+     distance is at least the box's thinnest half extent, so that from inside a room-sized node the
+     estimate stays finite and the lights at infinity keep their share. */
   Lane3 nearest = lane3(fmax(fabs(d.x) - half_extent.x, 0.0f), fmax(fabs(d.y) - half_extent.y, 0.0f),
                         fmax(fabs(d.z) - half_extent.z, 0.0f));
   Lane3 farthest = lane3_add(lane3_abs(d), half_extent);
@@ -181,6 +98,7 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
   LaneF dmin2 = fmax(fmax(pc_dot(nearest, nearest), thinnest * thinnest), FLT_MIN);
   LaneF dmax2 = fmax(pc_dot(farthest, farthest), FLT_MIN);
   LaneF importance = power * 0.5f * (1.0f / dmin2 + 1.0f / dmax2) * cos_p;
+  /* beyond theta_e: no light of the node reaches x */
   return select(importance, (LaneF)(0.0f), (cos_p < cos_e) | !(cos_p > 0.0f));
 }
 
@@ -194,8 +112,9 @@ PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, 
   return lane_load(out);
 }
 
-/* light_choice for the lanes in m: where target is PC_INVALID chooses a light with u (into *chosen),
- * elsewhere follows the choice of light target; the probability of that choice from x. */
+/* For the lanes in m: where target is PC_INVALID, chooses a light with u and stores its index in *chosen;
+ * elsewhere follows the choice of light target. Returns the probability of that choice from x (0: never
+ * chosen from x). */
 inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, LaneF u, LaneI m, LaneU* chosen) {
   __constant const SceneHeader* h = sc->h;
   *chosen = target;
@@ -255,5 +174,22 @@ inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, Lane
   }
   return p;
 }
+
+#if PC_LANES == 1
+/* With target == PC_INVALID: chooses a light with u and stores its index in *chosen. Otherwise follows
+ * the choice of light target. Returns the probability of that choice from x. */
+inline float light_choice(const SceneData* sc, float3 x, uint target, float u, uint* chosen) {
+  uint index;
+  float p = light_choice_lanes(sc, x, target, u, 1, &index);
+  if (target == PC_INVALID) *chosen = index;
+  return p;
+}
+
+/* The probability that sample_light from x chooses light index. */
+inline float light_choice_pdf(const SceneData* sc, float3 x, uint index) {
+  uint unused;
+  return light_choice(sc, x, index, 0.0f, &unused);
+}
+#endif
 
 #endif

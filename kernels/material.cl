@@ -32,27 +32,11 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
 }
 #endif
 
-/* The material at a surface point; a textured colour is the texture's value times the material's
- * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). Vertex
- * colours, interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x
- * COLOR_0); a sphere's are white. */
-inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
-  Material m = sc->materials[material];
-#ifdef PC_HAS_TEXTURES
-  if (m.color_texture != PC_INVALID)
-    m.color.xyz *= texture_lookup(sc->textures, sc->texels, m.color_texture, surface_uv(sc, s, hit));
-#endif
-#ifdef PC_HAS_VERTEX_COLORS
-  if (sc->shading[s->prim].flags & PC_FLAG_VERTEX_COLORS) {
-    __global const float4* c = sc->colors + 3 * s->prim;
-    m.color.xyz *= ((1.0f - hit->u - hit->v) * c[0].xyz + hit->u * c[1].xyz) + hit->v * c[2].xyz;
-  }
-#endif
-  return m;
-}
-
-/* material_at by lane (kernels/lanes.cl): the material of each lane in m (the others get the first such
- * lane's), every field as the one-lane function gives it (MaterialLanes: kernels/bsdf.cl). */
+/* The material at the surface points of the lanes in m (the others get the first such lane's; kernels/
+ * lanes.cl; MaterialLanes: kernels/bsdf.cl); a textured colour is the texture's value times the material's
+ * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). Vertex colours,
+ * interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x COLOR_0); a
+ * sphere's are white. */
 inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
                                        const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
   /* Fields a program's material types do not read are dead code here, and their gathers with them. */
@@ -96,5 +80,20 @@ inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, cons
 #endif
   return out;
 }
+
+#if PC_LANES == 1
+/* material_at_lanes for one surface point: the material with its colour looked up. */
+inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
+  SurfaceLanes l = surface_lanes_of(s);
+  HitLanes h = hit_lanes_of(hit);
+  ShadingLanes shading;
+  shading.material = material;
+  shading.flags = sc->shading[s->prim].flags;
+  shading.light = sc->shading[s->prim].light;
+  Material m = sc->materials[material];
+  m.color.xyz = material_at_lanes(sc, material, &l, &shading, &h, 1).color;
+  return m;
+}
+#endif
 
 #endif

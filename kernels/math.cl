@@ -56,20 +56,10 @@ PC_MATH_LANES(lane3f8, float8, int8)
 PC_MATH_LANES(lane3f16, float16, int16)
 #undef PC_MATH_LANES
 
-inline lane3f lane3_of(float3 v) { return lane3(v.x, v.y, v.z); }
-inline float3 float3_of(lane3f v) { return (float3)(v.x, v.y, v.z); }
+/* A float3 as one lane and back (the same type: kept where a call reads better as a conversion). */
+inline float3 lane3_of(float3 v) { return v; }
+inline float3 float3_of(float3 v) { return v; }
 
-inline float luminance(float3 c) { return luminance_lanes(lane3_of(c)); }
-
-inline PC_OVL void make_frame(float3 n, float3* t, float3* b) {
-  lane3f lt, lb;
-  make_frame(lane3_of(n), &lt, &lb);
-  *t = float3_of(lt);
-  *b = float3_of(lb);
-}
-
-inline PC_OVL float3 offset_ray_origin(float3 p, float3 err, float3 n, float3 w) {
-  return float3_of(offset_ray_origin(lane3_of(p), lane3_of(err), lane3_of(n), lane3_of(w)));
-}
+inline float luminance(float3 c) { return luminance_lanes(c); }
 
 #endif

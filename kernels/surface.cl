@@ -22,42 +22,6 @@ inline float3 sphere_normal(Primitive p, float3 at, uint flags) {
   return (flags & PC_FLAG_FLIP_NORMAL) ? -n : n;
 }
 
-inline Surface surface_at(__global const Primitive* prims, __global const PrimShading* shading,
-                          __global const float4* normals, const Ray* ray, const Hit* hit) {
-  Surface s;
-  Primitive p = prims[hit->slot];
-  s.prim = prim_index_of(p);
-  s.instance = 0u;
-#ifdef PC_HAS_SPHERES
-  if (prim_kind_of(p) == PC_PRIM_SPHERE) {
-    /* Re-project onto the sphere (pbrt-v4): the error is then a few ulps of the offset from the centre. */
-    float3 c = p.a.xyz;
-    float3 rel = ray->o + hit->t * ray->d - c;
-    rel *= p.b.x / pc_length(rel);
-    s.p = c + rel;
-    s.p_err = error_gamma(5) * fabs(rel) + error_gamma(1) * fabs(s.p);
-    s.ng = sphere_normal(p, s.p, shading[s.prim].flags);
-    s.ns = s.ng;
-    return s;
-  }
-#endif
-  float b0 = 1.0f - hit->u - hit->v;
-  float3 pa = b0 * p.a.xyz, pb = hit->u * p.b.xyz, pc = hit->v * p.c.xyz;
-  s.p = pa + pb + pc;
-  s.p_err = error_gamma(7) * (fabs(pa) + fabs(pb) + fabs(pc));
-  s.ng = triangle_normal(p);
-  s.ns = s.ng;
-#ifdef PC_HAS_SMOOTH_NORMALS
-  if (shading[s.prim].flags & PC_FLAG_SMOOTH) {
-    float3 n = b0 * normals[3 * s.prim].xyz + hit->u * normals[3 * s.prim + 1].xyz +
-               hit->v * normals[3 * s.prim + 2].xyz;
-    float len = pc_length(n);
-    if (len > 0.0f) s.ns = pc_dot(n, s.ng) < 0.0f ? -n / len : n / len;
-  }
-#endif
-  return s;
-}
-
 #ifdef PC_HAS_INSTANCES
 /* A normal of the mesh's coordinates in the device's: by the inverse transpose of to_device's linear part,
  * which is the transpose of to_mesh's. It keeps the side a normal points to, also for a mirroring
@@ -88,49 +52,11 @@ inline void place_surface(Surface* s, __global const Instance* inst) {
 }
 #endif
 
-/* The surface at a hit of the scene (trace_scene), in the device's coordinates. */
-inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
-  Surface s = surface_at(sc->prims, sc->shading, sc->normals, ray, hit);
-#ifdef PC_HAS_INSTANCES
-  s.instance = hit->instance;
-  if (!(sc->instances[hit->instance].flags & PC_INSTANCE_IDENTITY)) place_surface(&s, sc->instances + hit->instance);
-#endif
-  return s;
-}
-
-/* The ray leaving surface point s in direction w (unit; a continuation, or a shadow ray towards a light
- * at infinity): moved off the surface by its error bound to w's side, s's primitive skipped. The cut-out
- * seed is the caller's. */
-inline Ray spawn_ray(const Surface* s, float3 w) {
-  Ray r;
-  r.o = offset_ray_origin(s->p, s->p_err, s->ng, w);
-  r.d = w;
-  r.tmin = 0.0f;
-  r.tmax = INFINITY;
-  r.skip_prim = s->prim;
-  r.skip_instance = s->instance;
-  return r;
-}
-
 /* Shadow rays stop this fraction short of their far end. */
 #define PC_SHADOW_EPSILON 1e-4f
 
-/* A shadow ray between two surface points, each moved off its surface by its error bound towards the
- * other (pbrt-v4's SpawnRayTo): neither end's own surface can block it. The direction is not unit
- * length; the ray covers [0, 1 - PC_SHADOW_EPSILON] of the way. */
-inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
-  Ray r;
-  r.o = offset_ray_origin(p, p_err, n, q - p);
-  r.d = offset_ray_origin(q, q_err, nq, r.o - q) - r.o;
-  r.tmin = 0.0f;
-  r.tmax = 1.0f - PC_SHADOW_EPSILON;
-  r.skip_prim = prim;
-  r.skip_instance = instance;
-  return r;
-}
-
-/* ---- The same over the lanes of a work item (kernels/lanes.cl): every lane does the operations of the
- * one-lane functions above. */
+/* ---- Written once over the program's lanes (kernels/lanes.cl); the functions on Surface, Ray and Hit at
+ * the end are the one-lane instances. */
 
 /* Surface by lane, and the PrimShading of its primitive. */
 typedef struct {
@@ -142,7 +68,9 @@ typedef struct {
   LaneU material, light, flags;
 } ShadingLanes;
 
-/* The surfaces at the hits of the lanes in m (the others get the first such lane's). */
+/* The surfaces at the hits of trace_scene (trace_lanes) of the lanes in m (the others get the first such
+ * lane's), in the device's coordinates. A point on a sphere is re-projected onto it (pbrt-v4): its error is
+ * then a few ulps of the offset from the centre. */
 inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
                                         ShadingLanes* shading) {
   LaneU slot = lane_safe_index(hit->slot, m);
@@ -215,25 +143,112 @@ inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray
   return s;
 }
 
-/* spawn_ray and spawn_ray_to by lane, into *r (the cut-out seed is the caller's). The forced inlines of the
- * lane code write through pointers rather than return structs: an inlined struct return leaves an
- * intrinsic (noalias scope) that Oclgrind cannot execute. */
-PC_LANE_INLINE void spawn_ray_lanes(const SurfaceLanes* s, Lane3 w, RayLanes* r) {
-  r->o = offset_ray_origin(s->p, s->p_err, s->ng, w);
+/* The ray leaving surface point p (error bound p_err, geometric normal n, primitive prim of instance) in
+ * direction w (unit; a continuation, or a shadow ray towards a light at infinity): moved off the surface
+ * by its error bound to w's side, its primitive skipped. Into *r, the cut-out seed left to the caller.
+ * (The forced inlines of the lane code write through pointers rather than return structs: an inlined
+ * struct return leaves an intrinsic, a noalias scope, that Oclgrind cannot execute.) */
+PC_LANE_INLINE void spawn_ray_lanes(Lane3 p, Lane3 p_err, Lane3 n, LaneU prim, LaneU instance, Lane3 w, RayLanes* r) {
+  r->o = offset_ray_origin(p, p_err, n, w);
   r->d = w;
   r->tmin = (LaneF)(0.0f);
   r->tmax = (LaneF)(INFINITY);
-  r->skip_prim = s->prim;
-  r->skip_instance = s->instance;
+  r->skip_prim = prim;
+  r->skip_instance = instance;
 }
 
-PC_LANE_INLINE void spawn_ray_to_lanes(const SurfaceLanes* s, Lane3 q, Lane3 q_err, Lane3 nq, RayLanes* r) {
-  r->o = offset_ray_origin(s->p, s->p_err, s->ng, lane3_sub(q, s->p));
+/* A shadow ray from that point to point q (error bound q_err, normal nq), each end moved off its surface
+ * by its error bound towards the other (pbrt-v4's SpawnRayTo): neither end's own surface can block it.
+ * The direction is not unit length; the ray covers [0, 1 - PC_SHADOW_EPSILON] of the way. */
+PC_LANE_INLINE void spawn_ray_to_lanes(Lane3 p, Lane3 p_err, Lane3 n, LaneU prim, LaneU instance, Lane3 q,
+                                       Lane3 q_err, Lane3 nq, RayLanes* r) {
+  r->o = offset_ray_origin(p, p_err, n, lane3_sub(q, p));
   r->d = lane3_sub(offset_ray_origin(q, q_err, nq, lane3_sub(r->o, q)), r->o);
   r->tmin = (LaneF)(0.0f);
   r->tmax = (LaneF)(1.0f - PC_SHADOW_EPSILON);
-  r->skip_prim = s->prim;
-  r->skip_instance = s->instance;
+  r->skip_prim = prim;
+  r->skip_instance = instance;
 }
+
+#if PC_LANES == 1
+/* A Ray or Hit as one lane, and a Ray back. */
+inline RayLanes ray_lanes_of(const Ray* r) {
+  RayLanes l;
+  l.o = r->o;
+  l.d = r->d;
+  l.tmin = r->tmin;
+  l.tmax = r->tmax;
+  l.skip_prim = r->skip_prim;
+  l.skip_instance = r->skip_instance;
+  l.cutout_seed = r->cutout_seed;
+  return l;
+}
+
+inline Ray ray_of(const RayLanes* l) {
+  Ray r;
+  r.o = l->o;
+  r.d = l->d;
+  r.tmin = l->tmin;
+  r.tmax = l->tmax;
+  r.skip_prim = l->skip_prim;
+  r.skip_instance = l->skip_instance;
+  r.cutout_seed = l->cutout_seed;
+  return r;
+}
+
+inline HitLanes hit_lanes_of(const Hit* hit) {
+  HitLanes h;
+  h.t = hit->t;
+  h.u = hit->u;
+  h.v = hit->v;
+  h.slot = hit->slot;
+  h.prim = hit->prim;
+  h.instance = hit->instance;
+  return h;
+}
+
+/* A Surface as one lane. */
+inline SurfaceLanes surface_lanes_of(const Surface* s) {
+  SurfaceLanes l;
+  l.p = s->p;
+  l.p_err = s->p_err;
+  l.ng = s->ng;
+  l.ns = s->ns;
+  l.prim = s->prim;
+  l.instance = s->instance;
+  return l;
+}
+
+/* The surface at a hit of the scene (trace_scene), in the device's coordinates. */
+inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
+  RayLanes r = ray_lanes_of(ray);
+  HitLanes h = hit_lanes_of(hit);
+  ShadingLanes shading;
+  SurfaceLanes l = scene_surface_lanes(sc, &r, &h, 1, &shading);
+  Surface s;
+  s.p = l.p;
+  s.p_err = l.p_err;
+  s.ng = l.ng;
+  s.ns = l.ns;
+  s.prim = l.prim;
+  s.instance = l.instance;
+  return s;
+}
+
+/* spawn_ray_lanes from surface point s; the cut-out seed is the caller's. */
+inline Ray spawn_ray(const Surface* s, float3 w) {
+  RayLanes r;
+  spawn_ray_lanes(s->p, s->p_err, s->ng, s->prim, s->instance, w, &r);
+  r.cutout_seed = 0u;
+  return ray_of(&r);
+}
+
+inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
+  RayLanes r;
+  spawn_ray_to_lanes(p, p_err, n, prim, instance, q, q_err, nq, &r);
+  r.cutout_seed = 0u;
+  return ray_of(&r);
+}
+#endif
 
 #endif

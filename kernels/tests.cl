@@ -90,26 +90,38 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
  * skipped). queries: 8 floats each: slot (uint bits), u, v, then either a direction (mode 0: closest
  * hit, any hit counts as a self-intersection) or, in mode 1, the slot, u, v of a second point (a
  * shadow ray to it, stopped short like the integrator's). out: scene-order primitive hit, or PC_INVALID. */
-/* The surface at triangle slot q[0] (uint bits), barycentrics q[1], q[2]. */
+/* The surface at triangle slot q[0] (uint bits), barycentrics q[1], q[2], of a scene without placed
+ * instances (instance 0 is the whole scene, untransformed). */
 inline Surface query_surface(__global const Primitive* prims, __global const PrimShading* shading,
-                             __global const float4* normals, __global const float* q) {
-  Ray unused; /* surface_at reads the ray only for spheres */
+                             __global const float4* normals, __global const Instance* instances,
+                             __global const float* q) {
+  SceneData sc; /* the arrays scene_surface reads */
+  sc.prims = prims;
+  sc.shading = shading;
+  sc.normals = normals;
+  sc.instances = instances;
+  Ray unused; /* read only for spheres */
   unused.o = (float3)(0.0f);
   unused.d = (float3)(0.0f, 0.0f, 1.0f);
+  unused.tmin = unused.tmax = 0.0f;
+  unused.skip_prim = unused.skip_instance = unused.cutout_seed = PC_INVALID;
   Hit at;
   at.t = 0.0f;
   at.slot = as_uint(q[0]);
+  at.prim = 0u;
+  at.instance = 0u; /* the world instance, identity (tests/robustness_test.cpp: no placed meshes) */
   at.u = q[1];
   at.v = q[2];
-  return surface_at(prims, shading, normals, &unused, &at);
+  return scene_surface(&sc, &unused, &at);
 }
 
 __kernel void spawn_test(__global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
                          __global const PrimShading* shading, __global const float4* normals,
-                         __global const float* queries, uint mode, __global uint* out) {
+                         __global const Instance* instances, __global const float* queries, uint mode,
+                         __global uint* out) {
   uint i = get_global_id(0);
   __global const float* q = queries + 8 * i;
-  Surface s = query_surface(prims, shading, normals, q);
+  Surface s = query_surface(prims, shading, normals, instances, q);
   Ray ray;
   ray.tmin = 0.0f;
   ray.skip_prim = s.prim;
@@ -119,7 +131,7 @@ __kernel void spawn_test(__global const WideNode* nodes, __global const LeafBloc
     ray.o = offset_ray_origin(s.p, s.p_err, s.ng, ray.d);
     ray.tmax = INFINITY;
   } else {
-    Surface target = query_surface(prims, shading, normals, q + 3);
+    Surface target = query_surface(prims, shading, normals, instances, q + 3);
     ray = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, target.p, target.p_err, target.ng);
   }
   Hit hit;

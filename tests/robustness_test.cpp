@@ -48,7 +48,7 @@ std::vector<uint32_t> spawn(const DeviceScene& scene, const std::vector<float>& 
   static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
   BvhBuffers bvh = upload_bvh(cl, scene);
   ClBuffer prims = upload(cl, scene.prims), shading = upload(cl, scene.shading),
-           normals = upload(cl, scene.normals), q = upload(cl, queries);
+           normals = upload(cl, scene.normals), instances = upload(cl, scene.instances), q = upload(cl, queries);
   size_t n = queries.size() / 8;
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, n * 4);
   ClKernel k(program.kernel("spawn_test"));
@@ -56,9 +56,10 @@ std::vector<uint32_t> spawn(const DeviceScene& scene, const std::vector<float>& 
   k.arg(next, prims.mem);
   k.arg(next + 1, shading.mem);
   k.arg(next + 2, normals.mem);
-  k.arg(next + 3, q.mem);
-  k.arg(next + 4, cl_uint(mode));
-  k.arg(next + 5, out.mem);
+  k.arg(next + 3, instances.mem);
+  k.arg(next + 4, q.mem);
+  k.arg(next + 5, cl_uint(mode));
+  k.arg(next + 6, out.mem);
   run_kernel(cl, k.k, n);
   std::vector<uint32_t> result(n);
   CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, n * 4, result.data(), 0, nullptr, nullptr));
