@@ -106,7 +106,7 @@ struct RenderArgs {
   std::optional<double> time_budget, target_error;
   int64_t pass_spp = 0;
   size_t work_group = 0;
-  uint32_t lanes = 1;
+  uint32_t lanes = 0;
   bool quiet = false, all_features = false, variance = false, allow_mixed_devices = false;
 };
 
@@ -195,6 +195,7 @@ nlohmann::json device_stats(const RenderResult& r) {
                     {"kernel_build_ms", d.kernel_build_ms},
                     {"kernel_from_cache", d.kernel_from_cache},
                     {"kernel_private_bytes", d.kernel_private_bytes},
+                    {"lanes", d.lanes},
                     {"probe_seconds", d.probe_seconds}});
   return list;
 }
@@ -298,7 +299,7 @@ int run_render(const RenderArgs& a) {
               {"max_depth", opt.max_depth},
               {"sampler", sampler_name(opt.sampler)},
               {"integrator", integrator_name(opt.integrator)},
-              {"lanes", opt.lanes},
+              {"lanes", r.devices.front().lanes},
               {"stop_reason", r.stop_reason},
               {"relmse_estimate", estimated_rel_mse(r.film)},
               {"kernel_build_ms", r.kernel_build_ms},
@@ -526,7 +527,9 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
-  render_cmd->add_option("--lanes", ra.lanes, "paths per work item of the path integrator: 1, 8 or 16 (the same pixels)");
+  render_cmd->add_option("--lanes", ra.lanes,
+                         "paths per work item of the path integrator: 1, 8 or 16 (the same pixels); 0: the device's "
+                         "(16 or 8 on CPU devices, 1 on GPUs)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
   render_cmd->add_option("--integrator", ra.integrator, "path (the default), light or bdpt (overrides the scene's render.integrator)");
   render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");

@@ -71,6 +71,7 @@ std::vector<DeviceInfo> list_devices() {
       cl_device_fp_config fp = device_value<cl_device_fp_config>(d, CL_DEVICE_SINGLE_FP_CONFIG);
       info.correctly_rounded_divide_sqrt = (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
       info.denormals = (fp & CL_FP_DENORM) != 0;
+      info.preferred_float_width = device_value<cl_uint>(d, CL_DEVICE_PREFERRED_VECTOR_WIDTH_FLOAT);
       info.index = devices.size();
       devices.push_back(info);
     }
@@ -87,6 +88,16 @@ uint32_t bvh_width(const DeviceInfo& device) {
     throw UsageError(std::string("PATHCL_BVH_WIDTH=") + forced + ": expected 4 or 8");
   }
   return device.is_cpu ? 8 : 4;
+}
+
+uint32_t path_lanes(const DeviceInfo& device) {
+  if (const char* forced = std::getenv("PATHCL_LANES")) {
+    for (uint32_t lanes : {1u, 8u, 16u})
+      if (std::string(forced) == std::to_string(lanes)) return lanes;
+    throw UsageError(std::string("PATHCL_LANES=") + forced + ": expected 1, 8 or 16");
+  }
+  if (!device.is_cpu || is_oclgrind(device)) return 1;
+  return device.preferred_float_width >= 16 ? 16 : 8;
 }
 
 DeviceInfo select_device(const std::string& selector) {

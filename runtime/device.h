@@ -19,6 +19,7 @@ struct DeviceInfo {
   // CL_DEVICE_SINGLE_FP_CONFIG: correctly rounded float divide and sqrt (then every kernel is built with
   // -cl-fp32-correctly-rounded-divide-sqrt), and denormals (else they may be flushed to zero).
   bool correctly_rounded_divide_sqrt = false, denormals = false;
+  cl_uint preferred_float_width = 1;  // CL_DEVICE_PREFERRED_VECTOR_WIDTH_FLOAT
   bool sub_device = false;  // a partition of `device` made by partition_device (released with its context)
   size_t index = 0;         // in list_devices()
 };
@@ -40,6 +41,12 @@ bool is_oclgrind(const DeviceInfo& device);
 // chooses for every device (tests and benchmarks of the layouts); any other value is a UsageError. The
 // hits, and so the images, are the same in both.
 uint32_t bvh_width(const DeviceInfo& device);
+
+// Paths per work item of the path integrator on the device (kernels/lanes.cl): 1 on GPUs and Oclgrind,
+// whose work items are the SIMD lanes already; on CPU devices 16 where the preferred float vector is 16
+// wide (AVX-512: the fastest there, 16 > 8 > 1 on the Cornell box, docs/heterogeneous.md), else 8.
+// PATHCL_LANES=1, 8 or 16 chooses for every device (tests, benchmarks); any other value is a UsageError.
+uint32_t path_lanes(const DeviceInfo& device);
 
 // A comma-separated list of selectors as select_device takes them, "gpu" (every GPU), "cpu" (the first CPU
 // device: the CPU devices of several platforms are the same cores, which would only compete), or "all"

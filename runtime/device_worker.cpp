@@ -34,12 +34,12 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   if (bdpt) {
     options += " -DPC_BDPT_MAX_VERTICES=" + std::to_string(std::max<uint32_t>(settings.max_depth, 1));
   }
-  if (settings.lanes != 1 && settings.lanes != 8 && settings.lanes != 16)
+  if (settings.lanes != 0 && settings.lanes != 1 && settings.lanes != 8 && settings.lanes != 16)
     throw UsageError("--lanes " + std::to_string(settings.lanes) + ": one path per work item (1) or 8 or 16");
   if (settings.lanes > 1 && integrator_ != PC_INTEGRATOR_PATH)
     throw UsageError("--lanes " + std::to_string(settings.lanes) + ": only the path integrator runs over lanes yet");
-  lanes_ = settings.lanes;
-  if (lanes_ > 1) options += " -DPC_LANES=" + std::to_string(lanes_);  // the lane kernel only when asked for
+  lanes_ = settings.lanes != 0 ? settings.lanes : integrator_ == PC_INTEGRATOR_PATH ? path_lanes(cl.info) : 1;
+  if (lanes_ > 1) options += " -DPC_LANES=" + std::to_string(lanes_);  // the program's lane width (kernels/lanes.cl)
   program_.emplace(build_kernel_program(cl, bdpt ? "bdpt.cl" : light() ? "light_integrator.cl" : "integrator.cl", options));
   pixels_ = header.width * header.height;
 

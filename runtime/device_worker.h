@@ -37,7 +37,7 @@ struct WorkerSettings {
   size_t work_group = 0;      // 0: 64, or the kernel's limit if lower
   DeviceFault fault;
   uint32_t integrator = PC_INTEGRATOR_PATH;
-  uint32_t lanes = 1;         // path: paths per work item, 1, 8 or 16 (render_pass_lanesN)
+  uint32_t lanes = 0;         // path: paths per work item, 1, 8 or 16 (kernels/lanes.cl); 0: path_lanes(device)
   const LightTransportSetup* light = nullptr;  // light, bdpt: the header and emission distribution
   uint32_t max_depth = 0;     // bdpt: the light subpath's vertex array has this many (at least 1)
   bool splat_pairs = false;   // splat with 32-bit word pairs even where 64-bit atomics exist (tests)
@@ -66,6 +66,7 @@ class DeviceWorker {
 
   const KernelProgram& program() const { return *program_; }
   size_t work_group() const { return work_group_; }
+  uint32_t lanes() const { return lanes_; }
   uint64_t private_bytes() const { return private_bytes_; }  // CL_KERNEL_PRIVATE_MEM_SIZE of the render kernel
 
  private:

@@ -257,6 +257,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.kernel_from_cache = program.from_cache;
     report.kernel_options = program.options;
     report.kernel_private_bytes = threads[e.device]->worker().private_bytes();
+    report.lanes = threads[e.device]->worker().lanes();
     if (e.probe_seconds > 0) schedule_devices[e.device].rate = double(kProbePixels) * kProbeSamples / e.probe_seconds;
   }
   if (std::none_of(ready.begin(), ready.end(), [](bool r) { return r; })) {

@@ -43,9 +43,9 @@ struct RenderOptions {
   uint32_t tile_pixels = 0;     // pixels per tile; 0: about 256 tiles
   uint32_t max_unit_pixels = 0; // 0: as the devices' rates allow
   size_t work_group = 0;        // 0: 64 (or the kernel's limit); 8 for the lane kernels
-  // Paths per work item of the path integrator: 1 (render_pass) or 8 or 16 (render_pass_lanesN, issue 15);
-  // the same pixels.
-  uint32_t lanes = 1;
+  // Paths per work item of the path integrator (kernels/lanes.cl): 1, 8 or 16, the same pixels; 0: each
+  // device's own (path_lanes, runtime/device.h), 1 for the other integrators.
+  uint32_t lanes = 0;
 
   // Several devices.
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's
@@ -74,6 +74,7 @@ struct DeviceReport {
   bool kernel_from_cache = false;
   std::string kernel_options;
   uint64_t kernel_private_bytes = 0;  // the render kernel's private memory per work item, as the driver reports it
+  uint32_t lanes = 1;                 // paths per work item
   double probe_seconds = 0;
 };
 
