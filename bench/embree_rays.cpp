@@ -1,8 +1,9 @@
 // Embree 3 ray throughput on the same triangles and ray files as `pathcl rays` (scripts/bench/peers).
-//   embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] [--compare PATHCL_HITS]
+//   embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] [--compare PATHCL_HITS] [--packet 1|8|16]
 // SCENE.obj is `pathcl info --dump-obj` output: all faces in file order form one triangle geometry, so
 // Embree's primID is pathcl's primitive index (scenes without spheres). Rays and hits use pathcl's
-// 32- and 16-byte records (docs/scene-format.md). Traces with rtcIntersect1 on N threads (static
+// 32- and 16-byte records (docs/scene-format.md). Traces with rtcIntersect1 (or, with --packet, rtcIntersect8
+// or rtcIntersect16 on consecutive rays) on N threads (static
 // chunks), R timed repetitions, and prints one JSON line: rays, hits, build and per-repetition times,
 // median rays/s, and with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's.
 // Built by scripts/bench/peers (not part of the CMake build, which does not depend on Embree).
@@ -87,22 +88,65 @@ void trace(RTCScene scene, const std::vector<Ray>& rays, std::vector<Hit>& hits,
   }
 }
 
+// The same with rtcIntersect8 or rtcIntersect16 (RTCRayHitN: 8 or 16 rays by coordinate), consecutive rays
+// as one packet, as a renderer that traces its SIMD lanes' rays together would (Mitsuba's llvm variants).
+template <int N, typename RayHitN, typename Intersect>
+void trace_packets(RTCScene scene, const std::vector<Ray>& rays, std::vector<Hit>& hits, size_t begin, size_t end,
+                   Intersect intersect) {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  for (size_t first = begin; first < end; first += N) {
+    alignas(64) RayHitN rh{};
+    alignas(64) int valid[N];
+    for (int j = 0; j < N; ++j) {
+      size_t i = std::min(first + j, end - 1);
+      const Ray& r = rays[i];
+      valid[j] = first + j < end ? -1 : 0;
+      rh.ray.org_x[j] = r.org[0], rh.ray.org_y[j] = r.org[1], rh.ray.org_z[j] = r.org[2], rh.ray.tnear[j] = r.tmin;
+      rh.ray.dir_x[j] = r.dir[0], rh.ray.dir_y[j] = r.dir[1], rh.ray.dir_z[j] = r.dir[2], rh.ray.tfar[j] = r.tmax;
+      rh.ray.mask[j] = 0xffffffffu;
+      rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+    }
+    intersect(valid, scene, &context, &rh);
+    for (int j = 0; j < N && first + j < end; ++j) {
+      if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID)
+        hits[first + j] = {INFINITY, kMiss, 0, 0};
+      else
+        hits[first + j] = {rh.ray.tfar[j], rh.hit.primID[j], rh.hit.u[j], rh.hit.v[j]};
+    }
+  }
+}
+
+void trace_with(int packet, RTCScene scene, const std::vector<Ray>& rays, std::vector<Hit>& hits, size_t begin,
+                size_t end) {
+  if (packet == 16)
+    trace_packets<16, RTCRayHit16>(scene, rays, hits, begin, end, [](const int* v, RTCScene s, RTCIntersectContext* c,
+                                                                     RTCRayHit16* rh) { rtcIntersect16(v, s, c, rh); });
+  else if (packet == 8)
+    trace_packets<8, RTCRayHit8>(scene, rays, hits, begin, end, [](const int* v, RTCScene s, RTCIntersectContext* c,
+                                                                   RTCRayHit8* rh) { rtcIntersect8(v, s, c, rh); });
+  else
+    trace(scene, rays, hits, begin, end);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
     if (argc < 3) throw std::runtime_error("usage: embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] "
-                                           "[--compare PATHCL_HITS]");
+                                           "[--compare PATHCL_HITS] [--packet 1|8|16]");
     std::string obj = argv[1], ray_path = argv[2], hits_out, compare;
-    int threads = 1, repeat = 5;
+    int threads = 1, repeat = 5, packet = 1;
     for (int i = 3; i + 1 < argc; i += 2) {
       std::string k = argv[i];
       if (k == "--threads") threads = std::atoi(argv[i + 1]);
       else if (k == "--repeat") repeat = std::atoi(argv[i + 1]);
       else if (k == "--hits") hits_out = argv[i + 1];
       else if (k == "--compare") compare = argv[i + 1];
+      else if (k == "--packet") packet = std::atoi(argv[i + 1]);
       else throw std::runtime_error("unknown option " + k);
     }
+    if (packet != 1 && packet != 8 && packet != 16) throw std::runtime_error("--packet: 1, 8 or 16 rays");
     std::vector<float> verts;
     std::vector<uint32_t> faces;
     read_obj(obj, verts, faces);
@@ -133,7 +177,7 @@ int main(int argc, char** argv) {
       size_t chunk = (rays.size() + threads - 1) / threads;
       for (int k = 0; k < threads; ++k) {
         size_t b = std::min(rays.size(), k * chunk), e = std::min(rays.size(), b + chunk);
-        pool.emplace_back(trace, scene, std::cref(rays), std::ref(hits), b, e);
+        pool.emplace_back(trace_with, packet, scene, std::cref(rays), std::ref(hits), b, e);
       }
       for (auto& p : pool) p.join();
       ms.push_back(seconds_since(t) * 1e3);

@@ -81,8 +81,9 @@ def bsdf_lines(m):
     refuse(m, "Mitsuba", REFUSED[m.type])
 
 
-def export(scene, out_dir, name="scene"):
-    """Writes OUT_DIR/NAME.xml (parameters $spp, $seed, $max_depth, $timeout) and OUT_DIR/meshes/*.ply."""
+def export(scene, out_dir, name="scene", sampler="multijitter"):
+    """Writes OUT_DIR/NAME.xml (parameters $spp, $seed, $max_depth, $timeout) and OUT_DIR/meshes/*.ply.
+    sampler: Mitsuba's sampler plugin (scripts/bench/lanes compares samples/s with `independent`)."""
     os.makedirs(os.path.join(out_dir, "meshes"), exist_ok=True)
     cam = scene.camera
     forward, right, up = camera_frame(cam)
@@ -104,7 +105,7 @@ def export(scene, out_dir, name="scene"):
          '    <transform name="to_world">',
          '      <lookat origin="%s" target="%s" up="%s"/>' % (_vec(cam.position), _vec(cam.look_at), _vec(up)),
          '    </transform>',
-         '    <sampler type="multijitter">',
+         '    <sampler type=%s>' % quoteattr(sampler),
          '      <integer name="sample_count" value="$spp"/>',
          '      <integer name="seed" value="$seed"/>',
          '    </sampler>',

@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""Samples per second of the path integrator at 1, 8 and 16 lanes against Mitsuba 3's llvm_ad_rgb (issue 15;
+a benchmark, not a test), side by side on this machine: the Cornell box (scenes/cornell-official.json,
+256 x 256), glass and metal (scenes/glass-metal.json) and the benchmark terrain (scripts/make-bench-scene),
+each renderer with the independent sampler, the scene's depth and spp. Rounds alternate every
+configuration (A B C D A B C D ...); figures are medians over the rounds. pathcl's samples/s is its
+render time's (--stats samples_per_second, kernel builds from the cache); Mitsuba's is the second of two
+mi.render calls in one process (the first compiles its kernel), both through scripts/bench/peer_runners.py's
+timing. Mitsuba's `independent` sampler is what the issue's bar names; the peer benchmark gives each its
+best sampler for time to an error (scripts/bench/peers).
+Usage: scripts/bench/lanes [--rounds N] [--scenes cornell,glass-metal,terrain] [--lanes 1,8,16]
+Writes bench/results/lanes/<date>T<hhmm>.json and prints a table.
+"""
+import argparse
+import datetime
+import glob
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+import export_mitsuba  # noqa: E402
+import scene_model  # noqa: E402
+
+BUILD = os.path.join(ROOT, os.environ.get("PATHCL_BUILD", "build"))
+PATHCL = os.path.join(BUILD, "pathcl")
+WORK = os.path.join(ROOT, "build", "bench-lanes")
+SCENES = {"cornell": os.path.join(ROOT, "scenes", "cornell-official.json"),
+          "glass-metal": os.path.join(ROOT, "scenes", "glass-metal.json")}
+
+
+def run(cmd, env=None):
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if r.returncode:
+        sys.exit("%s: exit %d\n%s" % (" ".join(cmd), r.returncode, (r.stderr + r.stdout)[-2000:]))
+    return r.stdout
+
+
+def scene_path(name):
+    if name in SCENES:
+        if name == "glass-metal" and not os.path.exists(scene_model.ICOSPHERE_MESH):
+            scene_model.write_icosphere_obj()
+        return SCENES[name]
+    if name == "terrain":
+        path = os.path.join(WORK, "terrain.json")
+        if not os.path.exists(path):
+            run([sys.executable, os.path.join(ROOT, "scripts", "make-bench-scene"), WORK])
+        return path
+    sys.exit("unknown scene %s (cornell, glass-metal, terrain)" % name)
+
+
+def mitsuba_env():
+    env = dict(os.environ)
+    found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM*.so*"))
+    if found:  # Dr.Jit aborts with Debian's default LLVM 15 (scripts/bench/peers.py)
+        env["DRJIT_LIBLLVM_PATH"] = found[0]
+    return env
+
+
+def pathcl_samples(scene, lanes, spp):
+    stats = os.path.join(WORK, "stats.json")
+    run([PATHCL, "render", scene, "-o", os.path.join(WORK, "pathcl.exr"), "--quiet", "--sampler", "independent",
+         "--lanes", str(lanes), "--spp", str(spp), "--stats", stats])
+    with open(stats) as f:
+        return json.load(f)["samples_per_second"]
+
+
+def mitsuba_samples(xml, variant, spp, pixels):
+    out = run([sys.executable, os.path.join(HERE, "peer_runners.py"), "mitsuba", variant, xml, "--spp-series",
+               "%d,%d" % (spp, spp), "--seed", "1", "--out", os.path.join(WORK, "mitsuba-{spp}.exr")], mitsuba_env())
+    lines = [json.loads(l[len("PATHCL_BENCH "):]) for l in out.splitlines() if l.startswith("PATHCL_BENCH ")]
+    return pixels * spp / lines[-1]["render_seconds"], lines[-1]["version"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--scenes", default="cornell,glass-metal,terrain")
+    ap.add_argument("--lanes", default="1,8,16")
+    ap.add_argument("--mitsuba", default="llvm_ad_rgb", help="Mitsuba variants, comma-separated ('' for none)")
+    args = ap.parse_args()
+    os.makedirs(WORK, exist_ok=True)
+    lanes = [int(x) for x in args.lanes.split(",") if x]
+    variants = [v for v in args.mitsuba.split(",") if v]
+    result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
+              "cpu": platform.processor() or platform.machine(), "rounds": args.rounds,
+              "pathcl": run([PATHCL, "--version"]).splitlines()[0], "scenes": {}}
+    for name in [s for s in args.scenes.split(",") if s]:
+        scene = scene_path(name)
+        with open(scene) as f:
+            j = json.load(f)
+        spp = int(j.get("render", {}).get("spp", 16))
+        pixels = j["camera"]["width"] * j["camera"]["height"]
+        dump = os.path.join(WORK, name + ".obj")
+        scene_model.dump_scene_obj(PATHCL, scene, dump)
+        xml = export_mitsuba.export(scene_model.load(scene, dump), os.path.join(WORK, name + "-mitsuba"),
+                                    sampler="independent")
+        for l in lanes:  # kernel builds into the cache before the timed rounds
+            run([PATHCL, "render", scene, "-o", os.path.join(WORK, "warm.exr"), "--quiet", "--lanes", str(l),
+                 "--spp", "1", "--sampler", "independent"])
+        runs = {"pathcl-%d" % l: [] for l in lanes}
+        runs.update({"mitsuba-" + v: [] for v in variants})
+        version = None
+        for _ in range(args.rounds):
+            for l in lanes:
+                runs["pathcl-%d" % l].append(pathcl_samples(scene, l, spp))
+            for v in variants:
+                s, version = mitsuba_samples(xml, v, spp, pixels)
+                runs["mitsuba-" + v].append(s)
+        med = {k: statistics.median(v) for k, v in runs.items()}
+        entry = {"scene": os.path.relpath(scene, ROOT), "pixels": pixels, "spp": spp, "runs": runs,
+                 "median_samples_per_second": med, "mitsuba_version": version}
+        for v in variants:
+            for l in lanes:
+                entry["pathcl-%d_over_mitsuba-%s" % (l, v)] = med["pathcl-%d" % l] / med["mitsuba-" + v]
+        result["scenes"][name] = entry
+        print("%s (%d spp): %s" % (name, spp, ", ".join("%s %.2f M" % (k, v / 1e6) for k, v in med.items())))
+        for v in variants:
+            print("  against mitsuba-%s: %s" % (v, ", ".join(
+                "%d lanes %.2fx" % (l, entry["pathcl-%d_over_mitsuba-%s" % (l, v)]) for l in lanes)))
+    out_dir = os.path.join(ROOT, "bench", "results", "lanes")
+    os.makedirs(out_dir, exist_ok=True)
+    out = os.path.join(out_dir, "%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
+    with open(out, "w") as f:
+        json.dump(result, f, indent=1)
+    print("results:", os.path.relpath(out, ROOT))
+
+
+if __name__ == "__main__":
+    main()
