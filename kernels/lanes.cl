@@ -84,9 +84,8 @@ typedef float LaneF;
 typedef int LaneI;
 typedef uint LaneU;
 typedef lane3f Lane3;
-/* The lanes from PC_LANES consecutive values, and back. */
+/* The lanes from PC_LANES consecutive values. */
 #define lane_load(p) (*(p))
-#define lane_store(v, p) (*(p) = (v))
 #define PC_LANE_INDEX 0u
 #elif PC_LANES == 8
 typedef float8 LaneF;
@@ -94,7 +93,6 @@ typedef int8 LaneI;
 typedef uint8 LaneU;
 typedef lane3f8 Lane3;
 #define lane_load(p) vload8(0, p)
-#define lane_store(v, p) vstore8(v, 0, p)
 #define PC_LANE_INDEX (uint8)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u)
 #elif PC_LANES == 16
 typedef float16 LaneF;
@@ -102,7 +100,6 @@ typedef int16 LaneI;
 typedef uint16 LaneU;
 typedef lane3f16 Lane3;
 #define lane_load(p) vload16(0, p)
-#define lane_store(v, p) vstore16(v, 0, p)
 #define PC_LANE_INDEX (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u)
 #else
 #error "PC_LANES: 1, 8 or 16 paths per work item"
@@ -123,9 +120,6 @@ inline uint lane_first(LaneI m) {
 /* index where m is set, the first set lane's elsewhere: an index at which a gather may read for every
  * lane (each read is of a valid element). */
 inline LaneU lane_safe_index(LaneU index, LaneI m) { return select((LaneU)(pc_lane(index, lane_first(m))), index, m); }
-
-/* lane_safe_index as PC_LANES values, for a loop that loads each lane's element. */
-inline void lane_gather_indices(LaneU index, LaneI m, uint* at) { lane_store(lane_safe_index(index, m), at); }
 
 /* Where every lane of m has the same index: it (a gather of one element, loaded once); else PC_INVALID. */
 inline uint lane_uniform_index(LaneU index, LaneI m) {
@@ -186,14 +180,10 @@ inline Lane3 lane3_select(Lane3 a, Lane3 b, LaneI m) {
 inline LaneI lane3_any_positive(Lane3 a) { return (a.x > 0.0f) | (a.y > 0.0f) | (a.z > 0.0f); }
 inline LaneF lane3_max_component(Lane3 a) { return fmax(a.x, fmax(a.y, a.z)); }
 
-/* Lane j of a Lane3 as a float3, a Lane3 with lane j replaced, and a Lane3 from per-lane arrays of
- * components. */
+/* Lane j of a Lane3 as a float3, and a Lane3 with lane j replaced. */
 inline float3 lane3_at(Lane3 a, uint j) { return (float3)(pc_lane(a.x, j), pc_lane(a.y, j), pc_lane(a.z, j)); }
 inline Lane3 lane3_with(Lane3 a, uint j, float3 v) {
   return lane3(pc_with_lane(a.x, j, v.x), pc_with_lane(a.y, j, v.y), pc_with_lane(a.z, j, v.z));
-}
-inline Lane3 lane3_load(const float* x, const float* y, const float* z) {
-  return lane3(lane_load(x), lane_load(y), lane_load(z));
 }
 
 #endif

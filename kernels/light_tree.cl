@@ -54,19 +54,12 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
     power = (LaneF)(nd.lo.w), cos_o = (LaneF)(nd.hi.w), cos_e = (LaneF)(nd.axis.w);
     two_sided = (LaneI)(nd.two_sided != 0u ? -1 : 0);
   } else {
-    uint at[PC_LANES], ts[PC_LANES];
-    float v[12][PC_LANES];
-    lane_gather_indices(index, m, at);
-    for (uint j = 0u; j < PC_LANES; ++j) {
-      LightBvhNode nd = nodes[at[j]];
-      v[0][j] = nd.lo.x, v[1][j] = nd.lo.y, v[2][j] = nd.lo.z, v[3][j] = nd.lo.w;
-      v[4][j] = nd.hi.x, v[5][j] = nd.hi.y, v[6][j] = nd.hi.z, v[7][j] = nd.hi.w;
-      v[8][j] = nd.axis.x, v[9][j] = nd.axis.y, v[10][j] = nd.axis.z, v[11][j] = nd.axis.w;
-      ts[j] = nd.two_sided;
-    }
-    lo = lane3_load(v[0], v[1], v[2]), hi = lane3_load(v[4], v[5], v[6]), axis = lane3_load(v[8], v[9], v[10]);
-    power = lane_load(v[3]), cos_o = lane_load(v[7]), cos_e = lane_load(v[11]);
-    two_sided = lane_load(ts) != 0u;
+    LaneU at = lane_safe_index(index, m);
+    lo = lane_gather3(PC_FIELD_F(nodes, lo), at), hi = lane_gather3(PC_FIELD_F(nodes, hi), at);
+    axis = lane_gather3(PC_FIELD_F(nodes, axis), at);
+    power = lane_gather_float(PC_FIELD_AT(nodes, lo, 3), at), cos_o = lane_gather_float(PC_FIELD_AT(nodes, hi, 3), at);
+    cos_e = lane_gather_float(PC_FIELD_AT(nodes, axis, 3), at);
+    two_sided = lane_gather_uint(PC_FIELD_U(nodes, two_sided), at) != 0u;
   }
   Lane3 half_extent = lane3_scale(lane3_sub(hi, lo), 0.5f);
   Lane3 d = lane3_sub(x, lane3_add(lo, half_extent));
@@ -106,10 +99,8 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
 PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, LaneU index, LaneI m, bool light) {
   uint one = lane_uniform_index(index, m);
   if (one != PC_INVALID) return (LaneU)(light ? nodes[one].light : nodes[one].second);
-  uint at[PC_LANES], out[PC_LANES];
-  lane_gather_indices(index, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) out[j] = light ? nodes[at[j]].light : nodes[at[j]].second;
-  return lane_load(out);
+  LaneU at = lane_safe_index(index, m);
+  return light ? lane_gather_uint(PC_FIELD_U(nodes, light), at) : lane_gather_uint(PC_FIELD_U(nodes, second), at);
 }
 
 /* For the lanes in m: where target is PC_INVALID, chooses a light with u and stores its index in *chosen;
@@ -129,17 +120,12 @@ inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, Lane
   LaneF p = (LaneF)(0.0f);
   if (pc_any_(infinite)) {
     LaneF v = fmin(u / p_infinite, PC_ONE_MINUS_EPSILON);
-    uint found[PC_LANES];
-    lane_store(target, found);
+    LaneU index = target;
     PC_EACH_LANE(j, pc_lane_bits(infinite & sampling)) {
-      found[j] = tree_count + find_interval(sc->light_cdf, infinite_count, pc_lane(v, j));
+      index = pc_with_lane(index, j, tree_count + find_interval(sc->light_cdf, infinite_count, pc_lane(v, j)));
     }
-    LaneU index = lane_load(found);
-    uint at[PC_LANES];
-    float share[PC_LANES];
-    lane_gather_indices(index, infinite, at);
-    for (uint j = 0u; j < PC_LANES; ++j) share[j] = sc->lights[at[j]].infinite_share;
-    p = select(p, p_infinite * lane_load(share), infinite);
+    LaneF share = lane_gather_float(PC_FIELD_F(sc->lights, infinite_share), lane_safe_index(index, infinite));
+    p = select(p, p_infinite * share, infinite);
     *chosen = select(*chosen, index, infinite);
   }
   LaneI tree = m & !infinite;
@@ -148,10 +134,8 @@ inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, Lane
     LaneU leaf = (LaneU)(0u);
     LaneI following = tree & !sampling;
     if (pc_any_(following)) {
-      uint at[PC_LANES], leaves[PC_LANES];
-      lane_gather_indices(target, following, at);
-      for (uint j = 0u; j < PC_LANES; ++j) leaves[j] = sc->lights[at[j]].tree_leaf;
-      leaf = select(leaf, lane_load(leaves), following);
+      leaf = select(leaf, lane_gather_uint(PC_FIELD_U(sc->lights, tree_leaf), lane_safe_index(target, following)),
+                    following);
     }
     LaneF p_tree = 1.0f - p_infinite;
     LaneU node = (LaneU)(0u);

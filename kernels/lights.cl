@@ -56,19 +56,11 @@ PC_LANE_INLINE void gather_lights(__global const Light* lights, LaneU index, Lan
 /* The primitives (vertices a, b, c; a sphere's centre a and radius b.x) at the slots of the lanes in m. */
 PC_LANE_INLINE void gather_primitive_shapes(__global const Primitive* prims, LaneU slot, LaneI m, Lane3* a, Lane3* b, Lane3* c,
                                     LaneI* sphere) {
-  uint at[PC_LANES], kind[PC_LANES];
-  float v[9][PC_LANES];
-  lane_gather_indices(slot, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) {
-    Primitive p = prims[at[j]];
-    v[0][j] = p.a.x, v[1][j] = p.a.y, v[2][j] = p.a.z, v[3][j] = p.b.x, v[4][j] = p.b.y, v[5][j] = p.b.z;
-    v[6][j] = p.c.x, v[7][j] = p.c.y, v[8][j] = p.c.z;
-    kind[j] = prim_kind_of(p);
-  }
-  *a = lane3_load(v[0], v[1], v[2]);
-  *b = lane3_load(v[3], v[4], v[5]);
-  *c = lane3_load(v[6], v[7], v[8]);
-  *sphere = m & (lane_load(kind) == PC_PRIM_SPHERE);
+  LaneU at = lane_safe_index(slot, m);
+  *a = lane_gather3(PC_FIELD_F(prims, a), at);
+  *b = lane_gather3(PC_FIELD_F(prims, b), at);
+  *c = lane_gather3(PC_FIELD_F(prims, c), at);
+  *sphere = m & (lane_gather_uint(PC_FIELD_U_AT(prims, b, 3), at) == PC_PRIM_SPHERE); /* prim_kind_of */
 }
 
 inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny, Lane3 y, Lane3 x) {
@@ -162,10 +154,7 @@ inline void sample_area_light_lanes(const SceneData* sc, const LightLanes* light
   LaneI sphere;
   LaneF pdf = (LaneF)(0.0f);
   gather_primitive_shapes(sc->prims, light->slot, m, &a, &b, &c, &sphere);
-  uint at[PC_LANES], flag_bits[PC_LANES];
-  lane_gather_indices(light->prim, m, at);
-  for (uint j = 0u; j < PC_LANES; ++j) flag_bits[j] = sc->shading[at[j]].flags;
-  LaneU flags = lane_load(flag_bits);
+  LaneU flags = lane_gather_uint(PC_FIELD_U(sc->shading, flags), lane_safe_index(light->prim, m));
   if (pc_any_(m & !sphere)) {
     LaneF ba, bb;
     sample_uniform_triangle_lanes(u0, u1, &ba, &bb);

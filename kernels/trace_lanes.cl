@@ -20,7 +20,7 @@ typedef struct {
   LaneU slot, prim, instance;
 } HitLanes;
 
-#if PC_LANES > 1 && defined(PC_BVH8) && !defined(PC_HAS_INSTANCES) && !defined(PC_NO_PACKETS)
+#if PC_LANES > 1 && defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
 #define PC_TRACE_PACKETS
 #define PC_PACKET_OF_LANES_(N) RayPacket##N
 #define PC_HITS_OF_LANES_(N) HitPacket##N

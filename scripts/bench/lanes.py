@@ -8,7 +8,12 @@ render time's (--stats samples_per_second, kernel builds from the cache); Mitsub
 mi.render calls in one process (the first compiles its kernel), both through scripts/bench/peer_runners.py's
 timing. Mitsuba's `independent` sampler is what the issue's bar names; the peer benchmark gives each its
 best sampler for time to an error (scripts/bench/peers).
-Usage: scripts/bench/lanes [--rounds N] [--scenes cornell,glass-metal,terrain] [--lanes 1,8,16]
+With --builds it also builds each scene's path program at each W cold (fresh PoCL and pathcl kernel
+caches) and from the cache (kernel_build_ms of --stats), and reads the stack frames of the compiled
+kernel (`sub $N, %rsp` of each function of PoCL's shared object, objdump from Debian's binutils): PoCL
+reports 1024 bytes of private memory for every kernel, so the frames are the measure of a work item's
+private memory there (the largest frame, and the sum of all as a bound on the deepest call chain).
+Usage: scripts/bench/lanes [--rounds N] [--scenes cornell,glass-metal,terrain] [--lanes 1,8,16] [--builds]
 Writes bench/results/lanes/<date>T<hhmm>.json and prints a table.
 """
 import argparse
@@ -17,9 +22,12 @@ import glob
 import json
 import os
 import platform
+import re
+import shutil
 import statistics
 import subprocess
 import sys
+import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -77,12 +85,42 @@ def mitsuba_samples(xml, variant, spp, pixels):
     return pixels * spp / lines[-1]["render_seconds"], lines[-1]["version"]
 
 
+def builds(scene, lanes):
+    """Cold and cached kernel build (ms) of the scene's path program at `lanes`, and the stack frames of its
+    compiled kernel on PoCL: (largest frame, its function, sum of all frames)."""
+    tmp = tempfile.mkdtemp(prefix="pathcl-builds-")
+    env = dict(os.environ, POCL_CACHE_DIR=os.path.join(tmp, "pocl"), PATHCL_KERNEL_CACHE=os.path.join(tmp, "pathcl"))
+    stats = os.path.join(tmp, "stats.json")
+    times = []
+    for _ in range(2):
+        run([PATHCL, "render", scene, "-o", os.path.join(tmp, "out.exr"), "--quiet", "--lanes", str(lanes), "--spp", "1",
+             "--stats", stats], env)
+        with open(stats) as f:
+            times.append(json.load(f)["kernel_build_ms"])
+    frames = {}
+    for so in glob.glob(os.path.join(tmp, "pocl", "**", "render_pass.so"), recursive=True):
+        name = None
+        for line in run(["objdump", "-d", "--no-show-raw-insn", so]).splitlines():
+            m = re.match(r"^[0-9a-f]+ <(.+)>:$", line)
+            if m:
+                name = m.group(1)
+                continue
+            m = re.search(r"\bsub\s+\$0x([0-9a-f]+),%rsp", line)
+            if m and name and name not in frames:
+                frames[name] = int(m.group(1), 16)
+    shutil.rmtree(tmp, ignore_errors=True)
+    largest = max(frames.items(), key=lambda kv: kv[1]) if frames else ("", 0)
+    return {"cold_ms": times[0], "cached_ms": times[1], "largest_frame_bytes": largest[1],
+            "largest_frame_function": largest[0], "all_frames_bytes": sum(frames.values())}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--scenes", default="cornell,glass-metal,terrain")
     ap.add_argument("--lanes", default="1,8,16")
     ap.add_argument("--mitsuba", default="llvm_ad_rgb", help="Mitsuba variants, comma-separated ('' for none)")
+    ap.add_argument("--builds", action="store_true", help="also cold and cached build times and stack frames per W")
     args = ap.parse_args()
     os.makedirs(WORK, exist_ok=True)
     lanes = [int(x) for x in args.lanes.split(",") if x]
@@ -112,15 +150,22 @@ def main():
             for v in variants:
                 s, version = mitsuba_samples(xml, v, spp, pixels)
                 runs["mitsuba-" + v].append(s)
-        med = {k: statistics.median(v) for k, v in runs.items()}
+        med = {k: statistics.median(v) for k, v in runs.items() if v}
         entry = {"scene": os.path.relpath(scene, ROOT), "pixels": pixels, "spp": spp, "runs": runs,
                  "median_samples_per_second": med, "mitsuba_version": version}
-        for v in variants:
+        for v in variants if med else []:
             for l in lanes:
                 entry["pathcl-%d_over_mitsuba-%s" % (l, v)] = med["pathcl-%d" % l] / med["mitsuba-" + v]
+        if args.builds:
+            entry["builds"] = {str(l): builds(scene, l) for l in lanes}
+            for l in lanes:
+                b = entry["builds"][str(l)]
+                print("  %d lanes: kernel build %.0f ms cold, %.0f ms cached; largest stack frame %d bytes (%s), all "
+                      "frames %d bytes" % (l, b["cold_ms"], b["cached_ms"], b["largest_frame_bytes"],
+                                           b["largest_frame_function"], b["all_frames_bytes"]))
         result["scenes"][name] = entry
         print("%s (%d spp): %s" % (name, spp, ", ".join("%s %.2f M" % (k, v / 1e6) for k, v in med.items())))
-        for v in variants:
+        for v in variants if med else []:
             print("  against mitsuba-%s: %s" % (v, ", ".join(
                 "%d lanes %.2fx" % (l, entry["pathcl-%d_over_mitsuba-%s" % (l, v)]) for l in lanes)))
     out_dir = os.path.join(ROOT, "bench", "results", "lanes")
