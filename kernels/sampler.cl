@@ -64,18 +64,26 @@ __constant uint kPrimes[PC_HALTON_DIMENSIONS] = {2, 3, 5, 7, 11, 13, 17, 19, 23,
  * per lane (cycle walking, radical-inverse digits) run while any lane is active and keep the finished
  * lanes' values by select(); masks follow exact_math.cl (1 for one lane, -1 for vectors; pc_any_). */
 
-/* Lane j of a uint table lookup a[i]. */
+/* Lane j of a uint table lookup a[i]: a vector built from one load per lane (a private array read back as
+ * one vector waits for every store to reach the cache). */
 inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
-#define PC_SAMPLER_GATHER(U, N)                                         \
-  inline PC_OVL U pc_gather_(__constant const uint* a, U i) {          \
-    uint index[N], value[N];                                            \
-    vstore##N(i, 0, index);                                             \
-    for (int j = 0; j < N; ++j) value[j] = a[index[j]];                 \
-    return vload##N(0, value);                                          \
+inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
+inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
+  return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7], a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
+}
+
+/* The XOR of the direction numbers of the four bits of index & 15 (a row of kSobolNibbles): one table
+ * load for one lane; for 8 or 16 lanes four selects of the row's single-bit entries, since a gather of 8
+ * or 16 loads costs more than the arithmetic. */
+inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
+#define PC_SOBOL_NIBBLE_LANES(U)                                                                          \
+  inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                                \
+    return select((U)(0u), (U)(row[1]), (index & 1u) != 0u) ^ select((U)(0u), (U)(row[2]), (index & 2u) != 0u) ^ \
+           select((U)(0u), (U)(row[4]), (index & 4u) != 0u) ^ select((U)(0u), (U)(row[8]), (index & 8u) != 0u); \
   }
-PC_SAMPLER_GATHER(uint8, 8)
-PC_SAMPLER_GATHER(uint16, 16)
-#undef PC_SAMPLER_GATHER
+PC_SOBOL_NIBBLE_LANES(uint8)
+PC_SOBOL_NIBBLE_LANES(uint16)
+#undef PC_SOBOL_NIBBLE_LANES
 
 #define PC_SAMPLER_LANES(U, I, F, N)                                                                       \
   /* pcg4d (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020) of four lane values. */   \
@@ -120,8 +128,7 @@ PC_SAMPLER_GATHER(uint16, 16)
   /* Sobol dimension dim in 1..3 of a 32-bit index, as bits. */                                           \
   inline PC_OVL U sobol_bits(U index, uint dim) {                                                         \
     U x = (U)(0u);                                                                                        \
-    for (uint n = 0u; n < 8u; ++n)                                                                        \
-      x ^= pc_gather_(&kSobolNibbles[dim - 1u][n][0], (index >> (4u * n)) & 15u);                        \
+    for (uint n = 0u; n < 8u; ++n) x ^= pc_sobol_nibble_(&kSobolNibbles[dim - 1u][n][0], index >> (4u * n)); \
     return x;                                                                                             \
   }                                                                                                       \
   /* A random permutation of [0, n): Kensler's hashed bijection of the next power of two, cycle-walked    \

@@ -146,3 +146,22 @@ TEST(Determinism, LanesOtherThanOneEightAndSixteenAreRefused) {
   opt.integrator = PC_INTEGRATOR_BDPT;
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
 }
+
+// The default (lanes 0) is each device's own width: 8 or 16 on a CPU device, 1 on a GPU; PATHCL_LANES sets
+// it for every device and refuses other values; the other integrators run one path per work item.
+TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
+  RenderOptions opt;
+  opt.spp = 1;
+  const DeviceInfo& device = test_device().info;
+  RenderResult r = render(test_device(), small_cornell(), opt);
+  ASSERT_FALSE(r.devices.empty());
+  EXPECT_EQ(r.devices[0].lanes, path_lanes(device));
+  EXPECT_EQ(r.devices[0].lanes, device.is_cpu ? (device.preferred_float_width >= 16 ? 16u : 8u) : 1u);
+  setenv("PATHCL_LANES", "1", 1);
+  EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, 1u);
+  setenv("PATHCL_LANES", "4", 1);
+  EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
+  unsetenv("PATHCL_LANES");
+  opt.integrator = PC_INTEGRATOR_BDPT;
+  EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, 1u);
+}

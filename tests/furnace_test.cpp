@@ -27,11 +27,14 @@ std::string furnace_scene(const std::string& shape_json, int size) {
 
 const std::string kSphere = R"({"type": "sphere", "center": [0, 0, 0], "radius": 2, "flip_normals": true)";
 
-RenderResult render_scene(const DeviceScene& scene, uint32_t spp, uint32_t max_depth, uint32_t seed = 1) {
+// lanes: paths per work item (kernels/lanes.cl); 0 the device's own (16 or 8 on PoCL).
+RenderResult render_scene(const DeviceScene& scene, uint32_t spp, uint32_t max_depth, uint32_t seed = 1,
+                          uint32_t lanes = 0) {
   RenderOptions opt;
   opt.spp = spp;
   opt.max_depth = max_depth;
   opt.seed = seed;
+  opt.lanes = lanes;
   return render(test_device(), scene, opt);
 }
 
@@ -55,18 +58,22 @@ TEST(Furnace, AnalyticSphereIsExactPerPixelWithoutRussianRoulette) {
   }
 }
 
+// At every lane width: one path per work item (the GPUs' kernel) and 8 or 16 over SIMD lanes.
 TEST(Furnace, AnalyticSphereMeanWithRussianRouletteWithinFourStandardErrors) {
   DeviceScene scene = load_device_scene(write_temp_file("furnace-sphere-rr.json", furnace_scene(kSphere, 32)));
-  for (uint32_t depth : {6u, 12u}) {
-    RenderResult r = render_scene(scene, 16, depth, 11);
-    expect_clean(r);
-    std::vector<double> pixels;
-    for (size_t i = 0; i < r.film.mean.size(); i += 3) pixels.push_back(r.film.mean[i]);
-    MeanStd m = mean_and_error(pixels);
-    double expected = furnace_value(depth);
-    EXPECT_GT(m.std_error, 0);  // Russian roulette adds noise; zero would mean it never ran
-    EXPECT_NEAR(m.mean, expected, 4 * m.std_error) << "max_depth " << depth;
-    EXPECT_LT(m.std_error, 0.01 * expected);
+  for (uint32_t lanes : {1u, 8u, 16u}) {
+    for (uint32_t depth : {6u, 12u}) {
+      SCOPED_TRACE(std::to_string(lanes) + " lanes");
+      RenderResult r = render_scene(scene, 16, depth, 11, lanes);
+      expect_clean(r);
+      std::vector<double> pixels;
+      for (size_t i = 0; i < r.film.mean.size(); i += 3) pixels.push_back(r.film.mean[i]);
+      MeanStd m = mean_and_error(pixels);
+      double expected = furnace_value(depth);
+      EXPECT_GT(m.std_error, 0);  // Russian roulette adds noise; zero would mean it never ran
+      EXPECT_NEAR(m.mean, expected, 4 * m.std_error) << "max_depth " << depth;
+      EXPECT_LT(m.std_error, 0.01 * expected);
+    }
   }
 }
 

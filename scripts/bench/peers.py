@@ -125,7 +125,7 @@ class Pathcl(Renderer):
                     samples_per_second=s["samples_per_second"], kernel_build_ms=s["kernel_build_ms"],
                     kernel_from_cache=s["kernel_from_cache"], bvh_build_ms=s["bvh_build_ms"],
                     scene_load_ms=s["scene_load_ms"], kernel_seconds=s["kernel_seconds"],
-                    render_seconds=s["render_seconds"], passes=s["passes"], rays_per_second=s["rays_per_second"])
+                    render_seconds=s["render_seconds"], launches=s["launches"], rays_per_second=s["rays_per_second"])
 
     def budget(self, seed, seconds):
         s, rows, wall, setup = self._render(seed, ["--time", str(seconds)], "budget-%g-%d" % (seconds, seed))
