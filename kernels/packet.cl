@@ -115,15 +115,16 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
         F W_ = Bx * Ay - By * Ax;                                                                         \
         I outside = ((U_ < 0.0f) | (V_ < 0.0f) | (W_ < 0.0f)) & ((U_ > 0.0f) | (V_ > 0.0f) | (W_ > 0.0f)); \
         F det = U_ + V_ + W_;                                                                             \
+        uint prim = b->prim[i];                                                                           \
+        I inside = active & !outside & (det != 0.0f) & (r->skip_prim != (U)(prim));                       \
+        if (!pc_any_(inside)) continue; /* most tests: no lane's ray crosses the triangle */             \
         F Az = sz * Akz, Bz = sz * Bkz, Cz = sz * Ckz;                                                    \
         F T = U_ * Az + V_ * Bz + W_ * Cz;                                                                \
         I before_tmin = select(T <= r->tmin * det, T >= r->tmin * det, det < 0.0f);                       \
         F inv_det = 1.0f / det;                                                                           \
         F t = T * inv_det;                                                                                \
-        uint prim = b->prim[i];                                                                           \
         /* intersect_prim's order: nearer, or as near and a lower primitive index. */                     \
-        I accept = active & !outside & (det != 0.0f) & !before_tmin & (t <= h->t) &                       \
-                   (r->skip_prim != (U)(prim)) & ((t < h->t) | ((U)(prim) < h->prim));                    \
+        I accept = inside & !before_tmin & (t <= h->t) & ((t < h->t) | ((U)(prim) < h->prim));            \
         PC_PACKET_CUTOUTS(N)                                                                              \
         if (!pc_any_(accept)) continue;                                                                   \
         h->t = select(h->t, t, accept);                                                                   \
