@@ -151,11 +151,13 @@ PC_LANE_INLINE uint8 lane_gather_uint(__global const uint* base, uint stride, ui
 #else
 PC_LANE_INLINE float16 lane_gather_float(__global const float* base, uint stride, uint16 index) {
   uint16 o = index * stride;
-  return (float16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7], base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
+  return (float16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7],
+    base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
 }
 PC_LANE_INLINE uint16 lane_gather_uint(__global const uint* base, uint stride, uint16 index) {
   uint16 o = index * stride;
-  return (uint16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7], base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
+  return (uint16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3], base[o.s4], base[o.s5], base[o.s6], base[o.s7],
+    base[o.s8], base[o.s9], base[o.sa], base[o.sb], base[o.sc], base[o.sd], base[o.se], base[o.sf]);
 }
 #endif
 

@@ -69,7 +69,8 @@ __constant uint kPrimes[PC_HALTON_DIMENSIONS] = {2, 3, 5, 7, 11, 13, 17, 19, 23,
 inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
 inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
 inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
-  return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7], a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
+  return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7],
+    a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
 }
 
 /* The XOR of the direction numbers of the four bits of index & 15 (a row of kSobolNibbles): one table
