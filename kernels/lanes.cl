@@ -16,7 +16,7 @@
 #include "exact_math.cl"
 
 /* ---- For every width: a mask as bits (bit j: lane j set) and back, one lane by runtime index, the
- * smallest and largest lane ------------------------------------------------------------------------- */
+ * smallest lane ----------------------------------------------------------------------------------- */
 inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
 inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
 inline PC_OVL float pc_lane(float x, uint j) { return x; }
@@ -26,7 +26,6 @@ inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
 inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
 inline PC_OVL int pc_with_lane(int x, uint j, int value) { return value; }
 inline PC_OVL float pc_min_lanes(float x) { return x; }
-inline PC_OVL float pc_max_lanes(float x) { return x; }
 
 inline PC_OVL uint pc_or_lanes_(uint2 b) { return b.x | b.y; }
 inline PC_OVL uint pc_or_lanes_(uint4 b) { return pc_or_lanes_(b.lo | b.hi); }
@@ -34,8 +33,6 @@ inline PC_OVL uint pc_or_lanes_(uint8 b) { return pc_or_lanes_(b.lo | b.hi); }
 inline PC_OVL uint pc_or_lanes_(uint16 b) { return pc_or_lanes_(b.lo | b.hi); }
 inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
 inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
-inline PC_OVL float pc_max_lanes(float2 x) { return fmax(x.x, x.y); }
-inline PC_OVL float pc_max_lanes(float4 x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
 
 #define PC_LANE_REDUCTIONS(F, I, U, N, BITS)                                                              \
   inline PC_OVL uint pc_lane_bits(I m) {                                                                  \
@@ -43,8 +40,7 @@ inline PC_OVL float pc_max_lanes(float4 x) { return pc_max_lanes(fmax(x.lo, x.hi
     return pc_or_lanes_(b);                                                                               \
   }                                                                                                       \
   inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
-  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }                        \
-  inline PC_OVL float pc_max_lanes(F x) { return pc_max_lanes(fmax(x.lo, x.hi)); }
+  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
 PC_LANE_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
 PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
                    (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
@@ -86,21 +82,18 @@ typedef uint LaneU;
 typedef lane3f Lane3;
 /* The lanes from PC_LANES consecutive values. */
 #define lane_load(p) (*(p))
-#define PC_LANE_INDEX 0u
 #elif PC_LANES == 8
 typedef float8 LaneF;
 typedef int8 LaneI;
 typedef uint8 LaneU;
 typedef lane3f8 Lane3;
 #define lane_load(p) vload8(0, p)
-#define PC_LANE_INDEX (uint8)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u)
 #elif PC_LANES == 16
 typedef float16 LaneF;
 typedef int16 LaneI;
 typedef uint16 LaneU;
 typedef lane3f16 Lane3;
 #define lane_load(p) vload16(0, p)
-#define PC_LANE_INDEX (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u)
 #else
 #error "PC_LANES: 1, 8 or 16 paths per work item"
 #endif
