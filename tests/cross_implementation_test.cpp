@@ -4,6 +4,7 @@
 // through OCL_ICD_VENDORS, see tests/CMakeLists.txt) must be bitwise equal, and Oclgrind, which checks
 // every memory access, must report no invalid access and no data race on them. Then the two devices
 // render one image together: the start-up probe puts them in one arithmetic class.
+#include <array>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -72,10 +73,13 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
   return scene_file(bundled, text);
 }
 
-std::vector<Case> cases() {
+// Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
+constexpr size_t kCases = 14;
+
+std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
   std::string cornell = resized("cornell-box", 8, 8, 4);
-  return {{"cornell box, sobol", cornell, ""},
+  return {{{"cornell box, sobol", cornell, ""},
           {"cornell box, independent", cornell, "--sampler independent"},
           {"cornell box, stratified", cornell, "--sampler stratified"},
           {"cornell box, halton", cornell, "--sampler halton"},
@@ -92,7 +96,13 @@ std::vector<Case> cases() {
           {"cornell box, 16 lanes", cornell, "--lanes 16"},
           {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},
           {"instances: moved, scaled, mirrored, smooth, cut-out",
-           resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}};
+           resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}}};
+}
+
+// Written on first use, in the test process's temporary directory.
+const std::array<Case, kCases>& cases() {
+  static const std::array<Case, kCases> all = make_cases();
+  return all;
 }
 
 struct Render {
@@ -119,30 +129,32 @@ size_t identical_pixels(const Image& a, const Image& b) {
 
 }  // namespace
 
-TEST(CrossImplementation, EveryFeatureRendersTheSameBitsOnPoclAndOclgrind) {
+class EveryFeature : public ::testing::TestWithParam<size_t> {};
+
+TEST_P(EveryFeature, RendersTheSameBitsOnPoclAndOclgrind) {
+  const Case& c = cases()[GetParam()];
+  ASSERT_FALSE(c.scene.empty()) << "fewer cases than kCases";
+  SCOPED_TRACE(c.name);
   // Oclgrind's checks of every memory access, and of data races between work items.
   setenv("OCLGRIND_DATA_RACES", "1", 1);
-  std::string dir = temp_dir() + "/cross";
-  fs::create_directories(dir);
-  int n = 0;
-  for (const Case& c : cases()) {
-    SCOPED_TRACE(c.name);
-    std::string tag = dir + "/" + std::to_string(n++);
-    Render pocl = render_on("pthread", c, tag + "-pocl.exr");
-    Render grind = render_on("oclgrind", c, tag + "-oclgrind.exr");
-    ASSERT_EQ(pocl.status, 0) << pocl.err;
-    ASSERT_EQ(grind.status, 0) << grind.err;
-    // Oclgrind reports what it finds on stderr; pathcl itself says nothing with --quiet.
-    EXPECT_EQ(grind.err, "") << "Oclgrind's diagnostics";
-    size_t pixels = pocl.image.rgb.size() / 3, same = identical_pixels(pocl.image, grind.image);
-    std::printf("%s: %zu of %zu pixels identical\n", c.name.c_str(), same, pixels);
-    EXPECT_EQ(same, pixels);
-    double sum = 0;
-    for (float v : pocl.image.rgb) sum += v;
-    EXPECT_GT(sum / pocl.image.rgb.size(), 1e-3) << "a black image proves little";
-  }
+  std::string tag = temp_dir() + "/cross/" + std::to_string(GetParam());
+  fs::create_directories(temp_dir() + "/cross");
+  Render pocl = render_on("pthread", c, tag + "-pocl.exr");
+  Render grind = render_on("oclgrind", c, tag + "-oclgrind.exr");
   unsetenv("OCLGRIND_DATA_RACES");
+  ASSERT_EQ(pocl.status, 0) << pocl.err;
+  ASSERT_EQ(grind.status, 0) << grind.err;
+  // Oclgrind reports what it finds on stderr; pathcl itself says nothing with --quiet.
+  EXPECT_EQ(grind.err, "") << "Oclgrind's diagnostics";
+  size_t pixels = pocl.image.rgb.size() / 3, same = identical_pixels(pocl.image, grind.image);
+  std::printf("%s: %zu of %zu pixels identical\n", c.name.c_str(), same, pixels);
+  EXPECT_EQ(same, pixels);
+  double sum = 0;
+  for (float v : pocl.image.rgb) sum += v;
+  EXPECT_GT(sum / pocl.image.rgb.size(), 1e-3) << "a black image proves little";
 }
+
+INSTANTIATE_TEST_SUITE_P(CrossImplementation, EveryFeature, ::testing::Range<size_t>(0, kCases));
 
 TEST(CrossImplementation, PoclAndOclgrindRenderOneImageTogether) {
   std::string dir = temp_dir() + "/together", err;
