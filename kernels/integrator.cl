@@ -327,11 +327,13 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
       st.radiance = lane3_select(st.radiance, lane3_add(st.radiance, st.nee), has_shadow & !blocked);
     }
     LaneI ended = active & !more;
-    idle = pc_lane_bits(ended);
-    if (idle == 0u) continue;
+    uint ended_bits = pc_lane_bits(ended);
+    /* Idle lanes that found the ring full stay idle, for a task once it has room. */
+    idle = (idle & ~taken) | ended_bits;
+    if (ended_bits == 0u) continue;
     active &= !ended;
     /* Finished samples into the ring, then every sample whose predecessors are in, in order. */
-    PC_EACH_LANE(j, idle) {
+    PC_EACH_LANE(j, ended_bits) {
       uint slot = task_of[j] % PC_RESULTS;
       result[slot] = lane3_at(st.radiance, j);
       ready |= 1ul << slot;

@@ -21,11 +21,8 @@ inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
 inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
 inline PC_OVL float pc_lane(float x, uint j) { return x; }
 inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
-inline PC_OVL int pc_lane(int x, uint j) { return x; }
 inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
 inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
-inline PC_OVL int pc_with_lane(int x, uint j, int value) { return value; }
-inline PC_OVL float pc_min_lanes(float x) { return x; }
 
 inline PC_OVL uint pc_or_lanes_(uint2 b) { return b.x | b.y; }
 inline PC_OVL uint pc_or_lanes_(uint4 b) { return pc_or_lanes_(b.lo | b.hi); }
@@ -61,10 +58,8 @@ PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
   }
 PC_LANE_ACCESS(float8, float, 8)
 PC_LANE_ACCESS(uint8, uint, 8)
-PC_LANE_ACCESS(int8, int, 8)
 PC_LANE_ACCESS(float16, float, 16)
 PC_LANE_ACCESS(uint16, uint, 16)
-PC_LANE_ACCESS(int16, int, 16)
 #undef PC_LANE_ACCESS
 
 /* Functions of the lane code that PoCL would otherwise call rather than inline: a call passes their

@@ -123,7 +123,7 @@ inline LaneF environment_light_pdf_lanes(const SceneData* sc, Lane3 x, Lane3 d, 
 }
 #endif
 
-/* sample_sphere_cone by lane: a point on the sphere (centre c, radius r) seen from x. */
+/* A point on the sphere (centre c, radius r) seen from x, per lane. */
 inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF u1, LaneF* pdf) {
   Lane3 d = lane3_sub(x, c);
   LaneF dc2 = pc_dot(d, d), dc = sqrt(dc2);
@@ -147,7 +147,7 @@ inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF
                c.z + r * (cos_alpha * w.z + sin_alpha * (cos_phi * t.z + sin_phi * b.z)));
 }
 
-/* sample_area_light by lane, into the lanes m of out. */
+/* A point on the area light (a triangle or a sphere) seen from x, into the lanes m of out. */
 inline void sample_area_light_lanes(const SceneData* sc, const LightLanes* light, LaneF choice, Lane3 x, LaneF u0,
                                     LaneF u1, LaneI m, LightSampleLanes* out) {
   Lane3 a, b, c, p = x, p_err = x, ny = x;

@@ -32,7 +32,7 @@ inline float3 transform_normal(__global const float4* to_mesh, float3 n) {
                   (r0.z * n.x + r1.z * n.y) + r2.z * n.z);
 }
 
-/* A surface of an instance's mesh (in the mesh's coordinates, as surface_at gives it) in the device's
+/* A surface of an instance's mesh (in the mesh's coordinates, as scene_surface_lanes first finds it) in the device's
  * coordinates. The error bound of the transformed point is pbrt-v4's: the point's own bound carried
  * through the matrix, plus the rounding of the transform's products and sums. */
 inline void place_surface(Surface* s, __global const Instance* inst) {
@@ -97,7 +97,7 @@ inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray
   }
 #ifdef PC_HAS_SPHERES
   if (pc_any_(sphere)) {
-    /* surface_at's re-projection onto the sphere (centre a, radius b.x) */
+    /* the hit point re-projected onto the sphere (centre a, radius b.x) */
     Lane3 rel = lane3_sub(lane3_add(ray->o, lane3_scale(ray->d, hit->t)), a);
     rel = lane3_scale(rel, b.x / pc_length(rel));
     Lane3 p = lane3_add(a, rel);

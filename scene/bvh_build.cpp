@@ -349,7 +349,7 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary, uint32_t merge_size) 
   WideBvh<Node> out;
   out.nodes.reserve(binary.size() / (Width / 2) + 1);
   out.nodes.emplace_back();
-  Collapser<Node, Width> collapser{binary, out, merge_size};
+  Collapser<Node, Width> collapser{binary, out, merge_size, {}, {}};
   collapser.count_subtrees();
   collapser.fill(0, 0, 0);
   return out;

@@ -176,7 +176,7 @@ TEST(LightChi2, AreaLights) {
   add("sphere by cone, near", sphere_json({0.2, -0.1, 1.4}, 1, R"("emission": [2.5, 2.5, 2.5])"), origin, SphereBinning());
   add("sphere by cone, far", sphere_json({0.5, 3, 1}, 0.8, R"("emission": [2.5, 2.5, 2.5])"), origin,
       SphereBinning::about({0.5, 3, 1}, 18 * kDeg));
-  // sin^2(theta_max) = 4e-4, below the small-cone threshold of sample_sphere_cone (sin^2(1.5 degrees)).
+  // sin^2(theta_max) = 4e-4, below the small-cone threshold of sample_sphere_cone_lanes (sin^2(1.5 degrees)).
   glm::dvec3 tiny(0.6, -0.8, 0);
   add("tiny sphere by cone", sphere_json(tiny, 0.02, R"("emission": [2.5, 2.5, 2.5])"), origin,
       SphereBinning::about(tiny, 1.5 * kDeg));
