@@ -161,6 +161,17 @@ TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
   ASSERT_FALSE(r.devices.empty());
   EXPECT_EQ(r.devices[0].lanes, path_lanes(device));
   EXPECT_EQ(r.devices[0].lanes, device.is_cpu ? (device.preferred_float_width >= 16 ? 16u : 8u) : 1u);
+  // Devices that this machine may not have: CPUs whose preferred float vectors are 16 (AVX-512), 8 (AVX2)
+  // and 4 (SSE) wide, and a GPU.
+  DeviceInfo cpu = device;
+  cpu.is_cpu = true, cpu.is_gpu = false;
+  for (cl_uint width : {16u, 8u, 4u}) {
+    cpu.preferred_float_width = width;
+    EXPECT_EQ(path_lanes(cpu), width == 16 ? 16u : 8u) << width;
+  }
+  DeviceInfo gpu = cpu;
+  gpu.is_cpu = false, gpu.is_gpu = true;
+  EXPECT_EQ(path_lanes(gpu), 1u);
   setenv("PATHCL_LANES", "1", 1);
   EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, 1u);
   setenv("PATHCL_LANES", "4", 1);
