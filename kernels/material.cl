@@ -84,14 +84,12 @@ inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, cons
 #if PC_LANES == 1
 /* material_at_lanes for one surface point: the material with its colour looked up. */
 inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
-  SurfaceLanes l = surface_lanes_of(s);
-  HitLanes h = hit_lanes_of(hit);
   ShadingLanes shading;
   shading.material = material;
   shading.flags = sc->shading[s->prim].flags;
   shading.light = sc->shading[s->prim].light;
   Material m = sc->materials[material];
-  m.color.xyz = material_at_lanes(sc, material, &l, &shading, &h, 1).color;
+  m.color.xyz = material_at_lanes(sc, material, s, &shading, hit, 1).color;
   return m;
 }
 #endif

@@ -58,11 +58,15 @@ inline void place_surface(Surface* s, __global const Instance* inst) {
 /* ---- Written once over the program's lanes (kernels/lanes.cl); the functions on Surface, Ray and Hit at
  * the end are the one-lane instances. */
 
-/* Surface by lane, and the PrimShading of its primitive. */
+/* Surface by lane (one lane is a Surface), and the PrimShading of its primitive. */
+#if PC_LANES == 1
+typedef Surface SurfaceLanes;
+#else
 typedef struct {
   Lane3 p, p_err, ng, ns;
   LaneU prim, instance;
 } SurfaceLanes;
+#endif
 
 typedef struct {
   LaneU material, light, flags;
@@ -171,83 +175,25 @@ PC_LANE_INLINE void spawn_ray_to_lanes(Lane3 p, Lane3 p_err, Lane3 n, LaneU prim
 }
 
 #if PC_LANES == 1
-/* A Ray or Hit as one lane, and a Ray back. */
-inline RayLanes ray_lanes_of(const Ray* r) {
-  RayLanes l;
-  l.o = r->o;
-  l.d = r->d;
-  l.tmin = r->tmin;
-  l.tmax = r->tmax;
-  l.skip_prim = r->skip_prim;
-  l.skip_instance = r->skip_instance;
-  l.cutout_seed = r->cutout_seed;
-  return l;
-}
-
-inline Ray ray_of(const RayLanes* l) {
-  Ray r;
-  r.o = l->o;
-  r.d = l->d;
-  r.tmin = l->tmin;
-  r.tmax = l->tmax;
-  r.skip_prim = l->skip_prim;
-  r.skip_instance = l->skip_instance;
-  r.cutout_seed = l->cutout_seed;
-  return r;
-}
-
-inline HitLanes hit_lanes_of(const Hit* hit) {
-  HitLanes h;
-  h.t = hit->t;
-  h.u = hit->u;
-  h.v = hit->v;
-  h.slot = hit->slot;
-  h.prim = hit->prim;
-  h.instance = hit->instance;
-  return h;
-}
-
-/* A Surface as one lane. */
-inline SurfaceLanes surface_lanes_of(const Surface* s) {
-  SurfaceLanes l;
-  l.p = s->p;
-  l.p_err = s->p_err;
-  l.ng = s->ng;
-  l.ns = s->ns;
-  l.prim = s->prim;
-  l.instance = s->instance;
-  return l;
-}
-
 /* The surface at a hit of the scene (trace_scene), in the device's coordinates. */
 inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
-  RayLanes r = ray_lanes_of(ray);
-  HitLanes h = hit_lanes_of(hit);
   ShadingLanes shading;
-  SurfaceLanes l = scene_surface_lanes(sc, &r, &h, 1, &shading);
-  Surface s;
-  s.p = l.p;
-  s.p_err = l.p_err;
-  s.ng = l.ng;
-  s.ns = l.ns;
-  s.prim = l.prim;
-  s.instance = l.instance;
-  return s;
+  return scene_surface_lanes(sc, ray, hit, 1, &shading);
 }
 
 /* spawn_ray_lanes from surface point s; the cut-out seed is the caller's. */
 inline Ray spawn_ray(const Surface* s, float3 w) {
-  RayLanes r;
+  Ray r;
   spawn_ray_lanes(s->p, s->p_err, s->ng, s->prim, s->instance, w, &r);
   r.cutout_seed = 0u;
-  return ray_of(&r);
+  return r;
 }
 
 inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
-  RayLanes r;
+  Ray r;
   spawn_ray_to_lanes(p, p_err, n, prim, instance, q, q_err, nq, &r);
   r.cutout_seed = 0u;
-  return ray_of(&r);
+  return r;
 }
 #endif
 

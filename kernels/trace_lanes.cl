@@ -8,7 +8,11 @@
 #include "intersect.cl"
 #include "packet.cl"
 
-/* intersect.cl's Ray and Hit by lane. */
+/* intersect.cl's Ray and Hit by lane; one lane is a Ray and a Hit. */
+#if PC_LANES == 1
+typedef Ray RayLanes;
+typedef Hit HitLanes;
+#else
 typedef struct {
   Lane3 o, d;
   LaneF tmin, tmax;
@@ -19,6 +23,7 @@ typedef struct {
   LaneF t, u, v;
   LaneU slot, prim, instance;
 } HitLanes;
+#endif
 
 #if PC_LANES > 1 && defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
 #define PC_TRACE_PACKETS
