@@ -454,21 +454,27 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
   }
 }
 
-/* The tree of the device's layout from node root, updating *hit as trace_bvh4_axis does; kz as a literal,
- * so each copy's triangle test has constant axis indices. cut: the scene whose cut-outs apply
- * (kernels/cutout.cl), or 0 for none. */
+/* The tree of the device's layout from node root, updating *hit as trace_bvh4_axis does, with the ray's
+ * ray_precompute rp; kz as a literal, so each copy's triangle test has constant axis indices. cut: the
+ * scene whose cut-outs apply (kernels/cutout.cl), or 0 for none. */
+inline bool trace_tree_precomputed(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
+                                   __global const Primitive* prims, uint root, const Ray* ray, const RayPrecomp* rp,
+                                   bool any_hit, Hit* hit) {
+#ifdef PC_BVH8
+#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, root, ray, rp, any_hit, hit, kz)
+#else
+#define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, root, ray, rp, any_hit, hit, kz)
+#endif
+  if (rp->kz == 0u) return PC_TRACE_AXIS(0u);
+  if (rp->kz == 1u) return PC_TRACE_AXIS(1u);
+  return PC_TRACE_AXIS(2u);
+#undef PC_TRACE_AXIS
+}
+
 inline bool trace_tree(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
                        __global const Primitive* prims, uint root, const Ray* ray, bool any_hit, Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
-#ifdef PC_BVH8
-#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, root, ray, &rp, any_hit, hit, kz)
-#else
-#define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, root, ray, &rp, any_hit, hit, kz)
-#endif
-  if (rp.kz == 0u) return PC_TRACE_AXIS(0u);
-  if (rp.kz == 1u) return PC_TRACE_AXIS(1u);
-  return PC_TRACE_AXIS(2u);
-#undef PC_TRACE_AXIS
+  return trace_tree_precomputed(cut, nodes, blocks, prims, root, ray, &rp, any_hit, hit);
 }
 
 /* The nearest hit (or with any_hit, any hit) in one tree whose root is node 0: the whole scene without

@@ -69,19 +69,58 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     packet_set_hit_lane(h, j, &hit);                                                                      \
     return true;                                                                                          \
   }                                                                                                       \
-  /* Lane j through the subtree at node root with the single-ray traversal (trace_tree), for subtrees    \
-   * few lanes entered. Returns whether lane j's hit changed. */                                          \
-  inline PC_OVL bool packet_subtree_lane(const SceneData* cut, __global const Bvh8Node* nodes,           \
-                                         __global const LeafBlock* blocks, __global const Primitive* prims, \
-                                         uint root, const RayPacket##N* r, uint j, bool any_hit, HitPacket##N* h) { \
-    Hit hit;                                                                                              \
-    Ray ray = packet_ray_lane(r, j, h, &hit);                                                             \
-    float t = hit.t;                                                                                      \
-    uint prim = hit.prim;                                                                                 \
-    trace_tree(cut, nodes, blocks, prims, root, &ray, any_hit, &hit);                                     \
-    if (hit.t == t && hit.prim == prim) return false;                                                     \
-    packet_set_hit_lane(h, j, &hit);                                                                      \
-    return true;                                                                                          \
+  /* The packet's rays lane by lane for the single-ray traversal of packet_subtrees_by_lane: each lane's  \
+   * ray and its ray_precompute (the packet's own per-lane values: the same operations, the same bits),   \
+   * stored once a traversal first needs them. */                                                         \
+  typedef struct {                                                                                        \
+    float ox[N], oy[N], oz[N], dx[N], dy[N], dz[N], tmin[N], ix[N], iy[N], iz[N], sx[N], sy[N], sz[N];   \
+    uint skip_prim[N], cutout_seed[N], kz[N];                                                             \
+  } PacketByLane##N;                                                                                      \
+  inline PC_OVL void packet_by_lane(const RayPacket##N* r, V3 inv_d, U kz, F sx, F sy, F sz,             \
+                                    PacketByLane##N* l) {                                                 \
+    vstore##N(r->o.x, 0, l->ox), vstore##N(r->o.y, 0, l->oy), vstore##N(r->o.z, 0, l->oz);                \
+    vstore##N(r->d.x, 0, l->dx), vstore##N(r->d.y, 0, l->dy), vstore##N(r->d.z, 0, l->dz);                \
+    vstore##N(r->tmin, 0, l->tmin), vstore##N(r->skip_prim, 0, l->skip_prim);                             \
+    vstore##N(r->cutout_seed, 0, l->cutout_seed);                                                         \
+    vstore##N(inv_d.x, 0, l->ix), vstore##N(inv_d.y, 0, l->iy), vstore##N(inv_d.z, 0, l->iz);             \
+    vstore##N(sx, 0, l->sx), vstore##N(sy, 0, l->sy), vstore##N(sz, 0, l->sz), vstore##N(kz, 0, l->kz);   \
+  }                                                                                                       \
+  /* Each lane in bits alone through the subtree at node root with the single-ray traversal, for subtrees \
+   * few lanes entered. Returns the lanes whose hit changed. */                                           \
+  inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const Bvh8Node* nodes,       \
+                                             __global const LeafBlock* blocks, __global const Primitive* prims, \
+                                             uint root, const PacketByLane##N* l, uint bits, bool any_hit, \
+                                             HitPacket##N* h) {                                           \
+    float t[N], u[N], v[N];                                                                               \
+    uint slot[N], prim[N], changed = 0u;                                                                  \
+    vstore##N(h->t, 0, t), vstore##N(h->u, 0, u), vstore##N(h->v, 0, v);                                  \
+    vstore##N(h->slot, 0, slot), vstore##N(h->prim, 0, prim);                                             \
+    for (uint j = 0u; j < N; ++j) {                                                                       \
+      if (!((bits >> j) & 1u)) continue;                                                                  \
+      Ray ray;                                                                                            \
+      ray.o = (float3)(l->ox[j], l->oy[j], l->oz[j]);                                                     \
+      ray.d = (float3)(l->dx[j], l->dy[j], l->dz[j]);                                                     \
+      ray.tmin = l->tmin[j];                                                                              \
+      ray.tmax = t[j];                                                                                    \
+      ray.skip_prim = l->skip_prim[j];                                                                    \
+      ray.skip_instance = PC_INVALID;                                                                     \
+      ray.cutout_seed = l->cutout_seed[j];                                                                \
+      RayPrecomp rp;                                                                                      \
+      rp.inv_d = (float3)(l->ix[j], l->iy[j], l->iz[j]);                                                  \
+      rp.sx = l->sx[j], rp.sy = l->sy[j], rp.sz = l->sz[j], rp.kz = l->kz[j];                             \
+      Hit hit;                                                                                            \
+      hit.t = t[j], hit.u = u[j], hit.v = v[j], hit.slot = slot[j], hit.prim = prim[j];                   \
+      hit.instance = PC_INVALID;                                                                          \
+      trace_tree_precomputed(cut, nodes, blocks, prims, root, &ray, &rp, any_hit, &hit);                  \
+      if (hit.t == t[j] && hit.prim == prim[j]) continue;                                                 \
+      t[j] = hit.t, u[j] = hit.u, v[j] = hit.v, slot[j] = hit.slot, prim[j] = hit.prim;                   \
+      changed |= 1u << j;                                                                                 \
+    }                                                                                                     \
+    if (changed != 0u) {                                                                                  \
+      h->t = vload##N(0, t), h->u = vload##N(0, u), h->v = vload##N(0, v);                                \
+      h->slot = vload##N(0, slot), h->prim = vload##N(0, prim);                                           \
+    }                                                                                                     \
+    return changed;                                                                                       \
   }                                                                                                       \
   /* The packet's active lanes against a leaf reference's blocks; returns the lanes whose hit changed. */ \
   inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,                     \
@@ -159,6 +198,8 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     int sp = 0;                                                                                           \
     uint ref = root;                                                                                      \
     I lanes = active;                                                                                     \
+    PacketByLane##N by_lane;                                                                              \
+    bool by_lane_ready = false;                                                                           \
     for (;;) {                                                                                            \
       if (ref & PC_BVH4_LEAF) {                                                                           \
         I changed = packet_leaf(cut, blocks, prims, ref, r, kx, ky, kz, sx, sy, sz, lanes, h);            \
@@ -171,6 +212,8 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
         __global const Bvh8Node* n = nodes + ref;                                                         \
         int base = sp;                                                                                    \
         for (uint c = 0u; c < 8u; ++c) {                                                                  \
+          uint child = n->child[c];                                                                       \
+          if (child == PC_INVALID) break; /* the used slots come first (scene/bvh_build.cpp) */          \
           /* ray_boxes8's slab test, one box against each lane's ray. */                                  \
           F lx = (n->lo_x[c] - r->o.x) * inv_d.x, hx = (n->hi_x[c] - r->o.x) * inv_d.x;                   \
           F ly = (n->lo_y[c] - r->o.y) * inv_d.y, hy = (n->hi_y[c] - r->o.y) * inv_d.y;                   \
@@ -190,7 +233,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
             stack_entry[j] = stack_entry[j - 1];                                                          \
             --j;                                                                                          \
           }                                                                                               \
-          stack[j] = n->child[c];                                                                         \
+          stack[j] = child;                                                                               \
           stack_key[j] = d;                                                                               \
           stack_entry[j] = e;                                                                             \
         }                                                                                                 \
@@ -206,10 +249,9 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
         if (4u * popcount(bits) > N || (stack[sp] & PC_BVH4_LEAF)) break;                               \
         /* A quarter of the lanes or fewer: each alone through the subtree (the same hits; most of the    \
          * vector work would be wasted: 3.1 against 3.8 M bounce rays/s at 8 lanes, docs/benchmarks-notes.md). */ \
-        uint changed = 0u;                                                                                \
-        for (uint j = 0u; j < N; ++j)                                                                     \
-          if (((bits >> j) & 1u) && packet_subtree_lane(cut, nodes, blocks, prims, stack[sp], r, j, any_hit, h)) \
-            changed |= 1u << j;                                                                           \
+        if (!by_lane_ready) packet_by_lane(r, inv_d, kz, sx, sy, sz, &by_lane);                           \
+        by_lane_ready = true;                                                                             \
+        uint changed = packet_subtrees_by_lane(cut, nodes, blocks, prims, stack[sp], &by_lane, bits, any_hit, h); \
         found |= pc_lanes_of_bits(changed, found);                                                        \
         if (any_hit) {                                                                                    \
           active &= !pc_lanes_of_bits(changed, active);                                                   \

@@ -31,7 +31,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 # (phase, function name prefixes; mangled names contain the plain name after their length prefix)
 FUNCTIONS = [
-    ("traversal", ["trace_packet", "packet_leaf", "packet_prim_lane", "packet_subtree_lane", "packet_ray_lane",
+    ("traversal", ["trace_packet", "packet_leaf", "packet_prim_lane", "packet_subtrees_by_lane", "packet_by_lane",
+                   "packet_ray_lane",
                    "trace_tree", "trace_lanes", "trace_scene", "trace_bvh", "trace_instance", "intersect_"]),
     ("light choice", ["light_choice_lanes", "light_bounds_importance_lanes", "light_node_field_lanes"]),
     ("light sampling and MIS", ["sample_light_lanes", "sample_area_light_lanes", "sample_sphere_cone_lanes",
