@@ -39,10 +39,10 @@ struct Bvh : BvhStats {
 Bvh build_bvh(const std::vector<Aabb>& prim_boxes);
 
 // The device's wide BVHs (kernels/shared/types.h): each wide node takes up to four (Bvh4Node) or eight
-// (Bvh8Node) subtrees of the binary tree, opening the child of largest surface area first, so a traversal
-// step tests four or eight boxes at once. Leaves and primitive order are the binary tree's. Its depth is
-// at most the binary tree's, which bounds the kernel's stack (kernels/intersect.cl). Needs fewer than
-// PC_BVH4_MAX_LEAF_FIRST primitives and leaves of at most 16.
+// (Bvh8Node) subtrees of the binary tree, so a traversal step tests four or eight boxes at once; the used
+// child slots come first. Primitive order is the binary tree's. Its depth is at most the binary tree's,
+// which bounds the kernel's stack (kernels/intersect.cl). Needs fewer than PC_BVH4_MAX_LEAF_FIRST
+// primitives and leaves of at most 16.
 template <class Node>
 struct WideBvh {
   std::vector<Node> nodes;  // nodes[0] is the root
@@ -50,9 +50,14 @@ struct WideBvh {
 };
 using Bvh4 = WideBvh<Bvh4Node>;
 using Bvh8 = WideBvh<Bvh8Node>;
+// The 4-wide tree: the binary tree's leaves, each node's children found by opening the child of largest
+// surface area first.
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
-// The 8-wide tree's leaves are binary subtrees of at most four primitives (or binary leaves), to be
-// tested four at a time (make_leaf_blocks); their references hold primitive slots until then.
+// The 8-wide tree: of all the ways to collapse the binary tree into 8-wide nodes whose leaves are binary
+// subtrees (of at most 16 primitives), the one of least SAH cost, where a node visited costs
+// kWideNodeCost and a leaf kLeafBlockCost for each block of four primitives it is tested in
+// (make_leaf_blocks). Leaf references hold primitive slots until make_leaf_blocks.
+constexpr float kWideNodeCost = 1, kLeafBlockCost = 1;
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);
 // The 8-wide tree's leaves as LeafBlocks of prims (in leaf order); rewrites the leaf references of nodes
 // to refer to the blocks (kernels/shared/types.h).

@@ -71,7 +71,9 @@ template <class T>
 void expect_same_bits(const std::vector<T>& a, const std::vector<T>& b, const char* what) {
   ASSERT_EQ(a.size(), b.size()) << what;
   // (memcmp must not see the null data() of an empty vector.)
-  if (!a.empty()) EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(T)), 0) << what << " differ";
+  if (!a.empty()) {
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(T)), 0) << what << " differ";
+  }
 }
 
 void expect_same_mesh(const TriangleMesh& a, const CleanReport& ra, const TriangleMesh& b, const CleanReport& rb) {
