@@ -93,9 +93,12 @@ typedef lane3f16 Lane3;
 #error "PC_LANES: 1, 8 or 16 paths per work item"
 #endif
 
-/* Each lane j set in bits, in order: for (...) PC_EACH_LANE(j, bits) { ... } runs the body once per lane
- * (for per-lane work with the one-lane code: textures, instances, the environment map). */
-#define PC_EACH_LANE(j, bits) for (uint j = 0u; j < PC_LANES; ++j) if (((bits) >> j) & 1u)
+/* PC_EACH_LANE(j, bits) { ... } runs the body once for each lane j set in bits (read once), lowest first,
+ * skipping the others (for per-lane work with the one-lane code: textures, instances, the environment
+ * map, and the render loop's tasks). */
+#define PC_EACH_LANE(j, bits)                                                                             \
+  for (uint pc_left_ = (bits), j = 31u - clz(pc_left_ & (0u - pc_left_)); pc_left_ != 0u;                 \
+       pc_left_ &= pc_left_ - 1u, j = 31u - clz(pc_left_ & (0u - pc_left_)))
 
 inline uint lane_count(LaneI m) { return popcount(pc_lane_bits(m)); }
 
