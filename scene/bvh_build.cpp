@@ -4,11 +4,12 @@
 #include "scene/bvh_build.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
-#include <array>
 #include <cstring>
 #include <memory>
+#include <stdexcept>
 
 #include <glm/common.hpp>
 #include <tbb/blocked_range.h>
@@ -287,15 +288,30 @@ float node_half_area(const BvhNode& n) {
 struct WideCollapseCost {
   static constexpr int kWidth = 8;
   static constexpr uint8_t kLeaf = 0, kNode = 255, kFewer = 254;  // split values that are no share
-  std::vector<std::array<float, kWidth>> cost;
   std::vector<std::array<uint8_t, kWidth>> split;  // i = 1: kLeaf or kNode
   std::vector<uint8_t> node_split;  // as a wide node: the left child's share of its kWidth children
 
+  // The costs of the subtrees not yet joined to their parents are a stack: in reverse depth-first order
+  // (the tree's node order backwards) a node's right subtree, then its left one, then the node itself
+  // are met, so its children's costs are the top two. 9 bytes a node are kept, not 41.
   WideCollapseCost(const std::vector<BvhNode>& binary, const std::vector<uint32_t>& count)
-      : cost(binary.size()), split(binary.size()), node_split(binary.size()) {
-    for (size_t n = binary.size(); n-- > 0;) {  // children come after their parent
+      : split(binary.size()), node_split(binary.size()) {
+    struct Pending {
+      uint32_t node;
+      std::array<float, kWidth> cost;
+    };
+    std::vector<Pending> pending;
+    for (size_t n = binary.size(); n-- > 0;) {
       const BvhNode& b = binary[n];
       bool interior = b.prim_count == 0 && b.left_first != 0;
+      std::array<float, kWidth> left{}, right{};
+      if (interior) {
+        if (pending.size() < 2 || pending.back().node != n + 1 || pending[pending.size() - 2].node != b.left_first)
+          throw std::logic_error("collapse_to_bvh8: the binary tree is not in depth-first order");
+        left = pending.back().cost;
+        right = pending[pending.size() - 2].cost;
+        pending.resize(pending.size() - 2);
+      }
       // spread[i - 1]: the subtree as at most i subtrees drawn from both children, the left's share k.
       std::array<float, kWidth> spread;
       std::array<uint8_t, kWidth> spread_split;
@@ -303,21 +319,23 @@ struct WideCollapseCost {
         spread[i - 1] = INFINITY;
         spread_split[i - 1] = kFewer;
         for (int k = 1; interior && k < i; ++k) {
-          float c = cost[n + 1][k - 1] + cost[b.left_first][i - k - 1];
+          float c = left[k - 1] + right[i - k - 1];
           if (c < spread[i - 1]) spread[i - 1] = c, spread_split[i - 1] = uint8_t(k);
         }
       }
       float area = node_half_area(b);
       float leaf = count[n] > 0 && count[n] <= kBvhMaxLeafSize ? kLeafBlockCost * area * float((count[n] + 3) / 4) : INFINITY;
       float node = interior ? kWideNodeCost * area + spread[kWidth - 1] : INFINITY;
-      cost[n][0] = std::min(leaf, node);
+      Pending p{uint32_t(n), {}};
+      p.cost[0] = std::min(leaf, node);
       split[n][0] = leaf <= node && leaf < INFINITY ? kLeaf : kNode;  // the empty scene's root is neither
       node_split[n] = spread_split[kWidth - 1];
       for (int i = 2; i <= kWidth; ++i) {
-        bool fewer = cost[n][i - 2] <= spread[i - 1];
-        cost[n][i - 1] = fewer ? cost[n][i - 2] : spread[i - 1];
+        bool fewer = p.cost[i - 2] <= spread[i - 1];
+        p.cost[i - 1] = fewer ? p.cost[i - 2] : spread[i - 1];
         split[n][i - 1] = fewer ? kFewer : spread_split[i - 1];
       }
+      pending.push_back(p);
     }
   }
   // The children of binary node n as a wide node, appended to out.
