@@ -95,8 +95,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     uint slot[N], prim[N], changed = 0u;                                                                  \
     vstore##N(h->t, 0, t), vstore##N(h->u, 0, u), vstore##N(h->v, 0, v);                                  \
     vstore##N(h->slot, 0, slot), vstore##N(h->prim, 0, prim);                                             \
-    for (uint j = 0u; j < N; ++j) {                                                                       \
-      if (!((bits >> j) & 1u)) continue;                                                                  \
+    PC_EACH_LANE(j, bits) {                                                                               \
       Ray ray;                                                                                            \
       ray.o = (float3)(l->ox[j], l->oy[j], l->oz[j]);                                                     \
       ray.d = (float3)(l->dx[j], l->dy[j], l->dz[j]);                                                     \

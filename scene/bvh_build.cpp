@@ -280,10 +280,10 @@ float node_half_area(const BvhNode& n) {
 
 // The cheapest 8-wide tree by the surface area heuristic over the ways of collapsing the binary tree
 // (Ylitie, Karras and Laine 2017, "Efficient incoherent ray traversal on GPUs through compressed wide
-// BVHs", section 4.1), by the costs of scene/bvh_build.h (kWideNodeCost, kLeafBlockCost). cost[n][i - 1]:
-// the least cost of the subtree of binary node n as at most i subtrees of the wide tree (i = 1: one wide
-// leaf or node); split[n][i - 1]: how that least cost is reached (kFewer: with i - 1; else the left child's
-// share of the i). Against the greedy collapse with leaves of up to 4 primitives: a third fewer nodes on
+// BVHs", section 4.1), by the costs of scene/bvh_build.h (kWideNodeCost, kLeafBlockCost). For each binary
+// node n and i = 1..8, the least cost of its subtree as at most i subtrees of the wide tree (i = 1: one wide
+// leaf or node) is found from its children's; split[n][i - 1] keeps how it is reached (kFewer: with i - 1;
+// else the left child's share of the i). Against the greedy collapse with leaves of up to 4 primitives: a third fewer nodes on
 // the benchmark terrain, 5.79 -> 6.15 M bounce and 11.0 -> 11.5 M camera rays/s.
 struct WideCollapseCost {
   static constexpr int kWidth = 8;

@@ -172,10 +172,7 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
 // each node's box (its parent's lane box; the root's is the binary root's) and each leaf's box by the
 // blocks of four primitives it is tested in.
 double wide_tree_cost(const Bvh8& wide, const std::vector<BvhNode>& binary) {
-  auto area = [](glm::vec3 lo, glm::vec3 hi) {
-    glm::vec3 e = hi - lo;
-    return double(e.x * e.y + e.y * e.z + e.z * e.x);
-  };
+  auto area = [](glm::vec3 lo, glm::vec3 hi) { return double(Aabb{lo, hi}.half_area()); };
   double cost = kWideNodeCost * area({binary[0].lo[0], binary[0].lo[1], binary[0].lo[2]},
                                      {binary[0].hi[0], binary[0].hi[1], binary[0].hi[2]});
   for (const Bvh8Node& n : wide.nodes)
@@ -203,8 +200,7 @@ struct BruteForceCollapse {
   bool interior(uint32_t n) const { return binary[n].prim_count == 0 && binary[n].left_first != 0; }
   double area(uint32_t n) const {
     const BvhNode& b = binary[n];
-    glm::vec3 e(b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]);
-    return double(e.x * e.y + e.y * e.z + e.z * e.x);
+    return double(Aabb{{b.lo[0], b.lo[1], b.lo[2]}, {b.hi[0], b.hi[1], b.hi[2]}}.half_area());
   }
   // Every cut of the subtree at n of at most `most` subtrees.
   std::vector<std::vector<uint32_t>> cuts(uint32_t n, size_t most) const {
