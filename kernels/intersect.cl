@@ -11,6 +11,7 @@
  * whatever #if surrounds that place (cutout.cl's code is under PC_HAS_CUTOUTS itself). */
 #include "scene.cl"
 #include "cutout.cl"
+#include "lanes.cl"
 
 /* The BVH layout of this device (runtime/device.h, bvh_width): PC_BVH8 for the 8-wide tree. */
 #ifdef PC_BVH8
@@ -397,14 +398,11 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
       float8 entry = ray_boxes8(ray->o, rp->inv_d, negative, ray->tmin, hit->t, vload8(0, n->lo_x), vload8(0, n->lo_y),
                                 vload8(0, n->lo_z), vload8(0, n->hi_x), vload8(0, n->hi_y), vload8(0, n->hi_z));
       /* Bit i of mask: child i is hit. */
-      int8 bit = select((int8)(0), (int8)(1, 2, 4, 8, 16, 32, 64, 128), entry != (float8)(INFINITY));
-      int4 b4 = bit.lo | bit.hi;
-      int2 b2 = b4.lo | b4.hi;
-      uint mask = (uint)(b2.x | b2.y);
+      uint mask = pc_lane_bits(entry != (float8)(INFINITY));
       if (mask != 0u) {
         float d[8];
         vstore8(entry, 0, d);
-        uint i = 31u - clz(mask & (0u - mask));
+        uint i = pc_lowest_bit(mask);
         mask &= mask - 1u;
         uint near_ref = n->child[i];
         float near_d = d[i];
@@ -412,7 +410,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
           ref = near_ref;
           continue;
         }
-        i = 31u - clz(mask & (0u - mask));
+        i = pc_lowest_bit(mask);
         mask &= mask - 1u;
         uint far_ref = n->child[i];
         float far_d = d[i];
@@ -432,7 +430,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
         stack_entry[sp + 1] = near_d;
         sp += 2;
         while (mask != 0u) {
-          i = 31u - clz(mask & (0u - mask));
+          i = pc_lowest_bit(mask);
           mask &= mask - 1u;
           float di = d[i];
           uint ri = n->child[i];
