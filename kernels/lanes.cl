@@ -115,12 +115,6 @@ inline uint lane_first(LaneI m) {
  * lane (each read is of a valid element). */
 inline LaneU lane_safe_index(LaneU index, LaneI m) { return select((LaneU)(pc_lane(index, lane_first(m))), index, m); }
 
-/* Where every lane of m has the same index: it (a gather of one element, loaded once); else PC_INVALID. */
-inline uint lane_uniform_index(LaneU index, LaneI m) {
-  uint first = pc_lane(index, lane_first(m));
-  return pc_lane_bits(m & (index != first)) == 0u ? first : PC_INVALID;
-}
-
 /* base[index * stride] of every lane (a gather): a vector built from PC_LANES loads in registers (loads
  * stored to a private array and read back as one vector wait for every store to reach the cache). Every
  * index must be valid (lane_safe_index). A field of an array of structs is (PC_FIELD_F(array, member),
@@ -160,6 +154,56 @@ PC_LANE_INLINE uint16 lane_gather_uint(__global const uint* base, uint stride, u
 #define PC_GATHER3_(base, stride, index)                                                                 \
   lane3(lane_gather_float((base), stride, index), lane_gather_float((base) + 1, stride, index),           \
         lane_gather_float((base) + 2, stride, index))
+
+/* The lanes of m grouped by index, when the lanes hold at most PC_LANE_GROUPS distinct indices (the light
+ * each lane chose: a scene has few; the primitive it samples): a gather over the groups is a load and a
+ * select per group instead of a load and an insert per lane. Lanes outside m join the first group
+ * (lane_safe_index). m must have a lane. */
+#define PC_LANE_GROUPS 4
+typedef struct {
+  LaneU index;                   /* lane_safe_index(index, m) */
+  uint count;                    /* groups, or PC_INVALID for more than PC_LANE_GROUPS */
+  uint value[PC_LANE_GROUPS];    /* each group's index */
+  LaneI same[PC_LANE_GROUPS];    /* each group's lanes */
+} LaneGroups;
+
+PC_LANE_INLINE void lane_groups(LaneU index, LaneI m, LaneGroups* g) {
+#if PC_LANES == 1
+  /* One group: constants that reduce each group gather to its one load. */
+  g->index = g->value[0] = index;
+  g->same[0] = 1;
+  g->count = 1u;
+  return;
+#endif
+  g->index = lane_safe_index(index, m);
+  g->count = 0u;
+  for (uint left = pc_lane_bits(m); left != 0u; ++g->count) {
+    if (g->count == PC_LANE_GROUPS) {
+      g->count = PC_INVALID;
+      return;
+    }
+    uint v = pc_lane(g->index, pc_lowest_bit(left));
+    g->value[g->count] = v;
+    g->same[g->count] = g->index == v;
+    left &= ~pc_lane_bits(g->same[g->count]);
+  }
+}
+
+/* lane_gather_float and lane_gather_uint at the indices of g. */
+#define PC_GROUP_GATHER(S, L)                                                                             \
+  PC_LANE_INLINE L lane_group_gather_##S(__global const S* base, uint stride, const LaneGroups* g) {      \
+    if (g->count == PC_INVALID) return lane_gather_##S(base, stride, g->index);                          \
+    L r = (L)(base[g->value[0] * stride]);                                                                \
+    for (uint k = 1u; k < g->count; ++k) r = select(r, (L)(base[g->value[k] * stride]), g->same[k]);      \
+    return r;                                                                                             \
+  }
+PC_GROUP_GATHER(float, LaneF)
+PC_GROUP_GATHER(uint, LaneU)
+#undef PC_GROUP_GATHER
+#define lane_group_gather3(...) PC_GROUP_GATHER3_(__VA_ARGS__)
+#define PC_GROUP_GATHER3_(base, stride, g)                                                               \
+  lane3(lane_group_gather_float((base), stride, g), lane_group_gather_float((base) + 1, stride, g),       \
+        lane_group_gather_float((base) + 2, stride, g))
 
 /* Lane3 arithmetic, component by component: each is the float3 operation of one lane. */
 inline Lane3 lane3_splat(float3 v) { return lane3((LaneF)(v.x), (LaneF)(v.y), (LaneF)(v.z)); }

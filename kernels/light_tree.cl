@@ -24,7 +24,8 @@
 #define PC_ONE_MINUS_EPSILON 0x1.fffffep-1f
 
 /* Written once over the program's lanes (kernels/lanes.cl): each lane walks the tree on its own; where the
- * lanes' walks are at the same node (the top of the tree, or a tree of few lights) it is loaded once. */
+ * lanes' walks are at a few nodes (the top of the tree, or a tree of few lights), each is loaded once
+ * (lane_groups). */
 
 /* a's share of a + b: 1/2 when both are 0, all or nothing when the sum overflows. */
 PC_LANE_INLINE LaneF share_of_lanes(LaneF a, LaneF b) {
@@ -47,20 +48,14 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
   Lane3 lo, hi, axis;
   LaneF power, cos_o, cos_e;
   LaneI two_sided;
-  uint one = lane_uniform_index(index, m);
-  if (one != PC_INVALID) {
-    LightBvhNode nd = nodes[one];
-    lo = lane3_splat(nd.lo.xyz), hi = lane3_splat(nd.hi.xyz), axis = lane3_splat(nd.axis.xyz);
-    power = (LaneF)(nd.lo.w), cos_o = (LaneF)(nd.hi.w), cos_e = (LaneF)(nd.axis.w);
-    two_sided = (LaneI)(nd.two_sided != 0u ? -1 : 0);
-  } else {
-    LaneU at = lane_safe_index(index, m);
-    lo = lane_gather3(PC_FIELD_F(nodes, lo), at), hi = lane_gather3(PC_FIELD_F(nodes, hi), at);
-    axis = lane_gather3(PC_FIELD_F(nodes, axis), at);
-    power = lane_gather_float(PC_FIELD_AT(nodes, lo, 3), at), cos_o = lane_gather_float(PC_FIELD_AT(nodes, hi, 3), at);
-    cos_e = lane_gather_float(PC_FIELD_AT(nodes, axis, 3), at);
-    two_sided = lane_gather_uint(PC_FIELD_U(nodes, two_sided), at) != 0u;
-  }
+  LaneGroups at;
+  lane_groups(index, m, &at);
+  lo = lane_group_gather3(PC_FIELD_F(nodes, lo), &at), hi = lane_group_gather3(PC_FIELD_F(nodes, hi), &at);
+  axis = lane_group_gather3(PC_FIELD_F(nodes, axis), &at);
+  power = lane_group_gather_float(PC_FIELD_AT(nodes, lo, 3), &at);
+  cos_o = lane_group_gather_float(PC_FIELD_AT(nodes, hi, 3), &at);
+  cos_e = lane_group_gather_float(PC_FIELD_AT(nodes, axis, 3), &at);
+  two_sided = lane_group_gather_uint(PC_FIELD_U(nodes, two_sided), &at) != 0u;
   Lane3 half_extent = lane3_scale(lane3_sub(hi, lo), 0.5f);
   Lane3 d = lane3_sub(x, lane3_add(lo, half_extent));
   LaneF r2 = pc_dot(half_extent, half_extent), d2 = pc_dot(d, d);
@@ -97,10 +92,9 @@ PC_LANE_INLINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
 
 /* node[index].second, or .light, for the lanes in m (the others: the first such lane's). */
 PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, LaneU index, LaneI m, bool light) {
-  uint one = lane_uniform_index(index, m);
-  if (one != PC_INVALID) return (LaneU)(light ? nodes[one].light : nodes[one].second);
-  LaneU at = lane_safe_index(index, m);
-  return light ? lane_gather_uint(PC_FIELD_U(nodes, light), at) : lane_gather_uint(PC_FIELD_U(nodes, second), at);
+  LaneGroups at;
+  lane_groups(index, m, &at);
+  return light ? lane_group_gather_uint(PC_FIELD_U(nodes, light), &at) : lane_group_gather_uint(PC_FIELD_U(nodes, second), &at);
 }
 
 /* For the lanes in m: where target is PC_INVALID, chooses a light with u and stores its index in *chosen;

@@ -41,26 +41,28 @@ typedef struct {
 
 /* lights[index] for the lanes in m (the others get the first such lane's). */
 PC_LANE_INLINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
-  LaneU at = lane_safe_index(index, m);
-  out->emission = lane_gather3(PC_FIELD_F(lights, emission), at);
-  out->position = lane_gather3(PC_FIELD_F(lights, position), at);
-  out->direction = lane_gather3(PC_FIELD_F(lights, direction), at);
-  out->type = lane_gather_uint(PC_FIELD_U(lights, type), at);
-  out->prim = lane_gather_uint(PC_FIELD_U(lights, prim), at);
-  out->slot = lane_gather_uint(PC_FIELD_U(lights, slot), at);
-  out->area = lane_gather_float(PC_FIELD_F(lights, area), at);
-  out->cos_inner = lane_gather_float(PC_FIELD_F(lights, cos_inner), at);
-  out->cos_outer = lane_gather_float(PC_FIELD_F(lights, cos_outer), at);
+  LaneGroups at;
+  lane_groups(index, m, &at);
+  out->emission = lane_group_gather3(PC_FIELD_F(lights, emission), &at);
+  out->position = lane_group_gather3(PC_FIELD_F(lights, position), &at);
+  out->direction = lane_group_gather3(PC_FIELD_F(lights, direction), &at);
+  out->type = lane_group_gather_uint(PC_FIELD_U(lights, type), &at);
+  out->prim = lane_group_gather_uint(PC_FIELD_U(lights, prim), &at);
+  out->slot = lane_group_gather_uint(PC_FIELD_U(lights, slot), &at);
+  out->area = lane_group_gather_float(PC_FIELD_F(lights, area), &at);
+  out->cos_inner = lane_group_gather_float(PC_FIELD_F(lights, cos_inner), &at);
+  out->cos_outer = lane_group_gather_float(PC_FIELD_F(lights, cos_outer), &at);
 }
 
 /* The primitives (vertices a, b, c; a sphere's centre a and radius b.x) at the slots of the lanes in m. */
 PC_LANE_INLINE void gather_primitive_shapes(__global const Primitive* prims, LaneU slot, LaneI m, Lane3* a, Lane3* b, Lane3* c,
                                     LaneI* sphere) {
-  LaneU at = lane_safe_index(slot, m);
-  *a = lane_gather3(PC_FIELD_F(prims, a), at);
-  *b = lane_gather3(PC_FIELD_F(prims, b), at);
-  *c = lane_gather3(PC_FIELD_F(prims, c), at);
-  *sphere = m & (lane_gather_uint(PC_FIELD_U_AT(prims, b, 3), at) == PC_PRIM_SPHERE); /* prim_kind_of */
+  LaneGroups at;
+  lane_groups(slot, m, &at);
+  *a = lane_group_gather3(PC_FIELD_F(prims, a), &at);
+  *b = lane_group_gather3(PC_FIELD_F(prims, b), &at);
+  *c = lane_group_gather3(PC_FIELD_F(prims, c), &at);
+  *sphere = m & (lane_group_gather_uint(PC_FIELD_U_AT(prims, b, 3), &at) == PC_PRIM_SPHERE); /* prim_kind_of */
 }
 
 inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny, Lane3 y, Lane3 x) {

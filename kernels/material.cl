@@ -40,19 +40,20 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
 inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
                                        const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
   /* Fields a program's material types do not read are dead code here, and their gathers with them. */
-  LaneU at = lane_safe_index(material, m);
+  LaneGroups at; /* a scene has few materials */
+  lane_groups(material, m, &at);
   __global const Material* all = sc->materials;
   MaterialLanes out;
-  out.type = lane_gather_uint(PC_FIELD_U(all, type), at);
-  out.color = lane_gather3(PC_FIELD_F(all, color), at);
-  out.specular = lane_gather3(PC_FIELD_F(all, specular), at);
-  out.k = lane_gather3(PC_FIELD_F(all, k), at);
-  out.alpha = lane_gather_float(PC_FIELD_F(all, alpha), at);
-  out.sigma = lane_gather_float(PC_FIELD_F(all, sigma), at);
-  out.exponent = lane_gather_float(PC_FIELD_F(all, exponent), at);
-  out.ior = lane_gather_float(PC_FIELD_F(all, ior), at);
+  out.type = lane_group_gather_uint(PC_FIELD_U(all, type), &at);
+  out.color = lane_group_gather3(PC_FIELD_F(all, color), &at);
+  out.specular = lane_group_gather3(PC_FIELD_F(all, specular), &at);
+  out.k = lane_group_gather3(PC_FIELD_F(all, k), &at);
+  out.alpha = lane_group_gather_float(PC_FIELD_F(all, alpha), &at);
+  out.sigma = lane_group_gather_float(PC_FIELD_F(all, sigma), &at);
+  out.exponent = lane_group_gather_float(PC_FIELD_F(all, exponent), &at);
+  out.ior = lane_group_gather_float(PC_FIELD_F(all, ior), &at);
 #ifdef PC_HAS_TEXTURES
-  LaneU texture = lane_gather_uint(PC_FIELD_U(all, color_texture), at);
+  LaneU texture = lane_group_gather_uint(PC_FIELD_U(all, color_texture), &at);
   LaneI textured = m & (texture != PC_INVALID);
   PC_EACH_LANE(j, pc_lane_bits(textured)) {
     Surface one;
