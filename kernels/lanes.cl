@@ -173,8 +173,7 @@ PC_LANE_INLINE void lane_groups(LaneU index, LaneI m, LaneGroups* g) {
   g->index = g->value[0] = index;
   g->same[0] = 1;
   g->count = 1u;
-  return;
-#endif
+#else
   g->index = lane_safe_index(index, m);
   g->count = 0u;
   for (uint left = pc_lane_bits(m); left != 0u; ++g->count) {
@@ -187,6 +186,7 @@ PC_LANE_INLINE void lane_groups(LaneU index, LaneI m, LaneGroups* g) {
     g->same[g->count] = g->index == v;
     left &= ~pc_lane_bits(g->same[g->count]);
   }
+#endif
 }
 
 /* lane_gather_float and lane_gather_uint at the indices of g. */
