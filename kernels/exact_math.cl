@@ -379,6 +379,15 @@ inline PC_OVL int pc_any_(int m) { return m != 0; }
   PC_EM_ERF(T, I, U)
 PC_EM_ANY(int2)
 PC_EM_ANY(int3)
+#if defined(__clang__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
+/* x86 CPUs with AVX-512 (PoCL, Intel's CPU runtime): a mask of 4, 8 or 16 lanes (-1 or 0 each) as the bits
+ * of its sign bits, which the compiler takes straight from the comparison's mask register (one kmov); also
+ * kernels/lanes.cl's pc_lane_bits. */
+#define PC_AVX512_MASKS 1
+inline PC_OVL int pc_any_(int4 m) { return __builtin_ia32_cvtd2mask128(m) != 0; }
+inline PC_OVL int pc_any_(int8 m) { return __builtin_ia32_cvtd2mask256(m) != 0; }
+inline PC_OVL int pc_any_(int16 m) { return __builtin_ia32_cvtd2mask512(m) != 0; }
+#else
 /* Masks of 4, 8 and 16 lanes (-1 or 0 each) narrowed to bytes and read as one or two integers: a few vector
  * instructions, where PoCL's any() is a loop over the lanes (it took a tenth of the 16-lane path kernel's
  * time). */
@@ -388,6 +397,7 @@ inline PC_OVL int pc_any_(int16 m) {
   ulong2 b = as_ulong2(convert_char16(m));
   return (b.x | b.y) != 0ul;
 }
+#endif
 PC_EM_ALL(float, int, uint, )
 PC_EM_ALL(float2, int2, uint2, 2)
 PC_EM_ALL(float3, int3, uint3, 3)

@@ -30,12 +30,19 @@ inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi
 /* The bits of 8 lanes given as bytes 0 or 1: the multiplication puts byte j's bit into bit 56 + j (the
  * partial products land on distinct bits, so nothing carries). Fewer instructions than OR-ing the lanes'
  * bit values together, on the critical path of every BVH node. */
+#ifdef PC_AVX512_MASKS
+/* The sign bits (exact_math.cl): one kmov, where the form below is five instructions on the critical path
+ * of every node. */
+inline PC_OVL uint pc_lane_bits(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
+inline PC_OVL uint pc_lane_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+#else
 inline uint pc_bits_of_bytes_(ulong bytes) { return (uint)((bytes * 0x0102040810204080ul) >> 56); }
 inline PC_OVL uint pc_lane_bits(int8 m) { return pc_bits_of_bytes_(as_ulong(convert_uchar8(m & 1))); }
 inline PC_OVL uint pc_lane_bits(int16 m) {
   ulong2 b = as_ulong2(convert_uchar16(m & 1));
   return pc_bits_of_bytes_(b.x) | pc_bits_of_bytes_(b.y) << 8;
 }
+#endif
 /* The index of the lowest bit set in x (x != 0): a form that compilers turn into one count of trailing zeros
  * (OpenCL 1.2 has no ctz). */
 inline uint pc_lowest_bit(uint x) { return popcount(~x & (x - 1u)); }
