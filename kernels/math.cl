@@ -45,11 +45,17 @@ inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
   inline PC_OVL F luminance_lanes(V3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }          \
   inline PC_OVL F power_heuristic(F pdf_a, F pdf_b) {                                                     \
     F a = pdf_a * pdf_a, b = pdf_b * pdf_b;                                                               \
+    I squares = (a + b > 0.0f) & isfinite(a + b);                                                         \
+    F weight = a / (a + b);                                                                               \
     /* Where the squares overflowed (a light sampled from 1e18 away has a pdf of 1e36: inf / inf was      \
-     * NaN) or underflowed: the same weight from the ratio of the pdfs. */                                \
-    F r = pdf_b / pdf_a;                                                                                  \
-    F from_ratio = select(1.0f / (1.0f + r * r), (F)(0.0f), !(pdf_a > 0.0f));                             \
-    return select(from_ratio, a / (a + b), (a + b > 0.0f) & isfinite(a + b));                            \
+     * NaN) or underflowed: the same weight from the ratio of the pdfs (rare: its two divisions only      \
+     * where a lane needs them). */                                                                       \
+    if (pc_any_(!squares)) {                                                                              \
+      F r = pdf_b / pdf_a;                                                                                \
+      F from_ratio = select(1.0f / (1.0f + r * r), (F)(0.0f), !(pdf_a > 0.0f));                           \
+      weight = select(from_ratio, weight, squares);                                                       \
+    }                                                                                                     \
+    return weight;                                                                                        \
   }
 PC_MATH_LANES(lane3f, float, int)
 PC_MATH_LANES(lane3f8, float8, int8)
