@@ -31,8 +31,14 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
 #undef PC_PACKET_TYPES
 
 #define PC_PACKET_LANES(V3, F, I, U, N)                                                                   \
-  /* Component k (0 x, 1 y, 2 z) of v, k per lane. */                                                     \
-  inline PC_OVL F pc_axis_lanes(V3 v, U k) { return select(select(v.x, v.y, k == 1u), v.z, k == 2u); }    \
+  /* The components of v on a lane's axes kx, ky, kz (ray_precompute's: kx = kz + 1, ky = kz + 2, mod 3) \
+   * from the three masks kz == 0, 1, 2: three masks for the six selections, where the axes' own        \
+   * comparisons were six (and spilled mask registers in packet_leaf's loop). */                         \
+  inline PC_OVL void pc_permute_lanes(V3 v, I z_is_x, I z_is_y, I z_is_z, F* x, F* y, F* z) {             \
+    *x = select(select(v.x, v.y, z_is_x), v.z, z_is_y);                                                   \
+    *y = select(select(v.x, v.y, z_is_z), v.z, z_is_x);                                                   \
+    *z = select(select(v.x, v.y, z_is_y), v.z, z_is_z);                                                   \
+  }                                                                                                       \
   /* Lane j of the packet as a single ray (its nearest hit so far as tmax), and its hit. */              \
   inline PC_OVL Ray packet_ray_lane(const RayPacket##N* r, uint j, const HitPacket##N* h, Hit* hit) {     \
     Ray ray;                                                                                              \
@@ -123,10 +129,12 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
   }                                                                                                       \
   /* The packet's active lanes against a leaf reference's blocks; returns the lanes whose hit changed. */ \
   inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,                     \
-                              __global const Primitive* prims, uint ref, const RayPacket##N* r, U kx, U ky, U kz, \
+                              __global const Primitive* prims, uint ref, const RayPacket##N* r, U kz,     \
                               F sx, F sy, F sz, I active, HitPacket##N* h) {                              \
     uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;                                    \
-    F okx = pc_axis_lanes(r->o, kx), oky = pc_axis_lanes(r->o, ky), okz = pc_axis_lanes(r->o, kz);        \
+    I z_is_x = kz == 0u, z_is_y = kz == 1u, z_is_z = kz == 2u;                                            \
+    F okx, oky, okz;                                                                                      \
+    pc_permute_lanes(r->o, z_is_x, z_is_y, z_is_z, &okx, &oky, &okz);                                     \
     I changed = (I)(0);                                                                                   \
     for (uint bi = 0u; bi < (count + 3u) / 4u; ++bi) {                                                    \
       __global const LeafBlock* b = blocks + first + bi;                                                  \
@@ -141,13 +149,16 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
           continue;                                                                                       \
         }                                                                                                 \
         /* The vertices' coordinates on each lane's axes: the single-ray test's (a[kx] - o[kx]) etc. */   \
-        V3 a = lane3((F)(c[i]), (F)(c[4u + i]), (F)(c[8u + i]));                                          \
-        V3 bb = lane3((F)(c[12u + i]), (F)(c[16u + i]), (F)(c[20u + i]));                                 \
-        V3 cc = lane3((F)(c[24u + i]), (F)(c[28u + i]), (F)(c[32u + i]));                                 \
-        F Akz = pc_axis_lanes(a, kz) - okz, Bkz = pc_axis_lanes(bb, kz) - okz, Ckz = pc_axis_lanes(cc, kz) - okz; \
-        F Ax = (pc_axis_lanes(a, kx) - okx) + sx * Akz, Ay = (pc_axis_lanes(a, ky) - oky) + sy * Akz;     \
-        F Bx = (pc_axis_lanes(bb, kx) - okx) + sx * Bkz, By = (pc_axis_lanes(bb, ky) - oky) + sy * Bkz;   \
-        F Cx = (pc_axis_lanes(cc, kx) - okx) + sx * Ckz, Cy = (pc_axis_lanes(cc, ky) - oky) + sy * Ckz;   \
+        F akx, aky, akz, bkx, bky, bkz, ckx, cky, ckz;                                                    \
+        pc_permute_lanes(lane3((F)(c[i]), (F)(c[4u + i]), (F)(c[8u + i])), z_is_x, z_is_y, z_is_z, &akx, &aky, &akz); \
+        pc_permute_lanes(lane3((F)(c[12u + i]), (F)(c[16u + i]), (F)(c[20u + i])), z_is_x, z_is_y, z_is_z, &bkx, \
+                         &bky, &bkz);                                                                     \
+        pc_permute_lanes(lane3((F)(c[24u + i]), (F)(c[28u + i]), (F)(c[32u + i])), z_is_x, z_is_y, z_is_z, &ckx, \
+                         &cky, &ckz);                                                                     \
+        F Akz = akz - okz, Bkz = bkz - okz, Ckz = ckz - okz;                                              \
+        F Ax = (akx - okx) + sx * Akz, Ay = (aky - oky) + sy * Akz;                                       \
+        F Bx = (bkx - okx) + sx * Bkz, By = (bky - oky) + sy * Bkz;                                       \
+        F Cx = (ckx - okx) + sx * Ckz, Cy = (cky - oky) + sy * Ckz;                                       \
         F U_ = Cx * By - Cy * Bx;                                                                         \
         F V_ = Ax * Cy - Ay * Cx;                                                                         \
         F W_ = Bx * Ay - By * Ax;                                                                         \
@@ -187,9 +198,9 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     I neg_x = inv_d.x < 0.0f, neg_y = inv_d.y < 0.0f, neg_z = inv_d.z < 0.0f;                             \
     F adx = fabs(r->d.x), ady = fabs(r->d.y), adz = fabs(r->d.z);                                         \
     U kz = select(select((U)(2u), (U)(1u), ady > adz), select((U)(2u), (U)(0u), adx > adz), adx > ady);   \
-    U kx = select(kz + 1u, (U)(0u), kz == 2u), ky = select(kx + 1u, (U)(0u), kx == 2u);                   \
-    F dz = pc_axis_lanes(r->d, kz);                                                                       \
-    F sx = -pc_axis_lanes(r->d, kx) / dz, sy = -pc_axis_lanes(r->d, ky) / dz, sz = 1.0f / dz;             \
+    F dkx, dky, dz;                                                                                       \
+    pc_permute_lanes(r->d, kz == 0u, kz == 1u, kz == 2u, &dkx, &dky, &dz);                                \
+    F sx = -dkx / dz, sy = -dky / dz, sz = 1.0f / dz;                                                     \
     I found = (I)(0);                                                                                     \
     uint stack[7 * PC_BVH_STACK];                                                                         \
     float stack_key[7 * PC_BVH_STACK];                                                                    \
@@ -201,7 +212,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     bool by_lane_ready = false;                                                                           \
     for (;;) {                                                                                            \
       if (ref & PC_BVH4_LEAF) {                                                                           \
-        I changed = packet_leaf(cut, blocks, prims, ref, r, kx, ky, kz, sx, sy, sz, lanes, h);            \
+        I changed = packet_leaf(cut, blocks, prims, ref, r, kz, sx, sy, sz, lanes, h);            \
         found |= changed;                                                                                 \
         if (any_hit) {                                                                                    \
           active &= !changed;                                                                             \
