@@ -337,7 +337,7 @@ __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut,
   int4 candidate = ~outside & (det != 0.0f) & ~before_tmin & (t <= (float4)(hit->t)) &
                    ((int4)(0, 1, 2, 3) < (int4)((int)b->count)) & (prim != (uint4)(ray->skip_prim));
   bool any_sphere = b->sphere_mask != 0u;
-  if (!any(candidate) && !any_sphere) return false;
+  if (!pc_any_(candidate) && !any_sphere) return false;
   float ts[4], us[4], vs[4];
   int ok[4];
   uint ps[4];

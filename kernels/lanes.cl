@@ -27,15 +27,14 @@ inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
 inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
 inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
 
-/* The bits of 8 lanes given as bytes 0 or 1: the multiplication puts byte j's bit into bit 56 + j (the
- * partial products land on distinct bits, so nothing carries). Fewer instructions than OR-ing the lanes'
- * bit values together, on the critical path of every BVH node. */
+/* A mask of 8 or 16 lanes as bits, on the critical path of every BVH node. */
 #ifdef PC_AVX512_MASKS
-/* The sign bits (exact_math.cl): one kmov, where the form below is five instructions on the critical path
- * of every node. */
+/* The sign bits (exact_math.cl): one kmov, where the form below is five instructions. */
 inline PC_OVL uint pc_lane_bits(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
 inline PC_OVL uint pc_lane_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
 #else
+/* The lanes as bytes 0 or 1: the multiplication puts byte j's bit into bit 56 + j (the partial products
+ * land on distinct bits, so nothing carries). Fewer instructions than OR-ing the lanes' bit values. */
 inline uint pc_bits_of_bytes_(ulong bytes) { return (uint)((bytes * 0x0102040810204080ul) >> 56); }
 inline PC_OVL uint pc_lane_bits(int8 m) { return pc_bits_of_bytes_(as_ulong(convert_uchar8(m & 1))); }
 inline PC_OVL uint pc_lane_bits(int16 m) {
