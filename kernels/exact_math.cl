@@ -380,13 +380,16 @@ inline PC_OVL int pc_any_(int m) { return m != 0; }
 PC_EM_ANY(int2)
 PC_EM_ANY(int3)
 #if defined(__clang__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
-/* x86 CPUs with AVX-512 (PoCL, Intel's CPU runtime): a mask of 4, 8 or 16 lanes (-1 or 0 each) as the bits
- * of its sign bits, which the compiler takes straight from the comparison's mask register (one kmov); also
+/* x86 CPUs with AVX-512 (PoCL, Intel's CPU runtime): a mask of 4, 8 or 16 lanes (-1 or 0 each) as its sign
+ * bits, which the compiler takes straight from the comparison's mask register (one kmov); also
  * kernels/lanes.cl's pc_lane_bits. */
 #define PC_AVX512_MASKS 1
-inline PC_OVL int pc_any_(int4 m) { return __builtin_ia32_cvtd2mask128(m) != 0; }
-inline PC_OVL int pc_any_(int8 m) { return __builtin_ia32_cvtd2mask256(m) != 0; }
-inline PC_OVL int pc_any_(int16 m) { return __builtin_ia32_cvtd2mask512(m) != 0; }
+inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_cvtd2mask128(m); }
+inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
+inline PC_OVL uint pc_sign_bits_(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
+inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
+inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
 #else
 /* Masks of 4, 8 and 16 lanes (-1 or 0 each) narrowed to bytes and read as one or two integers: a few vector
  * instructions, where PoCL's any() is a loop over the lanes (it took a tenth of the 16-lane path kernel's

@@ -30,8 +30,8 @@ inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi
 /* A mask of 8 or 16 lanes as bits, on the critical path of every BVH node. */
 #ifdef PC_AVX512_MASKS
 /* The sign bits (exact_math.cl): one kmov, where the form below is five instructions. */
-inline PC_OVL uint pc_lane_bits(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
-inline PC_OVL uint pc_lane_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+inline PC_OVL uint pc_lane_bits(int8 m) { return pc_sign_bits_(m); }
+inline PC_OVL uint pc_lane_bits(int16 m) { return pc_sign_bits_(m); }
 #else
 /* The lanes as bytes 0 or 1: the multiplication puts byte j's bit into bit 56 + j (the partial products
  * land on distinct bits, so nothing carries). Fewer instructions than OR-ing the lanes' bit values. */

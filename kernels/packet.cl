@@ -212,7 +212,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     bool by_lane_ready = false;                                                                           \
     for (;;) {                                                                                            \
       if (ref & PC_BVH4_LEAF) {                                                                           \
-        I changed = packet_leaf(cut, blocks, prims, ref, r, kz, sx, sy, sz, lanes, h);            \
+        I changed = packet_leaf(cut, blocks, prims, ref, r, kz, sx, sy, sz, lanes, h);                    \
         found |= changed;                                                                                 \
         if (any_hit) {                                                                                    \
           active &= !changed;                                                                             \
