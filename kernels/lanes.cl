@@ -155,11 +155,48 @@ PC_LANE_INLINE uint16 lane_gather_uint(__global const uint* base, uint stride, u
 }
 #endif
 
-/* The x, y, z at base[0, 1, 2] (a float4 or three floats of a struct) of every lane. */
-#define lane_gather3(...) PC_GATHER3_(__VA_ARGS__)
-#define PC_GATHER3_(base, stride, index)                                                                 \
-  lane3(lane_gather_float((base), stride, index), lane_gather_float((base) + 1, stride, index),           \
-        lane_gather_float((base) + 2, stride, index))
+/* The float4 at base[index * stride] of every lane (a float4 member of an array of structs:
+ * PC_FIELD_F4(array, member), index) as its xyz and w: one 16-byte load per lane and a transpose by
+ * shuffles, where four lane_gather_float are a load and an insert per lane and word. Every index must be
+ * valid (lane_safe_index). */
+#define PC_FIELD_F4(array, member) (__global const float4*)&(array)->member, (uint)(sizeof(*(array)) / 16u)
+#if PC_LANES == 1
+PC_LANE_INLINE void lane_gather4(__global const float4* base, uint stride, uint index, Lane3* xyz, float* w) {
+  float4 v = base[index * stride];
+  *xyz = v.xyz;
+  *w = v.w;
+}
+#elif PC_LANES == 8
+PC_LANE_INLINE void lane_gather4(__global const float4* base, uint stride, uint8 index, Lane3* xyz, float8* w) {
+  uint8 o = index * stride;
+  /* r0 .. r3: the float4s of lanes 0 1, 2 3, 4 5, 6 7 */
+  float8 r0 = (float8)(base[o.s0], base[o.s1]), r1 = (float8)(base[o.s2], base[o.s3]);
+  float8 r2 = (float8)(base[o.s4], base[o.s5]), r3 = (float8)(base[o.s6], base[o.s7]);
+  /* x and y, z and w of lanes 0-3 (from r0 r1) and 4-7 (r2 r3) */
+  uint8 xy = (uint8)(0u, 4u, 8u, 12u, 1u, 5u, 9u, 13u), zw = xy + 2u;
+  float8 xy_lo = shuffle2(r0, r1, xy), zw_lo = shuffle2(r0, r1, zw);
+  float8 xy_hi = shuffle2(r2, r3, xy), zw_hi = shuffle2(r2, r3, zw);
+  uint8 first = (uint8)(0u, 1u, 2u, 3u, 8u, 9u, 10u, 11u), second = first + 4u;
+  *xyz = lane3(shuffle2(xy_lo, xy_hi, first), shuffle2(xy_lo, xy_hi, second), shuffle2(zw_lo, zw_hi, first));
+  *w = shuffle2(zw_lo, zw_hi, second);
+}
+#else
+PC_LANE_INLINE void lane_gather4(__global const float4* base, uint stride, uint16 index, Lane3* xyz, float16* w) {
+  uint16 o = index * stride;
+  /* r0 .. r3: the float4s of lanes 0-3, 4-7, 8-11, 12-15 */
+  float16 r0 = (float16)(base[o.s0], base[o.s1], base[o.s2], base[o.s3]);
+  float16 r1 = (float16)(base[o.s4], base[o.s5], base[o.s6], base[o.s7]);
+  float16 r2 = (float16)(base[o.s8], base[o.s9], base[o.sa], base[o.sb]);
+  float16 r3 = (float16)(base[o.sc], base[o.sd], base[o.se], base[o.sf]);
+  /* x and y, z and w of lanes 0-7 (from r0 r1) and 8-15 (r2 r3) */
+  uint16 xy = (uint16)(0u, 4u, 8u, 12u, 16u, 20u, 24u, 28u, 1u, 5u, 9u, 13u, 17u, 21u, 25u, 29u), zw = xy + 2u;
+  float16 xy_lo = shuffle2(r0, r1, xy), zw_lo = shuffle2(r0, r1, zw);
+  float16 xy_hi = shuffle2(r2, r3, xy), zw_hi = shuffle2(r2, r3, zw);
+  uint16 first = (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 16u, 17u, 18u, 19u, 20u, 21u, 22u, 23u), second = first + 8u;
+  *xyz = lane3(shuffle2(xy_lo, xy_hi, first), shuffle2(xy_lo, xy_hi, second), shuffle2(zw_lo, zw_hi, first));
+  *w = shuffle2(zw_lo, zw_hi, second);
+}
+#endif
 
 /* The lanes of m grouped by index, when the lanes hold at most PC_LANE_GROUPS distinct indices (the light
  * each lane chose: a scene has few; the primitive it samples): a gather over the groups is a load and a

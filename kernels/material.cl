@@ -71,11 +71,8 @@ inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, cons
 #ifdef PC_HAS_VERTEX_COLORS
   LaneI colored = m & ((shading->flags & PC_FLAG_VERTEX_COLORS) != 0u);
   if (pc_any_(colored)) {
-    __global const float* colors = (__global const float*)sc->colors; /* 3 float4 per primitive */
-    LaneU prim = lane_safe_index(s->prim, colored);
-    Lane3 blend = lane3_add(lane3_add(lane3_scale(lane_gather3(colors, 12u, prim), 1.0f - hit->u - hit->v),
-                                      lane3_scale(lane_gather3(colors + 4, 12u, prim), hit->u)),
-                            lane3_scale(lane_gather3(colors + 8, 12u, prim), hit->v));
+    Lane3 blend = vertex_blend_lanes(sc->colors, lane_safe_index(s->prim, colored), 1.0f - hit->u - hit->v, hit->u,
+                                     hit->v);
     out.color = lane3_select(out.color, lane3_mul(out.color, blend), colored);
   }
 #endif

@@ -72,16 +72,30 @@ typedef struct {
   LaneU material, light, flags;
 } ShadingLanes;
 
+/* A vertex attribute of 3 float4 per primitive (smooth normals, vertex colours) at barycentric (b0, u, v)
+ * of each lane's primitive: (a b0 + b u) + c v. */
+inline Lane3 vertex_blend_lanes(__global const float4* vertices, LaneU prim, LaneF b0, LaneF u, LaneF v) {
+  Lane3 a, b, c;
+  LaneF unused;
+  lane_gather4(vertices, 3u, prim, &a, &unused);
+  lane_gather4(vertices + 1, 3u, prim, &b, &unused);
+  lane_gather4(vertices + 2, 3u, prim, &c, &unused);
+  return lane3_add(lane3_add(lane3_scale(a, b0), lane3_scale(b, u)), lane3_scale(c, v));
+}
+
 /* The surfaces at the hits of trace_scene (trace_lanes) of the lanes in m (the others get the first such
  * lane's), in the device's coordinates. A point on a sphere is re-projected onto it (pbrt-v4): its error is
  * then a few ulps of the offset from the centre. */
 inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
                                         ShadingLanes* shading) {
   LaneU slot = lane_safe_index(hit->slot, m);
-  Lane3 a = lane_gather3(PC_FIELD_F(sc->prims, a), slot), b = lane_gather3(PC_FIELD_F(sc->prims, b), slot);
-  Lane3 c = lane_gather3(PC_FIELD_F(sc->prims, c), slot);
+  Lane3 a, b, c;
+  LaneF a_w, b_w, c_w;
+  lane_gather4(PC_FIELD_F4(sc->prims, a), slot, &a, &a_w);
+  lane_gather4(PC_FIELD_F4(sc->prims, b), slot, &b, &b_w);
+  lane_gather4(PC_FIELD_F4(sc->prims, c), slot, &c, &c_w);
   SurfaceLanes s;
-  s.prim = lane_gather_uint(PC_FIELD_U_AT(sc->prims, a, 3), slot); /* prim_index_of */
+  s.prim = pc_bits_(a_w); /* prim_index_of: the bits of a.w */
   shading->material = lane_gather_uint(PC_FIELD_U(sc->shading, material), s.prim);
   shading->light = lane_gather_uint(PC_FIELD_U(sc->shading, light), s.prim);
   shading->flags = lane_gather_uint(PC_FIELD_U(sc->shading, flags), s.prim);
@@ -90,7 +104,7 @@ inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray
   LaneF b0 = 1.0f - hit->u - hit->v;
   LaneI sphere = (LaneI)(0);
 #ifdef PC_HAS_SPHERES
-  sphere = m & (lane_gather_uint(PC_FIELD_U_AT(sc->prims, b, 3), slot) == PC_PRIM_SPHERE); /* prim_kind_of */
+  sphere = m & (pc_bits_(b_w) == PC_PRIM_SPHERE); /* prim_kind_of: the bits of b.w */
 #endif
   if (pc_any_(m & !sphere)) {
     Lane3 pa = lane3_scale(a, b0), pb = lane3_scale(b, hit->u), pc = lane3_scale(c, hit->v);
@@ -117,11 +131,7 @@ inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray
 #ifdef PC_HAS_SMOOTH_NORMALS
   LaneI smooth = m & !sphere & ((shading->flags & PC_FLAG_SMOOTH) != 0u);
   if (pc_any_(smooth)) {
-    __global const float* normals = (__global const float*)sc->normals; /* 3 float4 per primitive */
-    LaneU prim = lane_safe_index(s.prim, smooth);
-    Lane3 n = lane3_add(lane3_add(lane3_scale(lane_gather3(normals, 12u, prim), b0),
-                                  lane3_scale(lane_gather3(normals + 4, 12u, prim), hit->u)),
-                        lane3_scale(lane_gather3(normals + 8, 12u, prim), hit->v));
+    Lane3 n = vertex_blend_lanes(sc->normals, lane_safe_index(s.prim, smooth), b0, hit->u, hit->v);
     LaneF len = pc_length(n);
     Lane3 unit = lane3_div(lane3_select(n, lane3_neg(n), pc_dot(n, s.ng) < 0.0f), len);
     s.ns = lane3_select(s.ns, unit, smooth & (len > 0.0f));

@@ -3,6 +3,7 @@
 // and multiplying the material's colour on the device exactly as an analytic furnace predicts.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 
 #include <glm/geometric.hpp>
@@ -195,4 +196,15 @@ TEST(VertexColors, DeviceMultipliesTheMaterialColor) {
     }
   EXPECT_LE(outliers, 1u);  // 384 values at 4.5 standard errors: 0.003 expected by chance
   EXPECT_NEAR(sum, expected_sum, 4 * std::sqrt(variance));
+  // The colours gathered for 8 and 16 lanes at once (kernels/surface.cl vertex_blend_lanes) are one lane's.
+  RenderOptions one_lane = opt;
+  one_lane.lanes = 1;
+  const std::vector<float> reference = render(test_device(), device, one_lane).film.mean;
+  for (uint32_t lanes : {8u, 16u}) {
+    RenderOptions wide = opt;
+    wide.lanes = lanes;
+    const std::vector<float> pixels = render(test_device(), device, wide).film.mean;
+    ASSERT_EQ(pixels.size(), reference.size());
+    EXPECT_EQ(std::memcmp(pixels.data(), reference.data(), pixels.size() * sizeof(float)), 0) << lanes << " lanes";
+  }
 }
