@@ -201,6 +201,16 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     F dkx, dky, dz;                                                                                       \
     pc_permute_lanes(r->d, kz == 0u, kz == 1u, kz == 2u, &dkx, &dky, &dz);                                \
     F sx = -dkx / dz, sy = -dky / dz, sz = 1.0f / dz;                                                     \
+    /* A subtree that few of the lanes enter is traced lane by lane (the same hits): at most a quarter    \
+     * of them where their rays point into one octant (camera rays, shadow rays towards a light: they go  \
+     * on together), three quarters where not (bounce rays: below the top of a large tree they enter few  \
+     * of the same boxes, and a packet does the work of all its lanes at every node). Three quarters for  \
+     * every packet: the terrain at 16 lanes +9.6 %, packets of 8 camera rays -11 %; a quarter for every  \
+     * packet: bounce rays at 8 lanes 3.1 against 3.8 M/s lane by lane (docs/benchmarks-notes.md). */     \
+    uint all = pc_lane_bits(active), bx = pc_lane_bits(active & neg_x);                                   \
+    uint by = pc_lane_bits(active & neg_y), bz = pc_lane_bits(active & neg_z);                            \
+    bool one_octant = (bx == 0u || bx == all) && (by == 0u || by == all) && (bz == 0u || bz == all);      \
+    uint by_lane_quarters = one_octant ? 1u : 3u;                                                         \
     I found = (I)(0);                                                                                     \
     uint stack[7 * PC_BVH_STACK];                                                                         \
     float stack_key[7 * PC_BVH_STACK];                                                                    \
@@ -256,12 +266,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
         lanes = active & (stack_entry[sp] <= h->t);                                                       \
         if (!pc_any_(lanes)) continue;                                                                    \
         uint bits = pc_lane_bits(lanes);                                                                  \
-        if (4u * popcount(bits) > 3u * N || (stack[sp] & PC_BVH4_LEAF)) break;                            \
-        /* Three quarters of the lanes or fewer: each alone through the subtree (the same hits).          \
-         * Below the top of a large tree incoherent rays enter few of the same boxes, and a packet does   \
-         * the work of all its lanes at every node: 3.1 against 3.8 M bounce rays/s at 8 lanes with a     \
-         * quarter; three quarters rather than a quarter: +10 % on the terrain at 16 lanes, the same on   \
-         * the Cornell box (docs/benchmarks-notes.md). */                                                 \
+        if (4u * popcount(bits) > by_lane_quarters * N || (stack[sp] & PC_BVH4_LEAF)) break;              \
         if (!by_lane_ready) packet_by_lane(r, inv_d, kz, sx, sy, sz, &by_lane);                           \
         by_lane_ready = true;                                                                             \
         uint changed = packet_subtrees_by_lane(cut, nodes, blocks, prims, stack[sp], &by_lane, bits, any_hit, h); \
