@@ -328,15 +328,18 @@ __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut,
   float4 W = Bx * Ay - By * Ax;
   int4 outside = ((U < 0.0f) | (V < 0.0f) | (W < 0.0f)) & ((U > 0.0f) | (V > 0.0f) | (W > 0.0f));
   float4 det = U + V + W;
+  uint4 prim = vload4(0, b->prim);
+  int4 crossed = ~outside & (det != 0.0f) & ((int4)(0, 1, 2, 3) < (int4)((int)b->count)) &
+                 (prim != (uint4)(ray->skip_prim));
+  bool any_sphere = b->sphere_mask != 0u;
+  /* Most blocks: the ray crosses none of the triangles, and needs no distance (nor its division). */
+  if (!pc_any_(crossed) && !any_sphere) return false;
   float4 Az = rp->sz * Akz, Bz = rp->sz * Bkz, Cz = rp->sz * Ckz;
   float4 T = U * Az + V * Bz + W * Cz;
   int4 before_tmin = select(T <= ray->tmin * det, T >= ray->tmin * det, det < 0.0f);
   float4 inv_det = 1.0f / det;
   float4 t = T * inv_det;
-  uint4 prim = vload4(0, b->prim);
-  int4 candidate = ~outside & (det != 0.0f) & ~before_tmin & (t <= (float4)(hit->t)) &
-                   ((int4)(0, 1, 2, 3) < (int4)((int)b->count)) & (prim != (uint4)(ray->skip_prim));
-  bool any_sphere = b->sphere_mask != 0u;
+  int4 candidate = crossed & ~before_tmin & (t <= (float4)(hit->t));
   if (!pc_any_(candidate) && !any_sphere) return false;
   float ts[4], us[4], vs[4];
   int ok[4];
