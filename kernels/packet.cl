@@ -253,6 +253,7 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
             stack_entry[j] = stack_entry[j - 1];                                                          \
             --j;                                                                                          \
           }                                                                                               \
+          prefetch_subtree(nodes, blocks, child);                                                         \
           stack[j] = child;                                                                               \
           stack_key[j] = d;                                                                               \
           stack_entry[j] = e;                                                                             \
