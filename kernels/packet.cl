@@ -30,6 +30,18 @@ PC_PACKET_TYPES(lane3f8, float8, uint8, 8)
 PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
 #undef PC_PACKET_TYPES
 
+/* Element index[j] of table for each lane j: one vpermps where clang targets AVX-512 (PoCL on such CPUs;
+ * OpenCL's shuffle() with a variable mask is a loop over the elements there). Elsewhere packet_leaf
+ * selects with masks instead: the same values, so the same bits. */
+#if defined(__clang__) && defined(__AVX512F__)
+#define PC_TABLE_LOOKUP
+inline float16 pc_table_lookup(float16 table, int16 index) { return __builtin_ia32_permvarsf512(table, index); }
+inline PC_OVL void pc_narrow(float16 v, float16* out) { *out = v; }
+inline PC_OVL void pc_narrow(float16 v, float8* out) { *out = v.lo; }
+inline PC_OVL int16 pc_widen(uint16 v) { return as_int16(v); }
+inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
+#endif
+
 #define PC_PACKET_LANES(V3, F, I, U, N)                                                                   \
   /* The components of v on a lane's axes kx, ky, kz (ray_precompute's: kx = kz + 1, ky = kz + 2, mod 3) \
    * from the three masks kz == 0, 1, 2: three masks for the six selections, where the axes' own        \
@@ -38,6 +50,22 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
     *x = select(select(v.x, v.y, z_is_x), v.z, z_is_y);                                                   \
     *y = select(select(v.x, v.y, z_is_z), v.z, z_is_x);                                                   \
     *z = select(select(v.x, v.y, z_is_y), v.z, z_is_z);                                                   \
+  }                                                                                                       \
+  /* How packet_leaf finds a block's vertex coordinates on each lane's axes: the masks kz == 0, 1, 2,     \
+   * and with PC_TABLE_LOOKUP each axis's place in a block's coordinates (x 0, y 4, z 8 floats on). */    \
+  typedef struct {                                                                                        \
+    I z_is_x, z_is_y, z_is_z;                                                                             \
+    int16 at_x, at_y, at_z;                                                                               \
+  } LaneAxes##N;                                                                                          \
+  inline PC_OVL LaneAxes##N lane_axes(U kz) {                                                             \
+    LaneAxes##N a;                                                                                        \
+    a.z_is_x = kz == 0u, a.z_is_y = kz == 1u, a.z_is_z = kz == 2u;                                        \
+    PC_LANE_AXES_AT                                                                                       \
+    return a;                                                                                             \
+  }                                                                                                       \
+  /* Vertex coordinates c[0], c[4], c[8] (x, y, z of one block lane) on each lane's axes kx, ky, kz. */   \
+  inline PC_OVL void block_vertex_on_axes(__global const float* c, const LaneAxes##N* a, F* x, F* y, F* z) { \
+    PC_BLOCK_VERTEX_ON_AXES(F)                                                                            \
   }                                                                                                       \
   /* Lane j of the packet as a single ray (its nearest hit so far as tmax), and its hit. */              \
   inline PC_OVL Ray packet_ray_lane(const RayPacket##N* r, uint j, const HitPacket##N* h, Hit* hit) {     \
@@ -132,9 +160,9 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
                               __global const Primitive* prims, uint ref, const RayPacket##N* r, U kz,     \
                               F sx, F sy, F sz, I active, HitPacket##N* h) {                              \
     uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;                                    \
-    I z_is_x = kz == 0u, z_is_y = kz == 1u, z_is_z = kz == 2u;                                            \
+    LaneAxes##N axes = lane_axes(kz);                                                                     \
     F okx, oky, okz;                                                                                      \
-    pc_permute_lanes(r->o, z_is_x, z_is_y, z_is_z, &okx, &oky, &okz);                                     \
+    pc_permute_lanes(r->o, axes.z_is_x, axes.z_is_y, axes.z_is_z, &okx, &oky, &okz);                      \
     I changed = (I)(0);                                                                                   \
     for (uint bi = 0u; bi < (count + 3u) / 4u; ++bi) {                                                    \
       __global const LeafBlock* b = blocks + first + bi;                                                  \
@@ -150,11 +178,9 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
         }                                                                                                 \
         /* The vertices' coordinates on each lane's axes: the single-ray test's (a[kx] - o[kx]) etc. */   \
         F akx, aky, akz, bkx, bky, bkz, ckx, cky, ckz;                                                    \
-        pc_permute_lanes(lane3((F)(c[i]), (F)(c[4u + i]), (F)(c[8u + i])), z_is_x, z_is_y, z_is_z, &akx, &aky, &akz); \
-        pc_permute_lanes(lane3((F)(c[12u + i]), (F)(c[16u + i]), (F)(c[20u + i])), z_is_x, z_is_y, z_is_z, &bkx, \
-                         &bky, &bkz);                                                                     \
-        pc_permute_lanes(lane3((F)(c[24u + i]), (F)(c[28u + i]), (F)(c[32u + i])), z_is_x, z_is_y, z_is_z, &ckx, \
-                         &cky, &ckz);                                                                     \
+        block_vertex_on_axes(c + i, &axes, &akx, &aky, &akz);                                             \
+        block_vertex_on_axes(c + 12u + i, &axes, &bkx, &bky, &bkz);                                       \
+        block_vertex_on_axes(c + 24u + i, &axes, &ckx, &cky, &ckz);                                       \
         F Akz = akz - okz, Bkz = bkz - okz, Ckz = ckz - okz;                                              \
         F Ax = (akx - okx) + sx * Akz, Ay = (aky - oky) + sy * Akz;                                       \
         F Bx = (bkx - okx) + sx * Bkz, By = (bky - oky) + sy * Bkz;                                       \
@@ -295,10 +321,28 @@ PC_PACKET_TYPES(lane3f16, float16, uint16, 16)
 #else
 #define PC_PACKET_CUTOUTS(N)
 #endif
+#ifdef PC_TABLE_LOOKUP
+/* kx = kz + 1 and ky = kz + 2 (mod 3), as in ray_precompute */
+#define PC_LANE_AXES_AT                                                                                   \
+  int16 z = pc_widen(kz), x = select(z + 1, (int16)(0), z == 2), y = select(x + 1, (int16)(0), x == 2); \
+  a.at_x = 4 * x, a.at_y = 4 * y, a.at_z = 4 * z;
+/* Sixteen floats from c on: the lane's x, y and z at 0, 4 and 8 (LeafBlock's ax ay az, or bx .., cx ..;
+ * from cx on the load runs on into the block's prim and counts, still inside it). */
+#define PC_BLOCK_VERTEX_ON_AXES(F)                                                                        \
+  float16 table = vload16(0, c);                                                                          \
+  pc_narrow(pc_table_lookup(table, a->at_x), x);                                                          \
+  pc_narrow(pc_table_lookup(table, a->at_y), y);                                                          \
+  pc_narrow(pc_table_lookup(table, a->at_z), z);
+#else
+#define PC_LANE_AXES_AT
+#define PC_BLOCK_VERTEX_ON_AXES(F) pc_permute_lanes(lane3((F)(c[0]), (F)(c[4]), (F)(c[8])), a->z_is_x, a->z_is_y, a->z_is_z, x, y, z);
+#endif
 PC_PACKET_LANES(lane3f8, float8, int8, uint8, 8)
 PC_PACKET_LANES(lane3f16, float16, int16, uint16, 16)
 #undef PC_PACKET_LANES
 #undef PC_PACKET_CUTOUTS
+#undef PC_LANE_AXES_AT
+#undef PC_BLOCK_VERTEX_ON_AXES
 
 /* rays[0 .. N) through the tree at node 0 as one packet, the lanes set in bits only: hits[j] (instance
  * PC_INVALID) and found[j] for each of those (pathcl rays' packets, the lane kernels' rays). */
