@@ -75,17 +75,17 @@ inline RayPrecomp ray_precompute(float3 d) {
   return p;
 }
 
-/* Robust slab test (pbrt-v4) of four or eight boxes at once (ray_boxes4, ray_boxes8), given by coordinate
- * (lo_x holds the boxes' lower x): the far distance is widened by 1 + 2 gamma(3) to cover rounding. The near and far planes
- * are chosen by the sign of inv_d (`negative`), not by comparing distances, so that the NaN of an
- * axis-parallel ray starting exactly on a slab plane (0 * inf) is skipped: comparisons rather than
- * fmin/fmax, as a NaN compares false (and they compile to plain min/max instructions). That axis then
- * does not limit the interval, and a ray lying in a box face counts as inside. An empty box (lo = +inf,
- * hi = -inf) is always missed. Returns each box's entry distance, or INFINITY when it is missed within
- * [tmin, tmax]. */
+/* Robust slab test (pbrt-v4) of four or eight boxes at once (ray_boxes_hit4, ray_boxes_hit8), given by
+ * coordinate (lo_x holds the boxes' lower x): the far distance is widened by 1 + 2 gamma(3) to cover
+ * rounding. The near and far planes are chosen by the sign of inv_d (`negative`), not by comparing
+ * distances, so that the NaN of an axis-parallel ray starting exactly on a slab plane (0 * inf) is
+ * skipped: comparisons rather than fmin/fmax, as a NaN compares false (and they compile to plain min/max
+ * instructions). That axis then does not limit the interval, and a ray lying in a box face counts as
+ * inside. An empty box (lo = +inf, hi = -inf) is always missed. */
 #define PC_DEFINE_SLAB(F, I)                                                                                    \
   /* Whether each box is hit within [tmin, tmax], from the near (nx, ny, nz) and far (fx, fy, fz) plane    \
-   * distances of each axis; *enter: its entry distance (of a missed box: any value). */                   \
+   * distances of each axis; *enter_out: its entry distance (of a missed box: any value). Also the packet  \
+   * traversal's, per lane (kernels/packet.cl). */                                                          \
   inline PC_OVL I slab_hits(F nx, F fx, F ny, F fy, F nz, F fz, F tmin, F tmax, F* enter_out) {             \
     F enter = tmin, exit = tmax;                                                                                     \
     enter = select(enter, nx, nx > enter);                                                                           \
@@ -96,13 +96,6 @@ inline RayPrecomp ray_precompute(float3 d) {
     exit = select(exit, fz, fz < exit);                                                                              \
     *enter_out = enter;                                                                                              \
     return enter <= exit * (1.0f + 2.0f * error_gamma(3));                                                           \
-  }                                                                                                                  \
-  /* The entry distance, or INFINITY for a miss within [tmin, tmax]. Also the packet traversal's, per lane   \
-   * (kernels/packet.cl). */                                                                                        \
-  inline PC_OVL F slab_entry(F nx, F fx, F ny, F fy, F nz, F fz, F tmin, F tmax) {                         \
-    F enter;                                                                                                         \
-    I hit = slab_hits(nx, fx, ny, fy, nz, fz, tmin, tmax, &enter);                                                  \
-    return select((F)(INFINITY), enter, hit);                                                                        \
   }
 PC_DEFINE_SLAB(float4, int4)
 PC_DEFINE_SLAB(float8, int8)
@@ -118,15 +111,18 @@ PC_DEFINE_SLAB(float16, int16)
     float##N lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;                                               \
     return slab_hits(negative.x ? hx : lx, negative.x ? lx : hx, negative.y ? hy : ly, negative.y ? ly : hy,         \
                      negative.z ? hz : lz, negative.z ? lz : hz, (float##N)(tmin), (float##N)(tmax), enter);         \
-  }                                                                                                                  \
-  inline float##N ray_boxes##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x,           \
-                               float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z) {           \
-    float##N enter;                                                                                                  \
-    int##N hit = ray_boxes_hit##N(o, inv_d, negative, tmin, tmax, lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter);      \
-    return select((float##N)(INFINITY), enter, hit);                                                                 \
   }
 PC_DEFINE_RAY_BOXES(4)
 PC_DEFINE_RAY_BOXES(8)
+#undef PC_DEFINE_RAY_BOXES
+
+/* Each of four boxes' entry distance, or INFINITY when it is missed within [tmin, tmax]. */
+inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
+                         float4 lo_z, float4 hi_x, float4 hi_y, float4 hi_z) {
+  float4 enter;
+  int4 hit = ray_boxes_hit4(o, inv_d, negative, tmin, tmax, lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter);
+  return select((float4)(INFINITY), enter, hit);
+}
 
 /* Watertight ray/triangle test. Edge functions of a shared edge are computed from the same sheared
  * vertex coordinates in both triangles, so a ray through the edge hits at least one of them. */

@@ -24,8 +24,13 @@ inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
 inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
 inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
 
-inline PC_OVL float pc_min_lanes(float2 x) { return fmin(x.x, x.y); }
-inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
+/* The least of the lanes of x, which holds no NaN: plain comparisons (vminps), where fmin's NaN rules
+ * cost a compare and a blend at every step. */
+inline PC_OVL float2 pc_min_of_numbers(float2 a, float2 b) { return select(a, b, b < a); }
+inline PC_OVL float4 pc_min_of_numbers(float4 a, float4 b) { return select(a, b, b < a); }
+inline PC_OVL float8 pc_min_of_numbers(float8 a, float8 b) { return select(a, b, b < a); }
+inline PC_OVL float pc_min_lanes(float2 x) { return x.y < x.x ? x.y : x.x; }
+inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
 
 /* A mask of 8 or 16 lanes as bits, on the critical path of every BVH node. */
 #ifdef PC_AVX512_MASKS
@@ -47,7 +52,7 @@ inline PC_OVL uint pc_lane_bits(int16 m) {
 inline uint pc_lowest_bit(uint x) { return popcount(~x & (x - 1u)); }
 #define PC_LANE_REDUCTIONS(F, I, U, N, BITS)                                                              \
   inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
-  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(fmin(x.lo, x.hi)); }
+  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
 PC_LANE_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
 PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
                    (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))

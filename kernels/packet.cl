@@ -260,13 +260,14 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
         for (uint c = 0u; c < 8u; ++c) {                                                                  \
           uint child = n->child[c];                                                                       \
           if (child == PC_INVALID) break; /* the used slots come first (scene/bvh_build.cpp) */          \
-          /* ray_boxes8's slab test, one box against each lane's ray. */                                  \
+          /* ray_boxes_hit8's slab test, one box against each lane's ray. */                              \
           F lx = (n->lo_x[c] - r->o.x) * inv_d.x, hx = (n->hi_x[c] - r->o.x) * inv_d.x;                   \
           F ly = (n->lo_y[c] - r->o.y) * inv_d.y, hy = (n->hi_y[c] - r->o.y) * inv_d.y;                   \
           F lz = (n->lo_z[c] - r->o.z) * inv_d.z, hz = (n->hi_z[c] - r->o.z) * inv_d.z;                   \
-          F enter = slab_entry(select(lx, hx, neg_x), select(hx, lx, neg_x), select(ly, hy, neg_y),        \
-                               select(hy, ly, neg_y), select(lz, hz, neg_z), select(hz, lz, neg_z), r->tmin, h->t); \
-          I in = lanes & (enter != (F)(INFINITY));                                                        \
+          F enter;                                                                                        \
+          I in = lanes & slab_hits(select(lx, hx, neg_x), select(hx, lx, neg_x), select(ly, hy, neg_y),    \
+                                   select(hy, ly, neg_y), select(lz, hz, neg_z), select(hz, lz, neg_z), r->tmin, \
+                                   h->t, &enter);                                                         \
           if (!pc_any_(in)) continue;                                                                     \
           /* Onto the stack, kept sorted far to near (by the nearest lane's entry) from where this node's \
            * entries start. */                                                                            \

@@ -35,10 +35,13 @@ __kernel void ray_box_test(__global const RayRecord* rays, __global const float*
   float mine = i % 4u == 0u ? e.s0 : i % 4u == 1u ? e.s1 : i % 4u == 2u ? e.s2 : e.s3;
   bool others_missed = all(select(e, (float4)(INFINITY), lane) == (float4)(INFINITY));
   int8 lane8 = (int8)(0, 1, 2, 3, 4, 5, 6, 7) == (int8)(i % 8u);
-  float8 e8 = ray_boxes8(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7],
-                         select((float8)(INFINITY), (float8)(lo.x), lane8), select((float8)(INFINITY), (float8)(lo.y), lane8),
-                         select((float8)(INFINITY), (float8)(lo.z), lane8), select((float8)(-INFINITY), (float8)(hi.x), lane8),
-                         select((float8)(-INFINITY), (float8)(hi.y), lane8), select((float8)(-INFINITY), (float8)(hi.z), lane8));
+  float8 enter8;
+  int8 hit8 = ray_boxes_hit8(vload3(0, r), rp.inv_d, rp.inv_d < 0.0f, r[3], r[7],
+                             select((float8)(INFINITY), (float8)(lo.x), lane8), select((float8)(INFINITY), (float8)(lo.y), lane8),
+                             select((float8)(INFINITY), (float8)(lo.z), lane8), select((float8)(-INFINITY), (float8)(hi.x), lane8),
+                             select((float8)(-INFINITY), (float8)(hi.y), lane8), select((float8)(-INFINITY), (float8)(hi.z), lane8),
+                             &enter8);
+  float8 e8 = select((float8)(INFINITY), enter8, hit8);
   float all8[8];
   vstore8(e8, 0, all8);
   bool others_missed8 = all(select(e8, (float8)(INFINITY), lane8) == (float8)(INFINITY));
