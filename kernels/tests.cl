@@ -49,6 +49,37 @@ __kernel void ray_box_test(__global const RayRecord* rays, __global const float*
   out[i] = others_missed && others_missed8 && same ? mine : NAN;
 }
 
+/* The same rays and boxes (box i in lane i % 8) through the 8-wide node tests: bit 0 of out, entered by
+ * ray_boxes_hit8; bit 1, by the traversal's test (ray_boxes_hit8_fused where the ray's FusedSlabs are
+ * usable, else ray_boxes_hit8); bit 2, the fused test ran; bit 3, it is compiled in (PC_FUSED_SLABS). */
+__kernel void ray_box_fused_test(__global const RayRecord* rays, __global const float* boxes, __global uint* out) {
+  uint i = get_global_id(0);
+  __global const float* r = (__global const float*)(rays + i);
+  float3 o = vload3(0, r), d = vload3(0, r + 4);
+  RayPrecomp rp = ray_precompute(d);
+  int3 negative = rp.inv_d < 0.0f;
+  float3 lo = vload3(0, boxes + 6 * i), hi = vload3(0, boxes + 6 * i + 3);
+  int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7) == (int8)(i % 8u);
+  float8 lo_x = select((float8)(INFINITY), (float8)(lo.x), lane), lo_y = select((float8)(INFINITY), (float8)(lo.y), lane);
+  float8 lo_z = select((float8)(INFINITY), (float8)(lo.z), lane), hi_x = select((float8)(-INFINITY), (float8)(hi.x), lane);
+  float8 hi_y = select((float8)(-INFINITY), (float8)(hi.y), lane), hi_z = select((float8)(-INFINITY), (float8)(hi.z), lane);
+  float8 enter;
+  uint robust = pc_lane_bits(ray_boxes_hit8(o, rp.inv_d, negative, r[3], r[7], lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter));
+  uint traversal = robust, flags = 0u;
+#ifdef PC_FUSED_SLABS
+  flags |= 8u;
+  FusedSlabs f = fused_slabs(o, rp.inv_d);
+  if (f.usable) {
+    flags |= 4u;
+    traversal = pc_lane_bits(ray_boxes_hit8_fused(&f, negative, r[3], r[7] * (1.0f + 2.0f * error_gamma(3)), lo_x, lo_y,
+                                                  lo_z, hi_x, hi_y, hi_z, &enter));
+  }
+#endif
+  /* An empty lane entered shows as bit 4. */
+  out[i] = flags | (robust == (1u << (i % 8u)) ? 1u : 0u) | (traversal == (1u << (i % 8u)) ? 2u : 0u) |
+           ((robust | traversal) & ~(1u << (i % 8u)) ? 16u : 0u);
+}
+
 /* One triangle (9 floats) per ray; out as HitRecord with prim 0 for a hit. */
 __kernel void ray_triangle_test(__global const RayRecord* rays, __global const float* tris, __global HitRecord* out) {
   uint i = get_global_id(0);

@@ -403,7 +403,7 @@ struct Collapser {
         kids.push_back(binary[k].left_first);
       }
     }
-    Node node;
+    Node node{};
     for (int lane = 0; lane < Width; ++lane) {
       bool used = lane < int(kids.size());
       const BvhNode* k = used ? &binary[kids[lane]] : nullptr;

@@ -1,7 +1,11 @@
 // Ray/box and ray/triangle tests run on the device one by one: edges, vertices, axis-parallel rays,
 // degenerate triangles, watertightness across a shared edge.
 #include <cmath>
+#include <cstdio>
 #include <random>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include <gtest/gtest.h>
 
@@ -54,6 +58,28 @@ std::vector<float> box_entries(const std::vector<RayRecord>& rays, const std::ve
 }
 
 const Tri kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+// Per ray and box: bit 0 entered by ray_boxes_hit8, bit 1 by the 8-wide traversal's test (the fused one
+// where it ran), bit 2 the fused test ran, bit 3 it is compiled in, bit 4 an empty lane was entered.
+std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays,
+                                        const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
+  ClContext& cl = test_device();
+  static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
+  std::vector<float> flat;
+  for (auto& [lo, hi] : boxes) flat.insert(flat.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+  ClBuffer rb = upload(cl, rays), bb = upload(cl, flat);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(uint32_t));
+  ClKernel k(program.kernel("ray_box_fused_test"));
+  k.arg(0, rb.mem);
+  k.arg(1, bb.mem);
+  k.arg(2, out.mem);
+  run_kernel(cl, k.k, rays.size());
+  std::vector<uint32_t> e(rays.size());
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, e.size() * 4, e.data(), 0, nullptr, nullptr));
+  return e;
+}
+
+
 
 }  // namespace
 
@@ -171,4 +197,77 @@ TEST(RayBox, FlatBoxOfAnAxisAlignedTriangleIsEntered) {
                        {{{0, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}}});
   EXPECT_FLOAT_EQ(t[0], 3.0f);
   EXPECT_NEAR(t[1], 3.0f, 1e-5f);
+}
+
+TEST(RayBox, FusedNodeTestEntersTouchedAndCrossedBoxes) {
+  // The 8-wide traversal's fused slab test (kernels/intersect.cl, where fma is an instruction) must enter
+  // every box the ray truly reaches within [tmin, tmax], as ray_boxes_hit8 does, also where it only
+  // touches it: at a corner, along an edge, from a corner it starts on, at exactly tmax; near and far
+  // from the origin. And it must still miss boxes the ray clearly misses.
+  std::vector<RayRecord> rays;
+  std::vector<std::pair<glm::vec3, glm::vec3>> boxes;
+  std::vector<bool> reached;
+  auto add = [&](RayRecord r, glm::vec3 lo, glm::vec3 hi, bool reaches) {
+    rays.push_back(r);
+    boxes.push_back({lo, hi});
+    reached.push_back(reaches);
+  };
+  for (glm::vec3 at : {glm::vec3(0), glm::vec3(1000.5f, -2000.25f, 333.125f), glm::vec3(-65536, 4096.5f, 1e5f)}) {
+    for (glm::vec3 d : {glm::vec3(1, 1, 1), glm::vec3(0.25f, 2, 1), glm::vec3(-3, 1, -0.5f)}) {
+      glm::vec3 s = glm::sign(d), p = at + d;  // p: the point at t = 1, exactly representable here
+      add(ray(at, d), glm::min(p, p + s), glm::max(p, p + s), true);    // enters at its corner, t = 1
+      glm::vec3 e = p + s * glm::vec3(1, -1, 1);                          // touches its edge at t = 1 only
+      add(ray(at, d), glm::min(p, e), glm::max(p, e), true);
+      add(ray(at, d), glm::min(at, at - s), glm::max(at, at - s), true);  // starts on its corner, leaves
+      add(ray(at, d, 0, 1), glm::min(p, p + s), glm::max(p, p + s), true);  // reaches it at tmax exactly
+      add(ray(at, d, 0, 0.99f), glm::min(p, p + s), glm::max(p, p + s), false);  // stops before it
+      // Beside it: moved along x so that the ray reaches its x slab from t = 2 on, and along y so that the
+      // ray has left its y slab at t = -1.
+      glm::vec3 q = p + s * glm::vec3(std::abs(d.x), -(2 * std::abs(d.y) + 1), 0);
+      add(ray(at, d), glm::min(q, q + s), glm::max(q, q + s), false);
+    }
+  }
+  // Random rays through points of random boxes made as tight as float allows around a point of the ray.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 20000; ++i) {
+    double scale = std::pow(10.0, 3 * (i % 3));
+    glm::dvec3 o(u(rng) * scale, u(rng) * scale, u(rng) * scale), d(u(rng), u(rng), u(rng));
+    if (glm::length(d) < 0.1) continue;
+    d *= std::pow(10.0, 2 * u(rng));
+    glm::vec3 of(o), df(d);
+    double t = 100 * std::abs(u(rng));
+    glm::dvec3 q = glm::dvec3(of) + t * glm::dvec3(df);
+    glm::vec3 lo, hi;
+    for (int k = 0; k < 3; ++k) {
+      float down = float(q[k]), up = float(q[k]);
+      if (double(down) > q[k]) down = std::nextafter(down, -INFINITY);
+      if (double(up) < q[k]) up = std::nextafter(up, INFINITY);
+      double grow = i % 2 ? 0 : std::abs(u(rng)) * scale * 1e-3;
+      lo[k] = float(down - grow);
+      hi[k] = float(up + grow);
+      lo[k] = std::min(lo[k], down), hi[k] = std::max(hi[k], up);
+    }
+    add(ray(of, df), lo, hi, true);
+    // The same box moved off the ray by a clear margin across it: missed.
+    glm::dvec3 across = glm::normalize(glm::cross(glm::dvec3(df), glm::dvec3(0.3, 0.5, 0.7)));
+    glm::dvec3 shift = across * (glm::length(glm::dvec3(hi - lo)) + 1e-3 * (scale + t * glm::length(glm::dvec3(df))));
+    add(ray(of, df), glm::vec3(glm::dvec3(lo) + shift), glm::vec3(glm::dvec3(hi) + shift), false);
+  }
+  auto e = node_test_entries(rays, boxes);
+  int fused = 0, compiled = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_EQ(e[i] & 16u, 0u) << "case " << i << ": an empty lane was entered";
+    EXPECT_EQ((e[i] & 1u) != 0, bool(reached[i])) << "case " << i << ": ray_boxes_hit8";
+    EXPECT_EQ((e[i] & 2u) != 0, bool(reached[i])) << "case " << i << ": the traversal's test";
+    fused += (e[i] & 4u) != 0;
+    compiled += (e[i] & 8u) != 0;
+  }
+  // Where the fused test is compiled in (PoCL on x86 with FMA), every one of these rays takes it: none is
+  // parallel to an axis.
+  if (compiled) {
+    EXPECT_EQ(fused, int(rays.size()));
+  }
+  std::printf("fused slab test %s: %d of %zu cases\n", compiled ? "compiled in" : "not compiled in (no fast fma)", fused,
+              rays.size());
 }

@@ -81,14 +81,17 @@ typedef struct {
   pc_uint child[4];
 } Bvh4Node;
 
-/* 8-wide (one float8 slab test checks all eight children): lo_x .. hi_z (6 x 32) + child (32) = 224 bytes;
- * interior references and unused slots as in Bvh4Node. Its leaves are binary subtrees of at most four
+/* 8-wide (one float8 slab test checks all eight children): lo_x .. hi_z (6 x 32) + child (32) + pad (32) =
+ * 256 bytes, four whole cache lines, and a node's address a shift of its index (with the fused slab test,
+ * bounce rays +1-3 %, camera rays +3 %: docs/benchmarks-notes.md); interior references and unused slots as
+ * in Bvh4Node. Its leaves are binary subtrees of at most four
  * primitives (or a binary leaf) stored as LeafBlocks: a leaf reference (PC_BVH4_LEAF set) holds the first
  * block (ref & ~PC_BVH4_LEAF) >> 4 and the primitive count (ref & 15) + 1, in (count + 3) / 4 blocks. */
 typedef struct {
   float lo_x[8], lo_y[8], lo_z[8];
   float hi_x[8], hi_y[8], hi_z[8];
   pc_uint child[8];
+  pc_uint pad[8]; /* zero */
 } Bvh8Node;
 
 /* Up to four primitives of an 8-wide BVH leaf, vertices by coordinate, so that one float4 watertight
@@ -329,7 +332,7 @@ typedef struct {
 static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
 static_assert(sizeof(Instance) == 112, "Instance is 112 bytes");
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
-static_assert(sizeof(Bvh8Node) == 224, "Bvh8Node is 224 bytes");
+static_assert(sizeof(Bvh8Node) == 256, "Bvh8Node is 256 bytes");
 static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
