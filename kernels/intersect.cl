@@ -130,7 +130,11 @@ PC_DEFINE_RAY_BOXES(8)
 typedef struct {
   float3 inv_near, off_near; /* near planes: t = fma(plane, inv_near, off_near) */
   float3 inv_far, off_far;   /* far planes, widened by 1 + 2 gamma(3) as slab_hits widens its exit */
-  bool usable;               /* all finite: the ray is not parallel to an axis (and not subnormal) */
+  /* Where a Bvh8Node's near and far planes of each axis start, in floats from lo_x: lo or hi by the sign
+   * of the direction. Loads from these offsets instead of a branch on each sign: bounce rays +2 %, as
+   * their first nodes mispredict those branches; camera rays, which predict them, -3 %. */
+  int3 near_at, far_at;
+  bool usable; /* all finite: the ray is not parallel to an axis (and not subnormal) */
 } FusedSlabs;
 
 /* The bound: q = fl(o inv) is within u |q| of the exact o inv (u = 2^-24, the unit roundoff), and
@@ -147,19 +151,23 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   float3 q_near = o * f.inv_near, q_far = o * f.inv_far;
   f.off_near = -q_near - fabs(q_near) * 0x1p-22f;
   f.off_far = -q_far + fabs(q_far) * 0x1p-22f;
+  int3 negative = inv_d < 0.0f, lo_at = (int3)(0, 8, 16), hi_at = (int3)(24, 32, 40);
+  f.near_at = select(lo_at, hi_at, negative);
+  f.far_at = select(hi_at, lo_at, negative);
   f.usable = all(isfinite(f.inv_far)) && all(isfinite(f.off_near)) && all(isfinite(f.off_far));
   return f;
 }
 
-/* ray_boxes_hit8 by FusedSlabs (f.usable); tmax_far: tmax * (1 + 2 gamma(3)). */
-inline int8 ray_boxes_hit8_fused(const FusedSlabs* f, int3 negative, float tmin, float tmax_far, float8 lo_x,
-                                 float8 lo_y, float8 lo_z, float8 hi_x, float8 hi_y, float8 hi_z, float8* enter_out) {
-  float8 nx = fma(negative.x ? hi_x : lo_x, (float8)(f->inv_near.x), (float8)(f->off_near.x));
-  float8 ny = fma(negative.y ? hi_y : lo_y, (float8)(f->inv_near.y), (float8)(f->off_near.y));
-  float8 nz = fma(negative.z ? hi_z : lo_z, (float8)(f->inv_near.z), (float8)(f->off_near.z));
-  float8 fx = fma(negative.x ? lo_x : hi_x, (float8)(f->inv_far.x), (float8)(f->off_far.x));
-  float8 fy = fma(negative.y ? lo_y : hi_y, (float8)(f->inv_far.y), (float8)(f->off_far.y));
-  float8 fz = fma(negative.z ? lo_z : hi_z, (float8)(f->inv_far.z), (float8)(f->off_far.z));
+/* ray_boxes_hit8 by FusedSlabs (f->usable), the boxes of node n; tmax_far: tmax * (1 + 2 gamma(3)). */
+inline int8 ray_boxes_hit8_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const Bvh8Node* n,
+                                 float8* enter_out) {
+  __global const float* planes = n->lo_x;
+  float8 nx = fma(vload8(0, planes + f->near_at.x), (float8)(f->inv_near.x), (float8)(f->off_near.x));
+  float8 ny = fma(vload8(0, planes + f->near_at.y), (float8)(f->inv_near.y), (float8)(f->off_near.y));
+  float8 nz = fma(vload8(0, planes + f->near_at.z), (float8)(f->inv_near.z), (float8)(f->off_near.z));
+  float8 fx = fma(vload8(0, planes + f->far_at.x), (float8)(f->inv_far.x), (float8)(f->off_far.x));
+  float8 fy = fma(vload8(0, planes + f->far_at.y), (float8)(f->inv_far.y), (float8)(f->off_far.y));
+  float8 fz = fma(vload8(0, planes + f->far_at.z), (float8)(f->inv_far.z), (float8)(f->off_far.z));
   float8 t0 = (float8)(tmin), t1 = (float8)(tmax_far);
   float8 nxy = select(ny, nx, nx > ny), nzt = select(t0, nz, nz > t0);
   float8 fxy = select(fy, fx, fx < fy), fzt = select(t1, fz, fz < t1);
@@ -488,17 +496,17 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
     } else {
       __global const Bvh8Node* n = nodes + ref;
       float8 entry;
-      float8 lo_x = vload8(0, n->lo_x), lo_y = vload8(0, n->lo_y), lo_z = vload8(0, n->lo_z);
-      float8 hi_x = vload8(0, n->hi_x), hi_y = vload8(0, n->hi_y), hi_z = vload8(0, n->hi_z);
       /* Bit i of mask: child i is hit. */
 #ifdef PC_FUSED_SLABS
-      uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit8_fused(&fused, negative, ray->tmin, nearest_far, lo_x, lo_y,
-                                                                   lo_z, hi_x, hi_y, hi_z, &entry)
-                                            : ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest, lo_x,
-                                                             lo_y, lo_z, hi_x, hi_y, hi_z, &entry));
+      uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit8_fused(&fused, ray->tmin, nearest_far, n, &entry)
+                                            : ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest,
+                                                             vload8(0, n->lo_x), vload8(0, n->lo_y), vload8(0, n->lo_z),
+                                                             vload8(0, n->hi_x), vload8(0, n->hi_y), vload8(0, n->hi_z),
+                                                             &entry));
 #else
-      uint mask = pc_lane_bits(ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest, lo_x, lo_y, lo_z,
-                                              hi_x, hi_y, hi_z, &entry));
+      uint mask = pc_lane_bits(ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest, vload8(0, n->lo_x),
+                                              vload8(0, n->lo_y), vload8(0, n->lo_z), vload8(0, n->hi_x),
+                                              vload8(0, n->hi_y), vload8(0, n->hi_z), &entry));
 #endif
       if (mask != 0u) {
         float d[8];

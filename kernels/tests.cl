@@ -51,8 +51,10 @@ __kernel void ray_box_test(__global const RayRecord* rays, __global const float*
 
 /* The same rays and boxes (box i in lane i % 8) through the 8-wide node tests: bit 0 of out, entered by
  * ray_boxes_hit8; bit 1, by the traversal's test (ray_boxes_hit8_fused where the ray's FusedSlabs are
- * usable, else ray_boxes_hit8); bit 2, the fused test ran; bit 3, it is compiled in (PC_FUSED_SLABS). */
-__kernel void ray_box_fused_test(__global const RayRecord* rays, __global const float* boxes, __global uint* out) {
+ * usable, else ray_boxes_hit8; nodes: room for one node per ray, where the box is put for it); bit 2, the
+ * fused test ran; bit 3, it is compiled in (PC_FUSED_SLABS). */
+__kernel void ray_box_fused_test(__global const RayRecord* rays, __global const float* boxes, __global Bvh8Node* nodes,
+                                 __global uint* out) {
   uint i = get_global_id(0);
   __global const float* r = (__global const float*)(rays + i);
   float3 o = vload3(0, r), d = vload3(0, r + 4);
@@ -71,8 +73,12 @@ __kernel void ray_box_fused_test(__global const RayRecord* rays, __global const 
   FusedSlabs f = fused_slabs(o, rp.inv_d);
   if (f.usable) {
     flags |= 4u;
-    traversal = pc_lane_bits(ray_boxes_hit8_fused(&f, negative, r[3], r[7] * (1.0f + 2.0f * error_gamma(3)), lo_x, lo_y,
-                                                  lo_z, hi_x, hi_y, hi_z, &enter));
+    Bvh8Node node;
+    vstore8(lo_x, 0, node.lo_x), vstore8(lo_y, 0, node.lo_y), vstore8(lo_z, 0, node.lo_z);
+    vstore8(hi_x, 0, node.hi_x), vstore8(hi_y, 0, node.hi_y), vstore8(hi_z, 0, node.hi_z);
+    nodes[i] = node;
+    traversal = pc_lane_bits(
+        ray_boxes_hit8_fused(&f, r[3], r[7] * (1.0f + 2.0f * error_gamma(3)), nodes + i, &enter));
   }
 #endif
   /* An empty lane entered shows as bit 4. */

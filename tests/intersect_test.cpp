@@ -68,11 +68,13 @@ std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays,
   std::vector<float> flat;
   for (auto& [lo, hi] : boxes) flat.insert(flat.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
   ClBuffer rb = upload(cl, rays), bb = upload(cl, flat);
+  ClBuffer nodes(cl, CL_MEM_READ_WRITE, rays.size() * sizeof(Bvh8Node));
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(uint32_t));
   ClKernel k(program.kernel("ray_box_fused_test"));
   k.arg(0, rb.mem);
   k.arg(1, bb.mem);
-  k.arg(2, out.mem);
+  k.arg(2, nodes.mem);
+  k.arg(3, out.mem);
   run_kernel(cl, k.k, rays.size());
   std::vector<uint32_t> e(rays.size());
   CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, e.size() * 4, e.data(), 0, nullptr, nullptr));
