@@ -1,5 +1,6 @@
 // Ray/box and ray/triangle tests run on the device one by one: edges, vertices, axis-parallel rays,
 // degenerate triangles, watertightness across a shared edge.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -40,48 +41,45 @@ std::vector<HitRecord> triangle_hits(const std::vector<RayRecord>& rays, const s
   return hits;
 }
 
-std::vector<float> box_entries(const std::vector<RayRecord>& rays, const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
+using Boxes = std::vector<std::pair<glm::vec3, glm::vec3>>;
+
+// Runs test kernel `name` over the rays and boxes (ray i against box i): its arguments the rays, the boxes
+// (lo.xyz, hi.xyz), scratch_bytes a ray of device memory when nonzero, and one T a ray out.
+template <class T>
+std::vector<T> run_box_kernel(const char* name, const std::vector<RayRecord>& rays, const Boxes& boxes,
+                              size_t scratch_bytes = 0) {
   ClContext& cl = test_device();
   static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
   std::vector<float> flat;
   for (auto& [lo, hi] : boxes) flat.insert(flat.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
   ClBuffer rb = upload(cl, rays), bb = upload(cl, flat);
-  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(float));
-  ClKernel k(program.kernel("ray_box_test"));
-  k.arg(0, rb.mem);
-  k.arg(1, bb.mem);
-  k.arg(2, out.mem);
+  ClBuffer scratch(cl, CL_MEM_READ_WRITE, std::max<size_t>(1, rays.size() * scratch_bytes));
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(T));
+  ClKernel k(program.kernel(name));
+  cl_uint arg = 0;
+  k.arg(arg++, rb.mem);
+  k.arg(arg++, bb.mem);
+  if (scratch_bytes) k.arg(arg++, scratch.mem);
+  k.arg(arg, out.mem);
   run_kernel(cl, k.k, rays.size());
-  std::vector<float> t(rays.size());
-  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, t.size() * 4, t.data(), 0, nullptr, nullptr));
-  return t;
+  std::vector<T> result(rays.size());
+  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, result.size() * sizeof(T), result.data(), 0, nullptr,
+                               nullptr));
+  return result;
 }
 
-const Tri kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+// Entry distance through the traversal's 4- and 8-box tests, or +inf for a miss (NaN if they disagree).
+std::vector<float> box_entries(const std::vector<RayRecord>& rays, const Boxes& boxes) {
+  return run_box_kernel<float>("ray_box_test", rays, boxes);
+}
 
 // Per ray and box: bit 0 entered by ray_boxes_hit8, bit 1 by the 8-wide traversal's test (the fused one
 // where it ran), bit 2 the fused test ran, bit 3 it is compiled in, bit 4 an empty lane was entered.
-std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays,
-                                        const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
-  ClContext& cl = test_device();
-  static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
-  std::vector<float> flat;
-  for (auto& [lo, hi] : boxes) flat.insert(flat.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
-  ClBuffer rb = upload(cl, rays), bb = upload(cl, flat);
-  ClBuffer nodes(cl, CL_MEM_READ_WRITE, rays.size() * sizeof(Bvh8Node));
-  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(uint32_t));
-  ClKernel k(program.kernel("ray_box_fused_test"));
-  k.arg(0, rb.mem);
-  k.arg(1, bb.mem);
-  k.arg(2, nodes.mem);
-  k.arg(3, out.mem);
-  run_kernel(cl, k.k, rays.size());
-  std::vector<uint32_t> e(rays.size());
-  CL_CHECK(clEnqueueReadBuffer(cl.queue, out.mem, CL_TRUE, 0, e.size() * 4, e.data(), 0, nullptr, nullptr));
-  return e;
+std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays, const Boxes& boxes) {
+  return run_box_kernel<uint32_t>("ray_box_fused_test", rays, boxes, sizeof(Bvh8Node));
 }
 
-
+const Tri kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
 
 }  // namespace
 
@@ -207,7 +205,7 @@ TEST(RayBox, FusedNodeTestEntersTouchedAndCrossedBoxes) {
   // touches it: at a corner, along an edge, from a corner it starts on, at exactly tmax; near and far
   // from the origin. And it must still miss boxes the ray clearly misses.
   std::vector<RayRecord> rays;
-  std::vector<std::pair<glm::vec3, glm::vec3>> boxes;
+  Boxes boxes;
   std::vector<bool> reached;
   auto add = [&](RayRecord r, glm::vec3 lo, glm::vec3 hi, bool reaches) {
     rays.push_back(r);
