@@ -76,7 +76,7 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
 }
 
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
-constexpr size_t kCases = 16;
+constexpr size_t kCases = 17;
 
 std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
@@ -100,6 +100,9 @@ std::array<Case, kCases> make_cases() {
           // vertex coordinates up with a permutation instruction, elsewhere it selects them with masks.
           {"cornell box, 16 lanes, packets", cornell, "--lanes 16", 8},
           {"every material and light, 8 lanes, packets", resized("materials", 16, 12, 1), "--lanes 8", 8},
+          // Single rays through the 8-wide layout: where fma is an instruction (PoCL) the node test takes the
+          // fused slab planes, elsewhere (Oclgrind) the unfused ones; they visit other nodes, never other hits.
+          {"cornell box, single rays, 8-wide layout", cornell, "--lanes 1", 8},
           {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},
           {"instances: moved, scaled, mirrored, smooth, cut-out",
            resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}}};
