@@ -82,6 +82,8 @@ inline RayPrecomp ray_precompute(float3 d) {
  * skipped: comparisons rather than fmin/fmax, as a NaN compares false (and they compile to plain min/max
  * instructions). That axis then does not limit the interval, and a ray lying in a box face counts as
  * inside. An empty box (lo = +inf, hi = -inf) is always missed. */
+/* The factor 1 + 2 gamma(3) by which the slab tests widen a box's far distance. */
+inline float slab_widening(void) { return 1.0f + 2.0f * error_gamma(3); }
 #define PC_DEFINE_SLAB(F, I)                                                                                    \
   /* Whether each box is hit within [tmin, tmax], from the near (nx, ny, nz) and far (fx, fy, fz) plane    \
    * distances of each axis; *enter_out: its entry distance (of a missed box: any value). Also the packet  \
@@ -95,7 +97,7 @@ inline RayPrecomp ray_precompute(float3 d) {
     exit = select(exit, fy, fy < exit);                                                                              \
     exit = select(exit, fz, fz < exit);                                                                              \
     *enter_out = enter;                                                                                              \
-    return enter <= exit * (1.0f + 2.0f * error_gamma(3));                                                           \
+    return enter <= exit * slab_widening();                                                                          \
   }
 PC_DEFINE_SLAB(float4, int4)
 PC_DEFINE_SLAB(float8, int8)
@@ -116,7 +118,6 @@ PC_DEFINE_RAY_BOXES(4)
 PC_DEFINE_RAY_BOXES(8)
 #undef PC_DEFINE_RAY_BOXES
 
-#if defined(__FMA__) || defined(FP_FAST_FMAF)
 /* Where fma() is an instruction: the 8-wide single-ray node test of a ray with finite FusedSlabs takes each
  * slab plane distance in one fused multiply-add, fma(plane, inv, off), instead of a subtraction and a
  * multiplication; no NaN can arise there, so the interval's ends are maxima and minima taken pairwise (two
@@ -125,8 +126,11 @@ PC_DEFINE_RAY_BOXES(8)
  * +3 % (docs/benchmarks-notes.md). Like ray_boxes_hit8 it enters every box the ray reaches within
  * [tmin, tmax] (the bound is at fused_slabs; tests/intersect_test.cpp); boxes missed by less than the
  * rounding may be entered by one test and not the other, which changes which nodes are visited, and in
- * which order, never the hits. Packets keep slab_hits: there the fused test measured 0.99x. */
+ * which order, never the hits. Packets keep slab_hits: there the fused test measured 0.99x. Elsewhere
+ * (PC_FUSED_SLABS undefined) no ray's FusedSlabs are usable, and ray_boxes_hit8 tests every node. */
+#if defined(__FMA__) || defined(FP_FAST_FMAF)
 #define PC_FUSED_SLABS
+#endif
 typedef struct {
   float3 inv_near, off_near; /* near planes: t = fma(plane, inv_near, off_near) */
   float3 inv_far, off_far;   /* far planes, widened by 1 + 2 gamma(3) as slab_hits widens its exit */
@@ -134,7 +138,7 @@ typedef struct {
    * of the direction. Loads from these offsets instead of a branch on each sign: bounce rays +2 %, as
    * their first nodes mispredict those branches; camera rays, which predict them, -3 %. */
   int3 near_at, far_at;
-  bool usable; /* all finite: the ray is not parallel to an axis (and not subnormal) */
+  bool usable; /* PC_FUSED_SLABS, and all finite: the ray is not parallel to an axis (and not subnormal) */
 } FusedSlabs;
 
 /* The bound: q = fl(o inv) is within u |q| of the exact o inv (u = 2^-24, the unit roundoff), and
@@ -147,14 +151,19 @@ typedef struct {
 inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   FusedSlabs f;
   f.inv_near = inv_d;
-  f.inv_far = inv_d * (1.0f + 2.0f * error_gamma(3));
+  f.inv_far = inv_d * slab_widening();
   float3 q_near = o * f.inv_near, q_far = o * f.inv_far;
   f.off_near = -q_near - fabs(q_near) * 0x1p-22f;
   f.off_far = -q_far + fabs(q_far) * 0x1p-22f;
+  /* lo_x .. hi_z at 0, 8, .. 40 floats (pinned by static asserts in kernels/shared/types.h) */
   int3 negative = inv_d < 0.0f, lo_at = (int3)(0, 8, 16), hi_at = (int3)(24, 32, 40);
   f.near_at = select(lo_at, hi_at, negative);
   f.far_at = select(hi_at, lo_at, negative);
+#ifdef PC_FUSED_SLABS
   f.usable = all(isfinite(f.inv_far)) && all(isfinite(f.off_near)) && all(isfinite(f.off_far));
+#else
+  f.usable = false;
+#endif
   return f;
 }
 
@@ -175,7 +184,6 @@ inline int8 ray_boxes_hit8_fused(const FusedSlabs* f, float tmin, float tmax_far
   *enter_out = enter;
   return enter <= exit;
 }
-#endif
 
 /* Each of four boxes' entry distance, or INFINITY when it is missed within [tmin, tmax]. */
 inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
@@ -482,32 +490,22 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
   int3 negative = rp->inv_d < 0.0f;
   uint ref = root;
   float nearest = hit->t; /* hit->t, kept in a register */
-#ifdef PC_FUSED_SLABS
   FusedSlabs fused = fused_slabs(ray->o, rp->inv_d);
-  float nearest_far = nearest * (1.0f + 2.0f * error_gamma(3));
-#endif
+  float nearest_far = nearest * slab_widening();
   for (;;) {
     if (ref & PC_BVH4_LEAF) {
       if (intersect_blocks(cut, blocks, prims, ref, ray, rp, any_hit, hit, kz)) return true;
       nearest = hit->t;
-#ifdef PC_FUSED_SLABS
-      nearest_far = nearest * (1.0f + 2.0f * error_gamma(3));
-#endif
+      nearest_far = nearest * slab_widening();
     } else {
       __global const Bvh8Node* n = nodes + ref;
       float8 entry;
       /* Bit i of mask: child i is hit. */
-#ifdef PC_FUSED_SLABS
       uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit8_fused(&fused, ray->tmin, nearest_far, n, &entry)
                                             : ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest,
                                                              vload8(0, n->lo_x), vload8(0, n->lo_y), vload8(0, n->lo_z),
                                                              vload8(0, n->hi_x), vload8(0, n->hi_y), vload8(0, n->hi_z),
                                                              &entry));
-#else
-      uint mask = pc_lane_bits(ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest, vload8(0, n->lo_x),
-                                              vload8(0, n->lo_y), vload8(0, n->lo_z), vload8(0, n->hi_x),
-                                              vload8(0, n->hi_y), vload8(0, n->hi_z), &entry));
-#endif
       if (mask != 0u) {
         float d[8];
         vstore8(entry, 0, d);

@@ -70,6 +70,7 @@ __kernel void ray_box_fused_test(__global const RayRecord* rays, __global const 
   uint traversal = robust, flags = 0u;
 #ifdef PC_FUSED_SLABS
   flags |= 8u;
+#endif
   FusedSlabs f = fused_slabs(o, rp.inv_d);
   if (f.usable) {
     flags |= 4u;
@@ -78,9 +79,8 @@ __kernel void ray_box_fused_test(__global const RayRecord* rays, __global const 
     vstore8(hi_x, 0, node.hi_x), vstore8(hi_y, 0, node.hi_y), vstore8(hi_z, 0, node.hi_z);
     nodes[i] = node;
     traversal = pc_lane_bits(
-        ray_boxes_hit8_fused(&f, r[3], r[7] * (1.0f + 2.0f * error_gamma(3)), nodes + i, &enter));
+        ray_boxes_hit8_fused(&f, r[3], r[7] * slab_widening(), nodes + i, &enter));
   }
-#endif
   /* An empty lane entered shows as bit 4. */
   out[i] = flags | (robust == (1u << (i % 8u)) ? 1u : 0u) | (traversal == (1u << (i % 8u)) ? 2u : 0u) |
            ((robust | traversal) & ~(1u << (i % 8u)) ? 16u : 0u);

@@ -333,6 +333,11 @@ static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes");
 static_assert(sizeof(Instance) == 112, "Instance is 112 bytes");
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
 static_assert(sizeof(Bvh8Node) == 256, "Bvh8Node is 256 bytes");
+// kernels/intersect.cl (fused_slabs) loads a node's planes from these float offsets.
+static_assert(offsetof(Bvh8Node, lo_y) == 8 * sizeof(float) && offsetof(Bvh8Node, lo_z) == 16 * sizeof(float) &&
+                  offsetof(Bvh8Node, hi_x) == 24 * sizeof(float) && offsetof(Bvh8Node, hi_y) == 32 * sizeof(float) &&
+                  offsetof(Bvh8Node, hi_z) == 40 * sizeof(float),
+              "Bvh8Node's planes are eight floats apart, lo_x .. hi_z");
 static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");
