@@ -2,7 +2,8 @@
 BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--lanes), against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads) on the same
 camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
 the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
-Checks that both layouts and the packets give the same hit records as each other.
+Checks that both layouts and the packets give the same hit records as each other, and counts what a ray
+visits on pathcl's 8-wide tree and on one built by Embree's builder (bench/bvh_visits.cpp).
 Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts/*.json, beside and
 not among the peer runs that scripts/bench/report.py reads)
 """
@@ -11,6 +12,7 @@ import datetime
 import json
 import os
 import platform
+import re
 import statistics
 import subprocess
 import sys
@@ -20,6 +22,7 @@ BUILD = os.path.join(ROOT, "build")
 PATHCL = os.path.join(BUILD, "pathcl")
 MAKE_RAYS = os.path.join(BUILD, "make_rays")
 EMBREE_RAYS = os.path.join(BUILD, "embree_rays")
+BVH_VISITS = os.path.join(BUILD, "bvh_visits")
 
 
 def run(cmd, env=None):
@@ -27,6 +30,20 @@ def run(cmd, env=None):
     if r.returncode:
         sys.exit("%s: exit %d\n%s" % (" ".join(cmd), r.returncode, r.stderr[-2000:]))
     return r.stdout
+
+
+def bvh_visits(obj, rays):
+    """bvh_visits' per-ray averages: {tree: {all|hit|miss: {rays, nodes, leaves, blocks}}}, and its tree sizes."""
+    out, visits, trees = run([BVH_VISITS, obj, rays]), {}, {}
+    for line in out.splitlines():
+        m = re.match(r"\[(\w+)\] (all|hit|miss) +rays +(\d+) +nodes/ray +([\d.]+) +leaves/ray +([\d.]+) +blocks/ray +([\d.]+)", line)
+        if m:
+            visits.setdefault(m[1], {})[m[2]] = {"rays": int(m[3]), "nodes": float(m[4]), "leaves": float(m[5]),
+                                                 "blocks": float(m[6])}
+        m = re.match(r"\[(\w+)\] nodes (\d+) +leaves (\d+) +blocks (\d+) .*SAH\(node=1,block=1\) ([\d.]+)", line)
+        if m:
+            trees[m[1]] = {"nodes": int(m[2]), "leaves": int(m[3]), "blocks": int(m[4]), "sah": float(m[5])}
+    return {"per_ray": visits, "trees": trees}
 
 
 def with_width(width):
@@ -94,6 +111,10 @@ def main():
                 e = json.loads(out)
                 runs["embree-%d" % threads].append(e["rays_per_second"])
                 same = e["same_primitive_fraction"]
+        visits = bvh_visits(obj, rays)
+        v = {t: visits["per_ray"][t]["all"] for t in ("pathcl", "embree")}
+        print("%s rays visit %.2f nodes and %.2f blocks on pathcl's 8-wide tree, %.2f and %.2f on Embree's builder's" %
+              (name, v["pathcl"]["nodes"], v["pathcl"]["blocks"], v["embree"]["nodes"], v["embree"]["blocks"]))
         records = []
         for path in (hits[4], hits[8], packet_hits[8], packet_hits[16]):
             with open(path, "rb") as f:
@@ -101,7 +122,7 @@ def main():
         identical = all(r == records[0] for r in records)
         med = {k: statistics.median(v) for k, v in runs.items()}
         result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
-                                "embree_same_primitive_fraction": same,
+                                "embree_same_primitive_fraction": same, "visits": visits,
                                 "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
                                 "bvh8_over_bvh4": med["bvh8"] / med["bvh4"],
                                 "packet8_over_bvh8": med["packet8"] / med["bvh8"],
