@@ -121,17 +121,21 @@ def main():
                 records.append(f.read())
         identical = all(r == records[0] for r in records)
         med = {k: statistics.median(v) for k, v in runs.items()}
+        # Each round's own ratio: the two programs a few seconds apart, so their spread shows this machine's.
+        by_round = [p / e for p, e in zip(runs["bvh8"], runs["embree-2"])]
         result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
                                 "embree_same_primitive_fraction": same, "visits": visits,
                                 "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
+                                "bvh8_over_embree2_by_round": by_round,
                                 "bvh8_over_bvh4": med["bvh8"] / med["bvh4"],
                                 "packet8_over_bvh8": med["packet8"] / med["bvh8"],
                                 "packet16_over_bvh8": med["packet16"] / med["bvh8"]}
         print("%s rays: 4-wide %.2f, 8-wide %.2f, packets of 8 %.2f, of 16 %.2f, Embree 1 thread %.2f, 2 threads "
-              "%.2f Mrays/s; 8-wide / Embree-2 %.2f; hit records of the layouts and packets identical: %s; same "
+              "%.2f Mrays/s; 8-wide / Embree-2 %.2f (rounds %.2f-%.2f); hit records of the layouts and packets identical: %s; same "
               "primitive as Embree: %.4f" %
               (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["packet8"] / 1e6, med["packet16"] / 1e6,
-               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["bvh8"] / med["embree-2"], identical, same))
+               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["bvh8"] / med["embree-2"], min(by_round),
+               max(by_round), identical, same))
     for scene, size, spp in (("cornell-box", 256, 64), ("glass-metal", 256, 64), ("terrain", 256, 16)):
         runs = {"bvh4": [], "bvh8": []}
         file = resized(os.path.join(scenes, scene + ".json"), size, os.path.join(scenes, "%s-%d.json" % (scene, size)))
