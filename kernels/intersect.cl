@@ -450,15 +450,23 @@ __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut,
   return found && any_hit;
 }
 
+/* The 8-wide BVH's node at interior reference ref, and the first block of leaf reference ref: both in
+ * bvh8, references in 8-byte words (kernels/shared/types.h), so the address is one scaled addition. */
+inline __global const Bvh8Node* bvh8_node(__global const Bvh8Node* bvh8, uint ref) {
+  return (__global const Bvh8Node*)((__global const ulong*)bvh8 + ref);
+}
+inline __global const LeafBlock* bvh8_leaf(__global const LeafBlock* bvh8, uint ref) {
+  return (__global const LeafBlock*)((__global const ulong*)bvh8 + (ref & ~PC_BVH4_LEAF));
+}
+
 /* The leaf reference's blocks (kernels/shared/types.h); with any_hit, true at the first hit. */
 __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut, __global const LeafBlock* blocks,
                                                             __global const Primitive* prims, uint ref, const Ray* ray,
                                                             const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
-  for (uint i = 0; i < (count + 3u) / 4u; ++i) {
-    if (intersect_block(cut, blocks + first + i, prims, ray, rp, any_hit, hit, kz)) return true;
+  for (__global const LeafBlock* b = bvh8_leaf(blocks, ref);; ++b) {
+    if (intersect_block(cut, b, prims, ray, rp, any_hit, hit, kz)) return true;
+    if (b->last) return false;
   }
-  return false;
 }
 
 /* Asks the cache for the node or the leaf blocks of reference ref, which traversal has pushed and will pop
@@ -467,8 +475,8 @@ __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut
  * +8 % (docs/benchmarks-notes.md). */
 inline void prefetch_subtree(__global const Bvh8Node* nodes, __global const LeafBlock* blocks, uint ref) {
 #if defined(__clang__) && defined(__x86_64__)
-  __global const char* p = (ref & PC_BVH4_LEAF) ? (__global const char*)(blocks + ((ref & ~PC_BVH4_LEAF) >> 4))
-                                                : (__global const char*)(nodes + ref);
+  __global const char* p = (ref & PC_BVH4_LEAF) ? (__global const char*)bvh8_leaf(blocks, ref)
+                                                : (__global const char*)bvh8_node(nodes, ref);
   __builtin_prefetch(p);
   __builtin_prefetch(p + 64);
   __builtin_prefetch(p + 128);
@@ -498,7 +506,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
       nearest = hit->t;
       nearest_far = nearest * slab_widening();
     } else {
-      __global const Bvh8Node* n = nodes + ref;
+      __global const Bvh8Node* n = bvh8_node(nodes, ref);
       float8 entry;
       /* Bit i of mask: child i is hit. */
       uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit8_fused(&fused, ray->tmin, nearest_far, n, &entry)

@@ -159,15 +159,13 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
   inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,                     \
                               __global const Primitive* prims, uint ref, const RayPacket##N* r, U kz,     \
                               F sx, F sy, F sz, I active, HitPacket##N* h) {                              \
-    uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;                                    \
     /* Derived from kz here at every leaf: passed in from trace_packet (computed once a packet) they were  \
      * spilled and reloaded instead, and the Cornell box at 16 lanes ran 4.3 % slower. */                  \
     LaneAxes##N axes = lane_axes(kz);                                                                     \
     F okx, oky, okz;                                                                                      \
     pc_permute_lanes(r->o, axes.z_is_x, axes.z_is_y, axes.z_is_z, &okx, &oky, &okz);                      \
     I changed = (I)(0);                                                                                   \
-    for (uint bi = 0u; bi < (count + 3u) / 4u; ++bi) {                                                    \
-      __global const LeafBlock* b = blocks + first + bi;                                                  \
+    for (__global const LeafBlock* b = bvh8_leaf(blocks, ref);; ++b) {                                   \
       __global const float* c = (__global const float*)b; /* ax ay az bx by bz cx cy cz, 4 lanes each */ \
       for (uint i = 0u; i < b->count; ++i) {                                                              \
         if (b->sphere_mask & (1u << i)) {                                                                 \
@@ -211,8 +209,8 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
         h->prim = select(h->prim, (U)(prim), accept);                                                     \
         changed |= accept;                                                                                \
       }                                                                                                   \
+      if (b->last) return changed;                                                                        \
     }                                                                                                     \
-    return changed;                                                                                       \
   }                                                                                                       \
   /* The packet through the tree from node root (closest hit; with any_hit a lane stops at its first hit, \
    * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's entry   \
@@ -257,7 +255,7 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
           if (!pc_any_(active)) return found;                                                             \
         }                                                                                                 \
       } else {                                                                                            \
-        __global const Bvh8Node* n = nodes + ref;                                                         \
+        __global const Bvh8Node* n = bvh8_node(nodes, ref);                                               \
         int base = sp;                                                                                    \
         for (uint c = 0u; c < 8u; ++c) {                                                                  \
           uint child = n->child[c];                                                                       \

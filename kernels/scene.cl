@@ -15,11 +15,11 @@ typedef struct {
 #undef PC_SCENE_FIELD
 
 /* The BVH of the layout this program was built for, as trace_bvh's first two arguments: the nodes and
- * the leaf blocks (kernels/intersect.cl). */
+ * the leaf blocks (kernels/intersect.cl), for the 8-wide layout both in bvh8; the 4-wide one has none. */
 #ifdef PC_BVH8
-#define PC_SCENE_BVH(sc) (sc)->nodes8, (sc)->leaf_blocks
+#define PC_SCENE_BVH(sc) (__global const Bvh8Node*)(sc)->bvh8, (__global const LeafBlock*)(sc)->bvh8
 #else
-#define PC_SCENE_BVH(sc) (sc)->nodes, (sc)->leaf_blocks
+#define PC_SCENE_BVH(sc) (sc)->nodes, (__global const LeafBlock*)(sc)->bvh8
 #endif
 
 /* A kernel's first parameters: the header and every scene array (bound by runtime/scene_buffers.h). */

@@ -4,7 +4,7 @@
 
 bool scene_array_used(const char* name, uint32_t bvh_width) {
   if (std::strcmp(name, "nodes") == 0) return bvh_width == 4;
-  if (std::strcmp(name, "nodes8") == 0 || std::strcmp(name, "leaf_blocks") == 0) return bvh_width == 8;
+  if (std::strcmp(name, "bvh8") == 0) return bvh_width == 8;
   return true;
 }
 
@@ -18,13 +18,14 @@ size_t scene_bytes(const DeviceScene& scene, uint32_t width) {
 }
 
 BvhBuffers upload_bvh(ClContext& cl, const DeviceScene& scene) {
-  if (bvh_width(cl.info) == 8) return {upload(cl, scene.nodes8), upload(cl, scene.leaf_blocks)};
-  return {upload(cl, scene.nodes), upload(cl, std::vector<LeafBlock>())};
+  if (bvh_width(cl.info) == 8) return {upload(cl, scene.bvh8)};
+  return {upload(cl, scene.nodes)};
 }
 
+// The 8-wide layout's nodes and leaf blocks are one buffer, bound as both.
 cl_uint BvhBuffers::bind(ClKernel& kernel, cl_uint first) const {
-  kernel.arg(first, nodes.mem);
-  kernel.arg(first + 1, blocks.mem);
+  kernel.arg(first, tree.mem);
+  kernel.arg(first + 1, tree.mem);
   return first + 2;
 }
 

@@ -12,11 +12,12 @@
 bool scene_array_used(const char* name, uint32_t bvh_width);
 // Bytes of device memory the header and the arrays take on a device with this BVH width.
 size_t scene_bytes(const DeviceScene& scene, uint32_t bvh_width);
-// The scene's BVH in the device's layout: the nodes, and the leaf blocks of the 8-wide tree (a dummy for
-// the 4-wide one), for kernels that take them as two arguments (kernels/trace.cl).
+// The scene's BVH in the device's layout, for kernels that take its nodes and leaf blocks as two arguments
+// (kernels/trace.cl): the 8-wide tree's one array as both, or the 4-wide tree's nodes as both (it has no
+// blocks).
 struct BvhBuffers {
-  ClBuffer nodes, blocks;
-  // Sets arguments first and first + 1; returns first + 2.
+  ClBuffer tree;  // nodes (4-wide) or bvh8 (8-wide)
+  // Sets arguments first and first + 1 (both tree); returns first + 2.
   cl_uint bind(ClKernel& kernel, cl_uint first) const;
 };
 BvhBuffers upload_bvh(ClContext& cl, const DeviceScene& scene);

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 #include <glm/common.hpp>
 #include <tbb/blocked_range.h>
@@ -445,32 +446,80 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary); }
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary) { return collapse<Bvh8Node, 8>(binary); }
 
-std::vector<LeafBlock> make_leaf_blocks(std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims) {
-  std::vector<LeafBlock> blocks;
-  blocks.reserve(prims.size() / 3 + 1);
-  for (Bvh8Node& node : nodes)
+namespace {
+
+// The block of prims[first, first + count) (count 1 to 4); unused lanes repeat the last primitive (and
+// are masked off by count).
+LeafBlock leaf_block(const std::vector<Primitive>& prims, uint32_t first, uint32_t count, bool last) {
+  LeafBlock b{};
+  b.first_slot = first;
+  b.count = count;
+  b.last = last ? 1u : 0u;
+  for (int lane = 0; lane < 4; ++lane) {
+    const Primitive& p = prims[first + std::min(uint32_t(lane), count - 1)];
+    set_lane(b.ax, lane, p.a.x), set_lane(b.ay, lane, p.a.y), set_lane(b.az, lane, p.a.z);
+    set_lane(b.bx, lane, p.b.x), set_lane(b.by, lane, p.b.y), set_lane(b.bz, lane, p.b.z);
+    set_lane(b.cx, lane, p.c.x), set_lane(b.cy, lane, p.c.y), set_lane(b.cz, lane, p.c.z);
+    uint32_t prim, kind;
+    std::memcpy(&prim, &p.a.w, 4);
+    std::memcpy(&kind, &p.b.w, 4);
+    b.prim[lane] = prim;
+    if (uint32_t(lane) < count && kind == PC_PRIM_SPHERE) b.sphere_mask |= 1u << lane;
+  }
+  return b;
+}
+
+constexpr size_t kWord = 8;  // bvh8's references count these (kernels/shared/types.h)
+
+}  // namespace
+
+uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
+                     std::vector<pc_float4>& bvh8) {
+  auto leaf_count = [](pc_uint ref) { return (ref & 15u) + 1; };
+  // Where everything goes: each node at a multiple of 64 bytes, then its leaves' blocks.
+  std::vector<size_t> node_at(nodes.size());
+  size_t end = bvh8.size() * sizeof(pc_float4);
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    end = (end + 63) / 64 * 64;
+    node_at[k] = end;
+    end += sizeof(Bvh8Node);
+    for (pc_uint ref : nodes[k].child)
+      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) end += (leaf_count(ref) + 3) / 4 * sizeof(LeafBlock);
+  }
+  if (end / kWord > PC_BVH8_MAX_WORDS)
+    throw std::length_error("the 8-wide BVH takes " + std::to_string(end >> 20) + " MiB; at most " +
+                            std::to_string((size_t(PC_BVH8_MAX_WORDS) * kWord) >> 20) + " are supported");
+  bvh8.resize(end / sizeof(pc_float4));  // zero-filled: padding and unused planes' pad
+  char* bytes = reinterpret_cast<char*>(bvh8.data());
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    Bvh8Node node = nodes[k];
+    size_t at = node_at[k] + sizeof(Bvh8Node);
     for (pc_uint& ref : node.child) {
-      if (ref == PC_INVALID || !(ref & PC_BVH4_LEAF)) continue;
-      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1;
-      ref = PC_BVH4_LEAF | uint32_t(blocks.size()) << 4 | (count - 1);
-      for (uint32_t start = 0; start < count; start += 4) {
-        LeafBlock b{};
-        b.first_slot = first + start;
-        b.count = std::min(count - start, 4u);
-        for (int lane = 0; lane < 4; ++lane) {
-          // Unused lanes repeat the last primitive (and are masked off by count).
-          const Primitive& p = prims[first + start + std::min(uint32_t(lane), b.count - 1)];
-          set_lane(b.ax, lane, p.a.x), set_lane(b.ay, lane, p.a.y), set_lane(b.az, lane, p.a.z);
-          set_lane(b.bx, lane, p.b.x), set_lane(b.by, lane, p.b.y), set_lane(b.bz, lane, p.b.z);
-          set_lane(b.cx, lane, p.c.x), set_lane(b.cy, lane, p.c.y), set_lane(b.cz, lane, p.c.z);
-          uint32_t prim, kind;
-          std::memcpy(&prim, &p.a.w, 4);
-          std::memcpy(&kind, &p.b.w, 4);
-          b.prim[lane] = prim;
-          if (uint32_t(lane) < b.count && kind == PC_PRIM_SPHERE) b.sphere_mask |= 1u << lane;
-        }
-        blocks.push_back(b);
+      if (ref == PC_INVALID) continue;
+      if (!(ref & PC_BVH4_LEAF)) {
+        ref = pc_uint(node_at[ref] / kWord);
+        continue;
+      }
+      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = leaf_count(ref);
+      ref = PC_BVH4_LEAF | pc_uint(at / kWord);
+      for (uint32_t start = 0; start < count; start += 4, at += sizeof(LeafBlock)) {
+        LeafBlock b = leaf_block(prims, first + start, std::min(count - start, 4u), start + 4 >= count);
+        std::memcpy(bytes + at, &b, sizeof b);
       }
     }
-  return blocks;
+    std::memcpy(bytes + node_at[k], &node, sizeof node);
+  }
+  return pc_uint(node_at[0] / kWord);
+}
+
+Bvh8Node bvh8_node(const std::vector<pc_float4>& bvh8, uint32_t at) {
+  Bvh8Node n;
+  std::memcpy(&n, reinterpret_cast<const char*>(bvh8.data()) + size_t(at) * kWord, sizeof n);
+  return n;
+}
+
+LeafBlock bvh8_block(const std::vector<pc_float4>& bvh8, uint32_t at) {
+  LeafBlock b;
+  std::memcpy(&b, reinterpret_cast<const char*>(bvh8.data()) + size_t(at) * kWord, sizeof b);
+  return b;
 }

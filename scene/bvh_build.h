@@ -55,10 +55,15 @@ using Bvh8 = WideBvh<Bvh8Node>;
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
 // The 8-wide tree: of all the ways to collapse the binary tree into 8-wide nodes whose leaves are binary
 // subtrees (of at most 16 primitives), the one of least SAH cost, where a node visited costs
-// kWideNodeCost and a leaf kLeafBlockCost for each block of four primitives it is tested in
-// (make_leaf_blocks). Leaf references hold primitive slots until make_leaf_blocks.
+// kWideNodeCost and a leaf kLeafBlockCost for each block of four primitives it is tested in. Its
+// references are node indices and, for leaves, primitive slots as in Bvh4Node, until append_bvh8.
 constexpr float kWideNodeCost = 1, kLeafBlockCost = 1;
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);
-// The 8-wide tree's leaves as LeafBlocks of prims (in leaf order); rewrites the leaf references of nodes
-// to refer to the blocks (kernels/shared/types.h).
-std::vector<LeafBlock> make_leaf_blocks(std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims);
+// Appends the 8-wide tree to bvh8 in the device's layout (kernels/shared/types.h): each node, then its
+// leaf children's LeafBlocks of prims (whose slots the leaf references hold), references rewritten to
+// word offsets in bvh8. Returns the root's. Throws std::length_error past PC_BVH8_MAX_WORDS.
+uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
+                     std::vector<pc_float4>& bvh8);
+// bvh8's node, or block, at word offset at (a copy).
+Bvh8Node bvh8_node(const std::vector<pc_float4>& bvh8, uint32_t at);
+LeafBlock bvh8_block(const std::vector<pc_float4>& bvh8, uint32_t at);

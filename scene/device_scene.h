@@ -57,8 +57,8 @@ struct BvhStats {
 
 // The arrays (PC_SCENE_ARRAYS of kernels/shared/types.h):
 //   nodes      the 4-wide BVH (collapse_to_bvh4 of the binary tree)
-//   nodes8     the 8-wide BVH (collapse_to_bvh8 of the same tree); a device gets one of the two
-//   leaf_blocks  the 8-wide BVH's leaves, four primitives a block (make_leaf_blocks)
+//   bvh8       the 8-wide BVH (collapse_to_bvh8 of the same tree) and its leaves, four primitives a
+//              block, in one array (append_bvh8); a device gets nodes or bvh8
 //   prims      geometry in BVH leaf order
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes
@@ -73,7 +73,7 @@ struct BvhStats {
 //   textures, texels
 //   env_dist   the environment map's sampling distribution (kernels/environment.cl)
 //   instances  the rest of the scene (identity) and each placement of an instanced mesh, in the order of
-//              instance_bvh's leaves; nodes, nodes8, leaf_blocks and prims hold the rest of the scene's
+//              instance_bvh's leaves; nodes, bvh8 and prims hold the rest of the scene's
 //              BVH first (root 0), then each instanced mesh's
 //   instance_bvh  the binary BVH over the instances' boxes
 struct DeviceScene {
@@ -91,4 +91,5 @@ struct DeviceScene {
   BvhStats bvh;
   uint32_t wide_depth = 0;           // depth of the 4-wide tree
   uint32_t wide8_depth = 0;          // depth of the 8-wide tree
+  uint32_t wide8_nodes = 0;          // its nodes (in bvh8, among the leaf blocks)
 };

@@ -92,7 +92,7 @@ namespace {
 
 // Where a BVH appended to the device scene starts, and what it bounds.
 struct TreeRoots {
-  uint32_t root4 = 0, root8 = 0;  // root nodes in nodes and nodes8
+  uint32_t root4 = 0, root8 = 0;  // root node in nodes, and word offset of the root in bvh8
   Aabb box;                        // of its primitives, in the coordinates they are stored in
 };
 
@@ -114,7 +114,6 @@ TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, con
   }
   TreeRoots roots;
   roots.root4 = uint32_t(out.nodes.size());
-  roots.root8 = uint32_t(out.nodes8.size());
   const BvhNode& top = bvh.nodes[0];
   roots.box = {{top.lo[0], top.lo[1], top.lo[2]}, {top.hi[0], top.hi[1], top.hi[2]}};
   // Interior references by the node offset, leaf references (primitive slots) by `first`.
@@ -127,15 +126,12 @@ TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, con
   };
   for (Bvh4Node& n : wide.nodes)
     for (pc_uint& ref : n.child) offset(ref, roots.root4, first);
-  for (Bvh8Node& n : wide8.nodes)
-    for (pc_uint& ref : n.child) offset(ref, roots.root8, first);
-  std::vector<LeafBlock> blocks = make_leaf_blocks(wide8.nodes, out.prims);
-  for (Bvh8Node& n : wide8.nodes)  // leaf references now count blocks from this tree's first
+  for (Bvh8Node& n : wide8.nodes)  // leaf slots as in out.prims; append_bvh8 places the rest
     for (pc_uint& ref : n.child)
-      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) offset(ref, 0, uint32_t(out.leaf_blocks.size()));
+      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) offset(ref, 0, first);
   out.nodes.insert(out.nodes.end(), wide.nodes.begin(), wide.nodes.end());
-  out.nodes8.insert(out.nodes8.end(), wide8.nodes.begin(), wide8.nodes.end());
-  out.leaf_blocks.insert(out.leaf_blocks.end(), blocks.begin(), blocks.end());
+  roots.root8 = append_bvh8(wide8.nodes, out.prims, out.bvh8);
+  out.wide8_nodes += uint32_t(wide8.nodes.size());
   out.wide_depth = std::max(out.wide_depth, wide.depth);
   out.wide8_depth = std::max(out.wide8_depth, wide8.depth);
   return roots;

@@ -56,28 +56,64 @@ std::pair<glm::vec3, glm::vec3> lane_box(const Node& n, int i) {
   return {{lane(n.lo_x, i), lane(n.lo_y, i), lane(n.lo_z, i)}, {lane(n.hi_x, i), lane(n.hi_y, i), lane(n.hi_z, i)}};
 }
 
-// The leaf slot of a wide leaf's k-th primitive: its references hold slots (4-wide) or blocks (8-wide).
-uint32_t leaf_slot(const std::vector<Bvh4Node>&, const DeviceScene&, uint32_t first, uint32_t k) { return first + k; }
-uint32_t leaf_slot(const std::vector<Bvh8Node>&, const DeviceScene& scene, uint32_t first, uint32_t k) {
-  const LeafBlock& b = scene.leaf_blocks.at(first + k / 4);
-  EXPECT_LT(k % 4, b.count);
-  uint32_t slot = b.first_slot + k % 4;
-  // The block holds the primitive's index and vertices (a sphere's lane is tested from prims).
-  const Primitive& p = scene.prims.at(slot);
-  uint32_t prim;
-  std::memcpy(&prim, &p.a.w, 4);
-  EXPECT_EQ(b.prim[k % 4], prim);
-  if (!(b.sphere_mask & (1u << (k % 4)))) {
-    EXPECT_EQ(lane(b.ax, k % 4), p.a.x);
-    EXPECT_EQ(lane(b.by, k % 4), p.b.y);
-    EXPECT_EQ(lane(b.cz, k % 4), p.c.z);
+// A wide tree's nodes by reference: the 4-wide tree's are indices into nodes; the 8-wide tree's are word
+// offsets into bvh8, where each node is followed by its leaves' blocks (kernels/shared/types.h).
+struct Tree4 {
+  const DeviceScene& scene;
+  const Bvh4Node& node(uint32_t ref) const { return scene.nodes.at(ref); }
+  size_t node_count() const { return scene.nodes.size(); }
+};
+struct Tree8 {
+  const DeviceScene& scene;
+  Bvh8Node node(uint32_t ref) const {
+    EXPECT_EQ(ref % (64 / 8), 0u) << "a node at a multiple of 64 bytes";
+    EXPECT_LE((size_t(ref) * 8 + sizeof(Bvh8Node)) / sizeof(pc_float4), scene.bvh8.size());
+    return bvh8_node(scene.bvh8, ref);
   }
-  return slot;
+  size_t node_count() const { return scene.wide8_nodes; }
+};
+
+// The leaf slots of a wide leaf reference of the node at node_ref: its references hold slots (4-wide) or
+// its first block (8-wide), whose blocks hold full lanes up to the last.
+std::vector<uint32_t> leaf_slots(const Tree4&, uint32_t, uint32_t ref) {
+  std::vector<uint32_t> slots;
+  for (uint32_t k = 0; k <= (ref & 15u); ++k) slots.push_back(((ref & ~PC_BVH4_LEAF) >> 4) + k);
+  return slots;
+}
+std::vector<uint32_t> leaf_slots(const Tree8& tree, uint32_t node_ref, uint32_t ref) {
+  std::vector<uint32_t> slots;
+  uint32_t at = ref & ~PC_BVH4_LEAF;
+  EXPECT_GE(at, node_ref + sizeof(Bvh8Node) / 8) << "a leaf's blocks after its node";
+  for (;; at += sizeof(LeafBlock) / 8) {
+    if (size_t(at) * 8 + sizeof(LeafBlock) > tree.scene.bvh8.size() * sizeof(pc_float4)) {
+      ADD_FAILURE() << "a leaf's blocks past the end of bvh8, or no last block";
+      break;
+    }
+    LeafBlock b = bvh8_block(tree.scene.bvh8, at);
+    EXPECT_TRUE(b.count >= 1 && b.count <= 4 && (b.last || b.count == 4)) << "count " << b.count;
+    for (uint32_t k = 0; k < b.count; ++k) {
+      uint32_t slot = b.first_slot + k;
+      // The block holds the primitive's index and vertices (a sphere's lane is tested from prims).
+      const Primitive& p = tree.scene.prims.at(slot);
+      uint32_t prim;
+      std::memcpy(&prim, &p.a.w, 4);
+      EXPECT_EQ(b.prim[k], prim);
+      if (!(b.sphere_mask & (1u << k))) {
+        EXPECT_EQ(lane(b.ax, k), p.a.x);
+        EXPECT_EQ(lane(b.by, k), p.b.y);
+        EXPECT_EQ(lane(b.cz, k), p.c.z);
+      }
+      if (!slots.empty()) EXPECT_EQ(slot, slots.back() + 1);
+      slots.push_back(slot);
+    }
+    if (b.last) break;
+  }
+  return slots;
 }
 
 // A wide tree of Width children a node: every primitive in exactly one leaf, children inside parents.
-template <class Node, int Width>
-void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, uint32_t wide_depth) {
+template <int Width, class Tree>
+void check_wide_tree(const DeviceScene& scene, const Tree& tree, uint32_t wide_depth) {
   std::vector<int> seen(scene.prims.size(), 0);
   // (wide node, depth, the box its parent gave it)
   struct Item {
@@ -90,8 +126,7 @@ void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, u
     Item item = stack.back();
     stack.pop_back();
     max_depth = std::max(max_depth, item.depth);
-    ASSERT_LT(item.node, nodes.size());
-    const Node& n = nodes[item.node];
+    const auto n = tree.node(item.node);
     int used = 0, interior = 0;
     for (int i = 0; i < Width; ++i) {
       auto [lo, hi] = lane_box(n, i);
@@ -112,11 +147,10 @@ void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, u
         stack.push_back({ref, item.depth + 1, lo, hi});
         continue;
       }
-      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1;
+      std::vector<uint32_t> slots = leaf_slots(tree, item.node, ref);
       ++leaves;
-      max_leaf = std::max(max_leaf, count);
-      for (uint32_t k = 0; k < count; ++k) {
-        uint32_t slot = leaf_slot(nodes, scene, first, k);
+      max_leaf = std::max(max_leaf, uint32_t(slots.size()));
+      for (uint32_t slot : slots) {
         ASSERT_LT(slot, scene.prims.size());
         seen[slot]++;
         // The leaf's box holds the primitive.
@@ -151,7 +185,7 @@ void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, u
   EXPECT_EQ(max_depth, wide_depth);
   // The kernel's stack holds Width - 1 entries per wide level: the wide tree is no deeper than the binary one.
   EXPECT_LE(wide_depth, scene.bvh.depth);
-  EXPECT_LT(nodes.size(), scene.bvh.node_count / (Width / 2));
+  EXPECT_LT(tree.node_count(), scene.bvh.node_count / (Width / 2));
 }
 
 }  // namespace
@@ -159,8 +193,8 @@ void check_wide_tree(const DeviceScene& scene, const std::vector<Node>& nodes, u
 TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
   DeviceScene scene = load_device_scene(write_temp_file("bvh-structure.json", random_scene_json(3000, 30, 1)));
   ASSERT_EQ(scene.prims.size(), 3030u);
-  check_wide_tree<Bvh4Node, 4>(scene, scene.nodes, scene.wide_depth);
-  check_wide_tree<Bvh8Node, 8>(scene, scene.nodes8, scene.wide8_depth);
+  check_wide_tree<4>(scene, Tree4{scene}, scene.wide_depth);
+  check_wide_tree<8>(scene, Tree8{scene}, scene.wide8_depth);
   EXPECT_LT(scene.wide8_depth, scene.wide_depth);
   EXPECT_LE(scene.bvh.depth, kBvhMaxDepth);
   // A SAH tree over 3000 scattered primitives is far cheaper than testing them all.
@@ -253,9 +287,11 @@ TEST(Bvh, SmallSceneIsOneLeafUnderTheRoot) {
   const Bvh4Node& root = scene.nodes[0];
   EXPECT_EQ(root.child[0], PC_BVH4_LEAF | 0u);  // slot 0, one primitive
   for (int i = 1; i < 4; ++i) EXPECT_GT(lane_box(root, i).first.x, lane_box(root, i).second.x);
-  ASSERT_EQ(scene.nodes8.size(), 1u);
-  EXPECT_EQ(scene.nodes8[0].child[0], PC_BVH4_LEAF | 0u);
-  for (int i = 1; i < 8; ++i) EXPECT_GT(lane_box(scene.nodes8[0], i).first.x, lane_box(scene.nodes8[0], i).second.x);
+  ASSERT_EQ(scene.wide8_nodes, 1u);
+  const Bvh8Node root8 = bvh8_node(scene.bvh8, 0);
+  EXPECT_EQ(root8.child[0], PC_BVH4_LEAF | uint32_t(sizeof(Bvh8Node) / 8));  // its one block right after it
+  for (int i = 1; i < 8; ++i) EXPECT_GT(lane_box(root8, i).first.x, lane_box(root8, i).second.x);
+  EXPECT_EQ(scene.bvh8.size() * sizeof(pc_float4), sizeof(Bvh8Node) + sizeof(LeafBlock));
 }
 
 // A random soup, plus a 12 x 12 grid of quads placed twice (two shapes, the same triangles): rays through

@@ -81,29 +81,35 @@ typedef struct {
   pc_uint child[4];
 } Bvh4Node;
 
-/* 8-wide (one float8 slab test checks all eight children): lo_x .. hi_z (6 x 32) + child (32) + pad (32) =
- * 256 bytes, four whole cache lines, and a node's address a shift of its index (with the fused slab test,
- * bounce rays +1-3 %, camera rays +3 %: docs/benchmarks-notes.md); interior references and unused slots as
- * in Bvh4Node. Its leaves are binary subtrees of at most four
- * primitives (or a binary leaf) stored as LeafBlocks: a leaf reference (PC_BVH4_LEAF set) holds the first
- * block (ref & ~PC_BVH4_LEAF) >> 4 and the primitive count (ref & 15) + 1, in (count + 3) / 4 blocks. */
+/* 8-wide (one float8 slab test checks all eight children): child (32) + lo_x .. hi_z (6 x 32) + pad (32) =
+ * 256 bytes, four whole cache lines. The child references share the first line with lo_x, which every
+ * node test loads, so they arrive with the planes instead of after the hit mask asks for them. Unused
+ * slots as in Bvh4Node. Nodes and their leaves live in one array, bvh8 (PC_SCENE_ARRAYS), each node (at a
+ * multiple of 64 bytes) followed by the LeafBlocks of its leaf children, as Embree's allocator lays them
+ * out. References count 8-byte words from bvh8's start, so that an address is one scaled addition: an
+ * interior child is its node's offset, a leaf (PC_BVH4_LEAF set) its first block's, and a leaf's blocks
+ * follow each other up to the one marked last. Its leaves are binary subtrees of at most 16 primitives (or
+ * a binary leaf). Against separate arrays of nodes and blocks addressed by index: bounce rays on the
+ * benchmark terrain +3 %, camera rays +2 % (docs/benchmarks-notes.md). */
+#define PC_BVH8_MAX_WORDS PC_BVH4_LEAF /* references below PC_BVH4_LEAF: 16 GiB */
 typedef struct {
+  pc_uint child[8];
   float lo_x[8], lo_y[8], lo_z[8];
   float hi_x[8], hi_y[8], hi_z[8];
-  pc_uint child[8];
   pc_uint pad[8]; /* zero */
 } Bvh8Node;
 
-/* Up to four primitives of an 8-wide BVH leaf, vertices by coordinate, so that one float4 watertight
- * test checks four triangles: a, b, c by coordinate (9 x 16) + prim (16) + first_slot, count,
- * sphere_mask, pad (16) = 176 bytes. Lane i is prims[first_slot + i]; a sphere's lane is tested alone. */
+/* Up to four primitives of an 8-wide BVH leaf (in bvh8, after its parent node), vertices by coordinate, so
+ * that one float4 watertight test checks four triangles: a, b, c by coordinate (9 x 16) + prim (16) +
+ * first_slot, count, sphere_mask, last (16) = 176 bytes. Lane i is prims[first_slot + i]; a sphere's lane
+ * is tested alone. */
 typedef struct {
   pc_float4 ax, ay, az, bx, by, bz, cx, cy, cz;
   pc_uint prim[4];     /* scene-order primitive index of each lane */
   pc_uint first_slot;
   pc_uint count;       /* lanes in use, 1 to 4 */
   pc_uint sphere_mask; /* bit i: lane i is a sphere */
-  pc_uint pad;
+  pc_uint last;        /* 1 on a leaf's last block, else 0 */
 } LeafBlock;
 
 /* A node of a binary BVH flattened depth-first: lo (12) + left_first (4) + hi (12) + prim_count (4) = 32
@@ -117,7 +123,7 @@ typedef struct {
   pc_uint prim_count;
 } BvhNode;
 
-/* A placement of a mesh (PC_HAS_INSTANCES): the mesh's own BVH (its root in nodes and in nodes8, over its
+/* A placement of a mesh (PC_HAS_INSTANCES): the mesh's own BVH (its root in nodes and in bvh8, over its
  * primitives, which are stored once in the mesh's coordinates) and the affine transforms between the
  * mesh's and the device's coordinates as three rows (x, y, z, translation) each. Instance 0 is the rest of
  * the scene, stored in device coordinates (PC_INSTANCE_IDENTITY: no transform is applied).
@@ -127,7 +133,7 @@ typedef struct {
   pc_float4 to_device[3];
   pc_float4 to_mesh[3];
   pc_uint root4; /* the mesh's root node in nodes (4-wide layout) */
-  pc_uint root8; /* in nodes8 (8-wide layout) */
+  pc_uint root8; /* byte offset in bvh8 (8-wide layout) */
   pc_uint flags; /* PC_INSTANCE_* */
   pc_uint pad;
 } Instance;
@@ -299,7 +305,7 @@ typedef struct {
  * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
-  X(Bvh4Node, nodes) X(Bvh8Node, nodes8) X(LeafBlock, leaf_blocks) X(Primitive, prims) X(PrimShading, shading)  \
+  X(Bvh4Node, nodes) X(pc_float4, bvh8) X(Primitive, prims) X(PrimShading, shading)  \
   X(pc_float4, normals) X(pc_float4, uvs) X(pc_float4, colors) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
   X(Texture, textures) X(pc_uint, texels)                                                                      \
   X(float, env_dist) X(Instance, instances) X(BvhNode, instance_bvh)
@@ -313,7 +319,7 @@ typedef struct {
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
   X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(LeafBlock, ax) \
-  X(LeafBlock, cz) X(LeafBlock, prim) X(LeafBlock, first_slot) X(LeafBlock, count) X(LeafBlock, sphere_mask) X(Primitive, a)                \
+  X(LeafBlock, cz) X(LeafBlock, prim) X(LeafBlock, first_slot) X(LeafBlock, count) X(LeafBlock, sphere_mask) X(LeafBlock, last) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior) X(Material, opacity) X(Material, opacity_texture)  \
@@ -334,9 +340,11 @@ static_assert(sizeof(Instance) == 112, "Instance is 112 bytes");
 static_assert(sizeof(Bvh4Node) == 112, "Bvh4Node is 112 bytes");
 static_assert(sizeof(Bvh8Node) == 256, "Bvh8Node is 256 bytes");
 // kernels/intersect.cl (fused_slabs) loads a node's planes from these float offsets.
-static_assert(offsetof(Bvh8Node, lo_y) == 8 * sizeof(float) && offsetof(Bvh8Node, lo_z) == 16 * sizeof(float) &&
-                  offsetof(Bvh8Node, hi_x) == 24 * sizeof(float) && offsetof(Bvh8Node, hi_y) == 32 * sizeof(float) &&
-                  offsetof(Bvh8Node, hi_z) == 40 * sizeof(float),
+static_assert(offsetof(Bvh8Node, lo_y) - offsetof(Bvh8Node, lo_x) == 8 * sizeof(float) &&
+                  offsetof(Bvh8Node, lo_z) - offsetof(Bvh8Node, lo_x) == 16 * sizeof(float) &&
+                  offsetof(Bvh8Node, hi_x) - offsetof(Bvh8Node, lo_x) == 24 * sizeof(float) &&
+                  offsetof(Bvh8Node, hi_y) - offsetof(Bvh8Node, lo_x) == 32 * sizeof(float) &&
+                  offsetof(Bvh8Node, hi_z) - offsetof(Bvh8Node, lo_x) == 40 * sizeof(float),
               "Bvh8Node's planes are eight floats apart, lo_x .. hi_z");
 static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
