@@ -4,7 +4,7 @@ camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain
 the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
 Checks that both layouts and the packets give the same hit records as each other, and counts what a ray
 visits on pathcl's 8-wide tree and on one built by Embree's builder (bench/bvh_visits.cpp).
-Usage: scripts/bench/layouts [--rounds N] [--size PIXELS]   (results: bench/results/layouts/*.json, beside and
+Usage: scripts/bench/layouts [--rounds N] [--size PIXELS] [--bar ROUNDS]   (results: bench/results/layouts/*.json, beside and
 not among the peer runs that scripts/bench/report.py reads)
 """
 import argparse
@@ -82,6 +82,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--size", type=int, default=768, help="terrain film side: camera rays, 2 a pixel")
+    ap.add_argument("--bar", type=int, default=0, metavar="ROUNDS",
+                    help="only the diffuse-bounce bar: the 8-wide single ray against Embree with 2 threads, alternated "
+                         "ROUNDS times (the per-round ratios narrow the figure on a noisy machine)")
     args = ap.parse_args()
     work = os.path.join(BUILD, "bench-layouts")
     os.makedirs(work, exist_ok=True)
@@ -97,6 +100,10 @@ def main():
 
     result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
               "pathcl": run([PATHCL, "--version"]).splitlines()[0], "rounds": args.rounds, "rays": {}, "samples": {}}
+    if args.bar:
+        result["bar"] = bar(big, obj, bounce, work, args.bar)
+        save(result)
+        return
     for name, rays in (("camera", cam), ("diffuse_bounce", bounce)):
         runs = {"bvh4": [], "bvh8": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": []}
         hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in (4, 8)}
@@ -146,6 +153,35 @@ def main():
         result["samples"][scene] = {"size": size, "spp": spp, "median_samples_per_second": med, "runs": runs}
         print("%s %dx%d, %d spp: 4-wide %.3f, 8-wide %.3f Msamples/s (%.2fx)" %
               (scene, size, size, spp, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh8"] / med["bvh4"]))
+    save(result)
+
+
+def bar(scene, obj, rays, work, rounds):
+    """pathcl's 8-wide single ray and Embree with 2 threads on the bounce rays, alternated (who goes first
+    swaps each round)."""
+    runs = {"bvh8": [], "embree-2": []}
+    embree = lambda: json.loads(run([EMBREE_RAYS, obj, rays, "--threads", "2", "--repeat", "5"]))["rays_per_second"]
+    for i in range(rounds):
+        if i % 2 == 0:
+            runs["bvh8"].append(pathcl_rays(scene, rays, 8, work))
+            runs["embree-2"].append(embree())
+        else:
+            runs["embree-2"].append(embree())
+            runs["bvh8"].append(pathcl_rays(scene, rays, 8, work))
+    ratios = sorted(p / e for p, e in zip(runs["bvh8"], runs["embree-2"]))
+    med = {k: statistics.median(v) for k, v in runs.items()}
+    out = {"runs": runs, "median_rays_per_second": med, "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
+           "round_ratio_median": statistics.median(ratios), "round_ratio_quartiles": [ratios[len(ratios) // 4],
+                                                                                    ratios[3 * len(ratios) // 4]],
+           "rounds_above_1": sum(r > 1 for r in ratios)}
+    print("diffuse_bounce bar, %d rounds: 8-wide %.2f, Embree 2 threads %.2f Mrays/s, %.3fx; per round %.3fx "
+          "(quartiles %.3f-%.3f, %d above 1)" % (rounds, med["bvh8"] / 1e6, med["embree-2"] / 1e6,
+                                                 out["bvh8_over_embree2"], out["round_ratio_median"],
+                                                 *out["round_ratio_quartiles"], out["rounds_above_1"]))
+    return out
+
+
+def save(result):
     os.makedirs(os.path.join(ROOT, "bench", "results", "layouts"), exist_ok=True)
     out = os.path.join(ROOT, "bench", "results", "layouts", "%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
     with open(out, "w") as f:
