@@ -46,10 +46,9 @@ struct WTree {
   float rlo[3], rhi[3];
 };
 
+// Half the surface area of the box lo, hi (Aabb's: 0 for an empty box).
 double half_area(const float lo[3], const float hi[3]) {
-  double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
-  if (dx < 0 || dy < 0 || dz < 0) return 0;
-  return dx * dy + dy * dz + dz * dx;
+  return Aabb{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}.half_area();
 }
 
 void stats(const char* name, const WTree& t) {
@@ -115,7 +114,7 @@ struct ENode {
 struct ELeaf {
   int leaf;  // 1
   unsigned n;
-  unsigned ids[1];  // n of them (allocated so)
+  unsigned* ids;  // n of them, allocated right after the leaf
 };
 void* e_create_node(RTCThreadLocalAllocator alloc, unsigned int numChildren, void*) {
   ENode* p = (ENode*)rtcThreadLocalAlloc(alloc, sizeof(ENode), 16);
@@ -134,6 +133,7 @@ void e_set_bounds(void* node, const RTCBounds** bounds, unsigned int n, void*) {
 void* e_create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t n, void*) {
   ELeaf* p = (ELeaf*)rtcThreadLocalAlloc(alloc, sizeof(ELeaf) + sizeof(unsigned) * n, 16);
   p->leaf = 1; p->n = unsigned(n);
+  p->ids = reinterpret_cast<unsigned*>(p + 1);
   for (size_t i = 0; i < n; ++i) p->ids[i] = prims[i].primID;
   return p;
 }

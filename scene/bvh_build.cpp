@@ -489,7 +489,7 @@ uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primi
   if (end / kWord > PC_BVH8_MAX_WORDS)
     throw std::length_error("the 8-wide BVH takes " + std::to_string(end >> 20) + " MiB; at most " +
                             std::to_string((size_t(PC_BVH8_MAX_WORDS) * kWord) >> 20) + " are supported");
-  bvh8.resize(end / sizeof(pc_float4));  // zero-filled: padding and unused planes' pad
+  bvh8.resize(end / sizeof(pc_float4));  // zero-filled: the padding before nodes and in them
   char* bytes = reinterpret_cast<char*>(bvh8.data());
   for (size_t k = 0; k < nodes.size(); ++k) {
     Bvh8Node node = nodes[k];

@@ -133,7 +133,7 @@ typedef struct {
   pc_float4 to_device[3];
   pc_float4 to_mesh[3];
   pc_uint root4; /* the mesh's root node in nodes (4-wide layout) */
-  pc_uint root8; /* byte offset in bvh8 (8-wide layout) */
+  pc_uint root8; /* the root's offset in bvh8, in 8-byte words (8-wide layout) */
   pc_uint flags; /* PC_INSTANCE_* */
   pc_uint pad;
 } Instance;

@@ -46,6 +46,12 @@ def bvh_visits(obj, rays):
     return {"per_ray": visits, "trees": trees}
 
 
+def embree_rays(obj, rays, threads, compare=None):
+    """embree_rays' JSON for the ray file with `threads` threads (5 repetitions); compare: pathcl's hit file."""
+    cmd = [EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5"]
+    return json.loads(run(cmd + (["--compare", compare] if compare else [])))
+
+
 def with_width(width):
     return dict(os.environ, PATHCL_BVH_WIDTH=str(width))
 
@@ -114,8 +120,7 @@ def main():
             for n in (8, 16):
                 runs["packet%d" % n].append(pathcl_rays(big, rays, 8, work, packet_hits[n], lanes=n))
             for threads in (1, 2):
-                out = run([EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5", "--compare", hits[8]])
-                e = json.loads(out)
+                e = embree_rays(obj, rays, threads, hits[8])
                 runs["embree-%d" % threads].append(e["rays_per_second"])
                 same = e["same_primitive_fraction"]
         visits = bvh_visits(obj, rays)
@@ -160,7 +165,7 @@ def bar(scene, obj, rays, work, rounds):
     """pathcl's 8-wide single ray and Embree with 2 threads on the bounce rays, alternated (who goes first
     swaps each round)."""
     runs = {"bvh8": [], "embree-2": []}
-    embree = lambda: json.loads(run([EMBREE_RAYS, obj, rays, "--threads", "2", "--repeat", "5"]))["rays_per_second"]
+    embree = lambda: embree_rays(obj, rays, 2)["rays_per_second"]
     for i in range(rounds):
         if i % 2 == 0:
             runs["bvh8"].append(pathcl_rays(scene, rays, 8, work))
