@@ -3,13 +3,14 @@
 // SCENE.obj is `pathcl info --dump-obj` output: all faces in file order form one triangle geometry, so
 // Embree's primID is pathcl's primitive index (scenes without spheres). Rays and hits use pathcl's
 // 32- and 16-byte records (docs/scene-format.md). Traces with rtcIntersect1 (or, with --packet, rtcIntersect8
-// or rtcIntersect16 on consecutive rays) on N threads (static
-// chunks), R timed repetitions, and prints one JSON line: rays, hits, build and per-repetition times,
-// median rays/s, and with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's.
+// or rtcIntersect16 on consecutive rays) on N threads that take chunks of kChunk rays in turn, R timed
+// repetitions, and prints one JSON line: rays, hits, build and per-repetition times, median rays/s, and
+// with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's.
 // Built by scripts/bench/peers (not part of the CMake build, which does not depend on Embree).
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -117,6 +118,12 @@ void trace_packets(RTCScene scene, const std::vector<Ray>& rays, std::vector<Hit
   }
 }
 
+// Rays a thread takes at a time. Dynamic, as PoCL hands out work-groups: two static halves left one thread
+// idle at the end, which cost Embree 3.8 % on the terrain's bounce rays with 2 threads (10 rounds,
+// docs/benchmarks-notes.md); 64 to 4096 rays all measured within 2 % of each other. A multiple of 16, so
+// that packets are the same consecutive rays with any thread count.
+constexpr size_t kChunk = 256;
+
 void trace_with(int packet, RTCScene scene, const std::vector<Ray>& rays, std::vector<Hit>& hits, size_t begin,
                 size_t end) {
   if (packet == 16)
@@ -174,11 +181,12 @@ int main(int argc, char** argv) {
     for (int r = 0; r < repeat; ++r) {
       auto t = std::chrono::steady_clock::now();
       std::vector<std::thread> pool;
-      size_t chunk = (rays.size() + threads - 1) / threads;
-      for (int k = 0; k < threads; ++k) {
-        size_t b = std::min(rays.size(), k * chunk), e = std::min(rays.size(), b + chunk);
-        pool.emplace_back(trace_with, packet, scene, std::cref(rays), std::ref(hits), b, e);
-      }
+      std::atomic<size_t> next{0};
+      for (int k = 0; k < threads; ++k)
+        pool.emplace_back([&] {
+          for (size_t b; (b = next.fetch_add(kChunk)) < rays.size();)
+            trace_with(packet, scene, rays, hits, b, std::min(rays.size(), b + kChunk));
+        });
       for (auto& p : pool) p.join();
       ms.push_back(seconds_since(t) * 1e3);
     }
