@@ -431,7 +431,7 @@ int run_info(const std::string& path, const std::string& dump_obj) {
   std::printf("kernel options: %s\n", kernel_options(v.features).c_str());
   std::printf("bvh: %u nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
               v.bvh.node_count, v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);
-  std::printf("device bvh: 4-wide (GPUs) %zu nodes, depth %u; 8-wide (CPUs) %zu nodes, depth %u\n", v.nodes.size(),
+  std::printf("device bvh: 4-wide (GPUs) %zu nodes, depth %u; 8-wide (CPUs) %u nodes, depth %u\n", v.nodes.size(),
               v.wide_depth, v.wide8_nodes, v.wide8_depth);
   std::printf("scene load and clean-up: %.1f ms\n", s.load_ms);
   return 0;
@@ -526,7 +526,7 @@ int main(int argc, char** argv) {
                        "depends on the split)");
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
-  render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: the driver's choice)");
+  render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: 64, or 8 with --lanes 8 or 16)");
   render_cmd->add_option("--lanes", ra.lanes,
                          "paths per work item of the path integrator: 1, 8 or 16 (the same pixels); 0: the device's "
                          "(16 or 8 on CPU devices, 1 on GPUs)");
@@ -559,7 +559,7 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--device", ya.device, "device index or name substring");
   rays_cmd->add_option("--repeat", ya.repeat, "timed repetitions (the median is reported)");
   rays_cmd->add_option("--stats", ya.stats, "write statistics as JSON");
-  rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: the driver's choice)");
+  rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: 64, or 8 with --lanes 8 or 16)");
   rays_cmd->add_option("--lanes", ya.lanes, "rays per work item: 1, or packets of 8 or 16 (8-wide BVH devices)");
   rays_cmd->add_flag("--any-hit", ya.any_hit, "stop each ray at its first hit found (shadow rays; only hit or miss is defined)");
 

@@ -220,6 +220,15 @@ ClBuffer& ClBuffer::operator=(ClBuffer&& o) noexcept {
   return *this;
 }
 
+size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested, uint32_t lanes, const std::string& what) {
+  size_t limit = 0;
+  CL_CHECK(clGetKernelWorkGroupInfo(kernel, cl.info.device, CL_KERNEL_WORK_GROUP_SIZE, sizeof limit, &limit, nullptr));
+  if (requested > limit)
+    throw UsageError("--work-group " + std::to_string(requested) + ": " + cl.info.name + " runs the " + what +
+                     " kernel in work groups of at most " + std::to_string(limit));
+  return requested > 0 ? requested : std::min<size_t>(lanes > 1 ? 8 : 64, limit);
+}
+
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
   size_t global = items;
   if (work_group > 0) global = (items + work_group - 1) / work_group * work_group;

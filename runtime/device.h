@@ -96,6 +96,13 @@ ClBuffer upload(ClContext& cl, const std::vector<T>& data) {
                       : ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * data.size(), data.data());
 }
 
+// The work-group size a kernel runs in: `requested` (a --work-group option) if the device allows it, else
+// UsageError naming `what`; 0 chooses 64 work items, or 8 where each holds the rays or paths of lanes > 1
+// (PoCL keeps a group's private memory on its stack), or the kernel's limit if lower. One size for every
+// launch: PoCL compiles a work-group function per local size, and left to itself it chooses the local size
+// from the global size's factors (4094 of 53,222 packets of 16 rays: 13 groups for 2 threads).
+size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested, uint32_t lanes, const std::string& what);
+
 // Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size; 0 lets
 // the driver choose) and returns the kernel's time on the device in milliseconds, from profiling events.
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);

@@ -68,16 +68,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   kernel_->arg(first_unit_arg_, film_.mem);
   kernel_->arg(first_unit_arg_ + 1, stats_.mem);
 
-  // One work-group size for every launch: PoCL compiles a work-group function for each new local size,
-  // and chooses the local size from the global size when it is left to it.
-  size_t limit = 0;
-  CL_CHECK(clGetKernelWorkGroupInfo(kernel_->k, cl.info.device, CL_KERNEL_WORK_GROUP_SIZE, sizeof limit, &limit, nullptr));
-  if (settings.work_group > limit)
-    throw UsageError("--work-group " + std::to_string(settings.work_group) + ": " + cl.info.name +
-                     " runs the render kernel in work groups of at most " + std::to_string(limit));
-  // The lane kernels' work items hold 8 or 16 paths each: PoCL keeps a work group's private memory on its
-  // stack, so their groups are smaller.
-  work_group_ = settings.work_group > 0 ? settings.work_group : std::min<size_t>(lanes_ > 1 ? 8 : 64, limit);
+  work_group_ = kernel_work_group(cl, kernel_->k, settings.work_group, lanes_, "render");
   cl_ulong private_bytes = 0;
   CL_CHECK(clGetKernelWorkGroupInfo(kernel_->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
                                     &private_bytes, nullptr));

@@ -35,6 +35,7 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
   ClBuffer prims = upload(cl, scene.prims), ray_buf = upload(cl, moved.empty() ? rays : moved);
   ClBuffer hit_buf(cl, CL_MEM_WRITE_ONLY, sizeof(HitRecord) * rays.size());
   ClKernel kernel(program.kernel(lanes == 1 ? "trace_rays" : lanes == 8 ? "trace_rays_packet8" : "trace_rays_packet16"));
+  work_group = kernel_work_group(cl, kernel.k, work_group, lanes, "ray");
   cl_uint next = bvh.bind(kernel, 0);
   kernel.arg(next, prims.mem);
   kernel.arg(next + 1, ray_buf.mem);
