@@ -227,16 +227,17 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
     F dkx, dky, dz;                                                                                       \
     pc_permute_lanes(r->d, kz == 0u, kz == 1u, kz == 2u, &dkx, &dky, &dz);                                \
     F sx = -dkx / dz, sy = -dky / dz, sz = 1.0f / dz;                                                     \
-    /* A subtree that few of the lanes enter is traced lane by lane (the same hits): at most a quarter    \
-     * of them where their rays point into one octant (camera rays, shadow rays towards a light: they go  \
-     * on together), three quarters where not (bounce rays: below the top of a large tree they enter few  \
-     * of the same boxes, and a packet does the work of all its lanes at every node). Three quarters for  \
-     * every packet: the terrain at 16 lanes +9.6 %, packets of 8 camera rays -11 %; a quarter for every  \
-     * packet: bounce rays at 8 lanes 3.1 against 3.8 M/s lane by lane (docs/benchmarks-notes.md). */     \
+    /* Where the rays point into one octant (camera rays, shadow rays towards a light: they go on         \
+     * together), a subtree that at most a quarter of the lanes enter is traced lane by lane (the same    \
+     * hits); where not (bounce rays: below the top of a large tree they enter few of the same boxes, and \
+     * a packet does the work of all its lanes at every node), every subtree below the root but the       \
+     * leaves: against those that at most three quarters enter, the terrain at 16 lanes +3.7 %, packets   \
+     * of 8 bounce rays +7.4 %, the Cornell box and glass-metal (whose root's children are mostly leaves) \
+     * unchanged; the root lane by lane as well: the terrain +5.9 %, but the Cornell box -20 %            \
+     * (docs/benchmarks-notes.md). */                                                                     \
     uint all = pc_lane_bits(active), bx = pc_lane_bits(active & neg_x);                                   \
     uint by = pc_lane_bits(active & neg_y), bz = pc_lane_bits(active & neg_z);                            \
     bool one_octant = (bx == 0u || bx == all) && (by == 0u || by == all) && (bz == 0u || bz == all);      \
-    uint by_lane_quarters = one_octant ? 1u : 3u;                                                         \
     I found = (I)(0);                                                                                     \
     uint stack[7 * PC_BVH_STACK];                                                                         \
     float stack_key[7 * PC_BVH_STACK];                                                                    \
@@ -294,7 +295,7 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
         lanes = active & (stack_entry[sp] <= h->t);                                                       \
         if (!pc_any_(lanes)) continue;                                                                    \
         uint bits = pc_lane_bits(lanes);                                                                  \
-        if (4u * popcount(bits) > by_lane_quarters * N || (stack[sp] & PC_BVH4_LEAF)) break;              \
+        if ((one_octant && 4u * popcount(bits) > N) || (stack[sp] & PC_BVH4_LEAF)) break;                 \
         if (!by_lane_ready) packet_by_lane(r, inv_d, kz, sx, sy, sz, &by_lane);                           \
         by_lane_ready = true;                                                                             \
         uint changed = packet_subtrees_by_lane(cut, nodes, blocks, prims, stack[sp], &by_lane, bits, any_hit, h); \
