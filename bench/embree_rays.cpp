@@ -1,11 +1,13 @@
 // Embree 3 ray throughput on the same triangles and ray files as `pathcl rays` (scripts/bench/peers).
 //   embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] [--compare PATHCL_HITS] [--packet 1|8|16]
+//               [--robust 0|1]
 // SCENE.obj is `pathcl info --dump-obj` output: all faces in file order form one triangle geometry, so
 // Embree's primID is pathcl's primitive index (scenes without spheres). Rays and hits use pathcl's
 // 32- and 16-byte records (docs/scene-format.md). Traces with rtcIntersect1 (or, with --packet, rtcIntersect8
 // or rtcIntersect16 on consecutive rays) on N threads that take chunks of kChunk rays in turn, R timed
 // repetitions, and prints one JSON line: rays, hits, build and per-repetition times, median rays/s, and
-// with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's.
+// with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's. --robust 1 sets
+// RTC_SCENE_FLAG_ROBUST (conservative node tests and watertight triangle tests, as pathcl's always are).
 // Built by scripts/bench/peers (not part of the CMake build, which does not depend on Embree).
 #include <embree3/rtcore.h>
 
@@ -141,9 +143,9 @@ void trace_with(int packet, RTCScene scene, const std::vector<Ray>& rays, std::v
 int main(int argc, char** argv) {
   try {
     if (argc < 3) throw std::runtime_error("usage: embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] "
-                                           "[--compare PATHCL_HITS] [--packet 1|8|16]");
+                                           "[--compare PATHCL_HITS] [--packet 1|8|16] [--robust 0|1]");
     std::string obj = argv[1], ray_path = argv[2], hits_out, compare;
-    int threads = 1, repeat = 5, packet = 1;
+    int threads = 1, repeat = 5, packet = 1, robust = 0;
     for (int i = 3; i + 1 < argc; i += 2) {
       std::string k = argv[i];
       if (k == "--threads") threads = std::atoi(argv[i + 1]);
@@ -151,6 +153,7 @@ int main(int argc, char** argv) {
       else if (k == "--hits") hits_out = argv[i + 1];
       else if (k == "--compare") compare = argv[i + 1];
       else if (k == "--packet") packet = std::atoi(argv[i + 1]);
+      else if (k == "--robust") robust = std::atoi(argv[i + 1]);
       else throw std::runtime_error("unknown option " + k);
     }
     if (packet != 1 && packet != 8 && packet != 16) throw std::runtime_error("--packet: 1, 8 or 16 rays");
@@ -163,6 +166,7 @@ int main(int argc, char** argv) {
     RTCDevice device = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
     if (!device) throw std::runtime_error("rtcNewDevice failed");
     RTCScene scene = rtcNewScene(device);
+    if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                             3 * sizeof(float), verts.size() / 3));

@@ -1,5 +1,6 @@
 """BVH layouts side by side (issue 15; a benchmark, not a test): `pathcl rays` with the 4- and the 8-wide
-BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--lanes), against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads) on the same
+BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--lanes), against Embree's
+rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads, and 2 threads with RTC_SCENE_FLAG_ROBUST) on the same
 camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
 the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
 Checks that both layouts and the packets give the same hit records as each other, and counts what a ray
@@ -46,9 +47,10 @@ def bvh_visits(obj, rays):
     return {"per_ray": visits, "trees": trees}
 
 
-def embree_rays(obj, rays, threads, compare=None):
-    """embree_rays' JSON for the ray file with `threads` threads (5 repetitions); compare: pathcl's hit file."""
-    cmd = [EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5"]
+def embree_rays(obj, rays, threads, compare=None, robust=False):
+    """embree_rays' JSON for the ray file with `threads` threads (5 repetitions); compare: pathcl's hit file;
+    robust: RTC_SCENE_FLAG_ROBUST (watertight, like pathcl's tests)."""
+    cmd = [EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5", "--robust", str(int(robust))]
     return json.loads(run(cmd + (["--compare", compare] if compare else [])))
 
 
@@ -111,7 +113,8 @@ def main():
         save(result)
         return
     for name, rays in (("camera", cam), ("diffuse_bounce", bounce)):
-        runs = {"bvh4": [], "bvh8": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": []}
+        runs = {"bvh4": [], "bvh8": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": [],
+                "embree-2-robust": []}
         hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in (4, 8)}
         packet_hits = {n: os.path.join(work, "%s-packet%d.hits" % (name, n)) for n in (8, 16)}
         for _ in range(args.rounds):
@@ -123,6 +126,9 @@ def main():
                 e = embree_rays(obj, rays, threads, hits[8])
                 runs["embree-%d" % threads].append(e["rays_per_second"])
                 same = e["same_primitive_fraction"]
+            e = embree_rays(obj, rays, 2, hits[8], robust=True)
+            runs["embree-2-robust"].append(e["rays_per_second"])
+            same_robust = e["same_primitive_fraction"]
         visits = bvh_visits(obj, rays)
         v = {t: visits["per_ray"][t]["all"] for t in ("pathcl", "embree")}
         print("%s rays visit %.2f nodes and %.2f blocks on pathcl's 8-wide tree, %.2f and %.2f on Embree's builder's" %
@@ -136,18 +142,21 @@ def main():
         # Each round's own ratio: the two programs a few seconds apart, so their spread shows this machine's.
         by_round = [p / e for p, e in zip(runs["bvh8"], runs["embree-2"])]
         result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
-                                "embree_same_primitive_fraction": same, "visits": visits,
+                                "embree_same_primitive_fraction": same,
+                                "embree_robust_same_primitive_fraction": same_robust, "visits": visits,
                                 "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
+                                "bvh8_over_embree2_robust": med["bvh8"] / med["embree-2-robust"],
                                 "bvh8_over_embree2_by_round": by_round,
                                 "bvh8_over_bvh4": med["bvh8"] / med["bvh4"],
                                 "packet8_over_bvh8": med["packet8"] / med["bvh8"],
                                 "packet16_over_bvh8": med["packet16"] / med["bvh8"]}
         print("%s rays: 4-wide %.2f, 8-wide %.2f, packets of 8 %.2f, of 16 %.2f, Embree 1 thread %.2f, 2 threads "
-              "%.2f Mrays/s; 8-wide / Embree-2 %.2f (rounds %.2f-%.2f); hit records of the layouts and packets identical: %s; same "
-              "primitive as Embree: %.4f" %
+              "%.2f, robust %.2f Mrays/s; 8-wide / Embree-2 %.2f (rounds %.2f-%.2f), / robust %.2f; hit records of the "
+              "layouts and packets identical: %s; same primitive as Embree: %.4f, robust %.4f" %
               (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["packet8"] / 1e6, med["packet16"] / 1e6,
-               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["bvh8"] / med["embree-2"], min(by_round),
-               max(by_round), identical, same))
+               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["embree-2-robust"] / 1e6,
+               med["bvh8"] / med["embree-2"], min(by_round), max(by_round),
+               med["bvh8"] / med["embree-2-robust"], identical, same, same_robust))
     for scene, size, spp in (("cornell-box", 256, 64), ("glass-metal", 256, 64), ("terrain", 256, 16)):
         runs = {"bvh4": [], "bvh8": []}
         file = resized(os.path.join(scenes, scene + ".json"), size, os.path.join(scenes, "%s-%d.json" % (scene, size)))
