@@ -526,7 +526,7 @@ int main(int argc, char** argv) {
                        "depends on the split)");
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
-  render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: 64, or 8 with --lanes 8 or 16)");
+  render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: 64, or 8 for 8 or 16 lanes)");
   render_cmd->add_option("--lanes", ra.lanes,
                          "paths per work item of the path integrator: 1, 8 or 16 (the same pixels); 0: the device's "
                          "(16 or 8 on CPU devices, 1 on GPUs)");
@@ -559,7 +559,7 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--device", ya.device, "device index or name substring");
   rays_cmd->add_option("--repeat", ya.repeat, "timed repetitions (the median is reported)");
   rays_cmd->add_option("--stats", ya.stats, "write statistics as JSON");
-  rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: 64, or 8 with --lanes 8 or 16)");
+  rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: 64, or 8 for 8 or 16 lanes)");
   rays_cmd->add_option("--lanes", ya.lanes, "rays per work item: 1, or packets of 8 or 16 (8-wide BVH devices)");
   rays_cmd->add_flag("--any-hit", ya.any_hit, "stop each ray at its first hit found (shadow rays; only hit or miss is defined)");
 

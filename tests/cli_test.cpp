@@ -154,6 +154,10 @@ TEST(Cli, DevicesInfoAndRays) {
   EXPECT_LE(hits[0].prim, 1u);  // the floor: the first quad of the first shape, as two triangles
   EXPECT_EQ(hits[1].t, INFINITY);
   EXPECT_EQ(hits[1].prim, PC_INVALID);
+  // A work group the device cannot run is bad input, as for render (runtime/device.h, kernel_work_group).
+  EXPECT_EQ(run_pathcl("rays " + scene("tiny.json") + " --rays " + ray_file + " --work-group 100000", &err), 2);
+  EXPECT_NE(err.find("error: --work-group 100000: "), std::string::npos) << err;
+  EXPECT_NE(err.find("runs the ray kernel in work groups of at most"), std::string::npos) << err;
 
   // A ray file whose size is not a multiple of 32 bytes is bad input.
   std::ofstream(ray_file, std::ios::binary) << "short";
