@@ -9,7 +9,7 @@
 // distance; popped entries beyond the nearest hit skipped), in double precision, and a leaf of n
 // triangles counts ceil(n / 4) blocks. Prints each tree's size and SAH, the visits per ray (all rays,
 // those that hit, those that miss), and how many rays hit the same triangle in both. Built by
-// CMakeLists.txt where Embree 3 is installed (scripts/bench/visits installs it).
+// CMakeLists.txt where Embree 3 is installed (scripts/bench/layouts installs it).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -84,7 +84,7 @@ WTree pathcl_tree(const std::vector<Aabb>& boxes) {
       d.hi[0][d.n] = s.hi_x[i]; d.hi[1][d.n] = s.hi_y[i]; d.hi[2][d.n] = s.hi_z[i];
       uint32_t c = s.child[i];
       if (c & PC_BVH4_LEAF) {
-        uint32_t first = (c & ~PC_BVH4_LEAF) >> 4, count = (c & 15) + 1;
+        uint32_t first = PC_LEAF_FIRST(c), count = PC_LEAF_COUNT(c);
         t.leaves.push_back({first, count});
         d.child[d.n] = -int32_t(t.leaves.size());
       } else {
@@ -205,7 +205,7 @@ WTree embree_tree(const std::vector<Aabb>& boxes) {
 }
 
 // ---------------- traversal ----------------
-struct Ray { float o[3], tmin, d[3], tmax; };
+using Ray = RayRecord;  // the ray file's records (kernels/shared/types.h)
 struct Counts { uint64_t nodes = 0, leaves = 0, blocks = 0; };
 
 // Moeller-Trumbore in double (counting visits needs no watertightness).
@@ -229,7 +229,7 @@ bool tri_hit(uint32_t tri, const double o[3], const double d[3], double tmin, do
 }
 
 int64_t trace(const WTree& t, const Ray& r, Counts& c) {
-  double o[3] = {r.o[0], r.o[1], r.o[2]}, d[3] = {r.d[0], r.d[1], r.d[2]}, inv[3];
+  double o[3] = {r.org[0], r.org[1], r.org[2]}, d[3] = {r.dir[0], r.dir[1], r.dir[2]}, inv[3];
   for (int a = 0; a < 3; ++a) inv[a] = 1.0 / d[a];
   const double tmin = r.tmin;
   double best = r.tmax;

@@ -295,7 +295,7 @@ __attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, 
 /* The leaf reference's primitives; with any_hit, true at the first hit. */
 __attribute__((always_inline)) inline bool intersect_leaf(const SceneData* cut, __global const Primitive* prims, uint ref, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  uint first = (ref & ~PC_BVH4_LEAF) >> 4, count = (ref & 15u) + 1u;
+  uint first = PC_LEAF_FIRST(ref), count = PC_LEAF_COUNT(ref);
   for (uint i = 0; i < count; ++i) {
     if (intersect_prim(cut, prims, first + i, ray, rp, kz, hit->t, hit) && any_hit) return true;
   }

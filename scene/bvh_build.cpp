@@ -416,7 +416,7 @@ struct Collapser {
       set_lane(node.hi_z, lane, used ? k->hi[2] : -INFINITY);
       node.child[lane] = PC_INVALID;
       if (used && is_leaf(kids[lane]))
-        node.child[lane] = PC_BVH4_LEAF | subtree_first[kids[lane]] << 4 | (subtree_count[kids[lane]] - 1);
+        node.child[lane] = PC_LEAF_REF(subtree_first[kids[lane]], subtree_count[kids[lane]]);
     }
     out.nodes[wide] = node;
     for (int lane = 0; lane < int(kids.size()); ++lane) {
@@ -475,7 +475,6 @@ constexpr size_t kWord = 8;  // bvh8's references count these (kernels/shared/ty
 
 uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
                      std::vector<pc_float4>& bvh8) {
-  auto leaf_count = [](pc_uint ref) { return (ref & 15u) + 1; };
   // Where everything goes: each node at a multiple of 64 bytes, then its leaves' blocks.
   std::vector<size_t> node_at(nodes.size());
   size_t end = bvh8.size() * sizeof(pc_float4);
@@ -484,7 +483,7 @@ uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primi
     node_at[k] = end;
     end += sizeof(Bvh8Node);
     for (pc_uint ref : nodes[k].child)
-      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) end += (leaf_count(ref) + 3) / 4 * sizeof(LeafBlock);
+      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) end += (PC_LEAF_COUNT(ref) + 3) / 4 * sizeof(LeafBlock);
   }
   if (end / kWord > PC_BVH8_MAX_WORDS)
     throw std::length_error("the 8-wide BVH takes " + std::to_string(end >> 20) + " MiB; at most " +
@@ -500,7 +499,7 @@ uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primi
         ref = pc_uint(node_at[ref] / kWord);
         continue;
       }
-      uint32_t first = (ref & ~PC_BVH4_LEAF) >> 4, count = leaf_count(ref);
+      uint32_t first = PC_LEAF_FIRST(ref), count = PC_LEAF_COUNT(ref);
       ref = PC_BVH4_LEAF | pc_uint(at / kWord);
       for (uint32_t start = 0; start < count; start += 4, at += sizeof(LeafBlock)) {
         LeafBlock b = leaf_block(prims, first + start, std::min(count - start, 4u), start + 4 >= count);

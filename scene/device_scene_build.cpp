@@ -120,7 +120,7 @@ TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, con
   auto offset = [](pc_uint& ref, uint32_t nodes, uint32_t slots) {
     if (ref == PC_INVALID) return;
     if (ref & PC_BVH4_LEAF)
-      ref = PC_BVH4_LEAF | (((ref & ~PC_BVH4_LEAF) >> 4) + slots) << 4 | (ref & 15u);
+      ref = PC_LEAF_REF(PC_LEAF_FIRST(ref) + slots, PC_LEAF_COUNT(ref));
     else
       ref += nodes;
   };

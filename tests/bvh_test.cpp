@@ -77,7 +77,7 @@ struct Tree8 {
 // its first block (8-wide), whose blocks hold full lanes up to the last.
 std::vector<uint32_t> leaf_slots(const Tree4&, uint32_t, uint32_t ref) {
   std::vector<uint32_t> slots;
-  for (uint32_t k = 0; k <= (ref & 15u); ++k) slots.push_back(((ref & ~PC_BVH4_LEAF) >> 4) + k);
+  for (uint32_t k = 0; k < PC_LEAF_COUNT(ref); ++k) slots.push_back(PC_LEAF_FIRST(ref) + k);
   return slots;
 }
 std::vector<uint32_t> leaf_slots(const Tree8& tree, uint32_t node_ref, uint32_t ref) {
@@ -213,7 +213,7 @@ double wide_tree_cost(const Bvh8& wide, const std::vector<BvhNode>& binary) {
     for (int i = 0; i < 8; ++i) {
       if (n.child[i] == PC_INVALID) continue;
       auto [lo, hi] = lane_box(n, i);
-      uint32_t count = (n.child[i] & 15u) + 1;
+      uint32_t count = PC_LEAF_COUNT(n.child[i]);
       cost += n.child[i] & PC_BVH4_LEAF ? kLeafBlockCost * area(lo, hi) * ((count + 3) / 4) : kWideNodeCost * area(lo, hi);
     }
   return cost;

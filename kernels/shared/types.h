@@ -70,10 +70,14 @@ typedef uint32_t pc_uint;
  * Both layouts have the binary tree's leaves and primitive order, and a hit is the nearest by (t, primitive
  * index), so every layout gives the same hit records (kernels/intersect.cl). 4-wide: Child boxes are stored by coordinate so one float4 slab test checks all four:
  * lo_x, lo_y, lo_z, hi_x, hi_y, hi_z (6 x 16) + child (16) = 112 bytes.
- * child[i] is an interior node index, or a leaf reference (PC_BVH4_LEAF set): primitives
- * [first, first + count) with first = (ref & ~PC_BVH4_LEAF) >> 4 and count = (ref & 15) + 1.
+ * child[i] is an interior node index, or a leaf reference (PC_BVH4_LEAF set) of primitives
+ * [first, first + count): PC_LEAF_REF(first, count).
  * An unused child slot has an empty box (lo = +inf, hi = -inf) that every slab test misses. */
 #define PC_BVH4_LEAF 0x80000000u
+/* A leaf reference of primitives [first, first + count), count 1 to 16, and its two parts. */
+#define PC_LEAF_REF(first, count) (PC_BVH4_LEAF | (first) << 4 | ((count) - 1u))
+#define PC_LEAF_FIRST(ref) (((ref) & ~PC_BVH4_LEAF) >> 4)
+#define PC_LEAF_COUNT(ref) (((ref) & 15u) + 1u)
 #define PC_BVH4_MAX_LEAF_FIRST (1u << 27)
 typedef struct {
   pc_float4 lo_x, lo_y, lo_z;
