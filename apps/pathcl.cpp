@@ -84,6 +84,7 @@ nlohmann::json scene_stats(const LoadedScene& s) {
           {"bvh_nodes", d.bvh.node_count},      {"bvh_depth", d.bvh.depth},
           {"bvh4_nodes", d.nodes.size()},       {"bvh4_depth", d.wide_depth},         {"bvh_leaves", d.bvh.leaf_count},
           {"bvh8_nodes", d.wide8_nodes},      {"bvh8_depth", d.wide8_depth},
+          {"bvh16_nodes", d.wide16_nodes},    {"bvh16_depth", d.wide16_depth},
           {"sah_cost", d.bvh.sah_cost},         {"bvh_build_ms", d.bvh.build_ms},   {"scene_load_ms", s.load_ms}};
 }
 
@@ -431,8 +432,9 @@ int run_info(const std::string& path, const std::string& dump_obj) {
   std::printf("kernel options: %s\n", kernel_options(v.features).c_str());
   std::printf("bvh: %u nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
               v.bvh.node_count, v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);
-  std::printf("device bvh: 4-wide (GPUs) %zu nodes, depth %u; 8-wide (CPUs) %u nodes, depth %u\n", v.nodes.size(),
-              v.wide_depth, v.wide8_nodes, v.wide8_depth);
+  std::printf("device bvh: 4-wide (GPUs) %zu nodes, depth %u; 8-wide (CPUs) %u nodes, depth %u; 16-wide (AVX-512 "
+              "CPUs) %u nodes, depth %u\n",
+              v.nodes.size(), v.wide_depth, v.wide8_nodes, v.wide8_depth, v.wide16_nodes, v.wide16_depth);
   std::printf("scene load and clean-up: %.1f ms\n", s.load_ms);
   return 0;
 }

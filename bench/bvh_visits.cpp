@@ -1,7 +1,7 @@
-// How much a closest-hit traversal visits on pathcl's 8-wide BVH and on a tree built by Embree's own
+// How much a closest-hit traversal visits on pathcl's 8- and 16-wide BVHs and on a tree built by Embree's own
 // builder, on the same rays (issue 15: is the bounce-ray gap to Embree in the tree?):
 //   bvh_visits MESH.obj RAYS [MAX_RAYS]
-// RAYS: 32-byte records as `pathcl rays` reads them. pathcl's tree: build_bvh and collapse_to_bvh8 over the
+// RAYS: 32-byte records as `pathcl rays` reads them. pathcl's trees: build_bvh and collapse_to_bvh8 or 16 over the
 // triangles' boxes (as the device scene builds it). Embree's: rtcBuildBVH with the settings of Embree 3.13's
 // BVH8 + Triangle4 scene builder (kernels/bvh/bvh_builder_sah.cpp: SAH blocks of 4, leaves of 4 to 28,
 // traversal and intersection cost 1, binned, no spatial splits). Both are traversed by one rule, pathcl's
@@ -33,8 +33,8 @@ std::vector<glm::dvec3> g_pos;  // triangle t: g_pos[3 t], g_pos[3 t + 1], g_pos
 // Both trees in one form: nodes of n children (interior or leaf) and leaves of the triangles
 // prims[first, first + count).
 struct WNode {
-  float lo[3][8], hi[3][8];
-  int32_t child[8];  // >= 0 interior index, < 0 leaf -(leaf+1)
+  float lo[3][16], hi[3][16];
+  int32_t child[16];  // >= 0 interior index, < 0 leaf -(leaf+1)
   int n = 0;
 };
 struct WLeaf { uint32_t first, count; };
@@ -68,17 +68,16 @@ void stats(const char* name, const WTree& t) {
          name, t.nodes.size(), t.leaves.size(), blocks, prims, double(prims) / blocks, 100.0 * prims / (4.0 * blocks), sah);
 }
 
-// ---------------- pathcl tree ----------------
-WTree pathcl_tree(const std::vector<Aabb>& boxes) {
-  Bvh bvh = build_bvh(boxes);
-  Bvh8 b8 = collapse_to_bvh8(bvh.nodes);
+// ---------------- pathcl trees ----------------
+template <class Node>
+WTree pathcl_tree(const Bvh& bvh, const WideBvh<Node>& b8, const char* name) {
   WTree t;
   t.prims = bvh.prim_order;
   t.nodes.resize(b8.nodes.size());
   for (size_t k = 0; k < b8.nodes.size(); ++k) {
-    const Bvh8Node& s = b8.nodes[k];
+    const Node& s = b8.nodes[k];
     WNode& d = t.nodes[k];
-    for (int i = 0; i < 8; ++i) {
+    for (int i = 0; i < int(std::size(s.child)); ++i) {
       if (s.child[i] == 0xffffffffu) break;
       d.lo[0][d.n] = s.lo_x[i]; d.lo[1][d.n] = s.lo_y[i]; d.lo[2][d.n] = s.lo_z[i];
       d.hi[0][d.n] = s.hi_x[i]; d.hi[1][d.n] = s.hi_y[i]; d.hi[2][d.n] = s.hi_z[i];
@@ -99,7 +98,7 @@ WTree pathcl_tree(const std::vector<Aabb>& boxes) {
       t.rlo[a] = std::min(t.rlo[a], t.nodes[0].lo[a][i]);
       t.rhi[a] = std::max(t.rhi[a], t.nodes[0].hi[a][i]);
     }
-  printf("[pathcl] binary nodes %u, binary SAH %.4f, bvh8 depth %u\n", bvh.node_count, bvh.sah_cost, b8.depth);
+  printf("[%s] binary nodes %u, binary SAH %.4f, depth %u\n", name, bvh.node_count, bvh.sah_cost, b8.depth);
   return t;
 }
 
@@ -242,7 +241,7 @@ int64_t trace(const WTree& t, const Ray& r, Counts& c) {
     if (cur >= 0) {
       c.nodes++;
       const WNode& nd = t.nodes[cur];
-      E h[8];
+      E h[16];
       int nh = 0;
       for (int i = 0; i < nd.n; ++i) {
         double tn = tmin, tf = best;
@@ -370,15 +369,20 @@ int main(int argc, char** argv) {
   std::fclose(f);
   std::printf("rays: %zu\n", rays.size());
 
-  WTree tp = pathcl_tree(boxes);
+  Bvh bvh = build_bvh(boxes);
+  WTree tp = pathcl_tree(bvh, collapse_to_bvh8(bvh.nodes), "pathcl");
   stats("pathcl", tp);
+  WTree t16 = pathcl_tree(bvh, collapse_to_bvh16(bvh.nodes), "pathcl16");
+  stats("pathcl16", t16);
   WTree te = embree_tree(boxes);
   stats("embree", te);
   std::vector<int64_t> hp, he;
   run("pathcl", tp, rays, hp);
   run("embree", te, rays, he);
+  std::vector<int64_t> h16;
+  run("pathcl16", t16, rays, h16);
   size_t same = 0;
-  for (size_t i = 0; i < rays.size(); ++i) same += hp[i] == he[i];
+  for (size_t i = 0; i < rays.size(); ++i) same += hp[i] == he[i] && h16[i] == he[i];
   std::printf("same hit (triangle index or both miss): %zu / %zu = %.6f\n", same, rays.size(), double(same) / rays.size());
   return 0;
 }

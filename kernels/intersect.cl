@@ -13,11 +13,27 @@
 #include "cutout.cl"
 #include "lanes.cl"
 
-/* The BVH layout of this device (runtime/device.h, bvh_width): PC_BVH8 for the 8-wide tree. */
-#ifdef PC_BVH8
+/* The BVH layout of this device (runtime/device.h, bvh_width): PC_BVH_WIDE = 8 or 16 for the CPU trees
+ * (nodes of 8 or 16 children followed by their leaves' blocks, in bvh8 or bvh16; kernels/shared/types.h),
+ * undefined for the 4-wide tree. WideF and WideI hold one value per child of a wide node. */
+#define PC_CAT_(a, b) a##b
+#define PC_CAT(a, b) PC_CAT_(a, b)
+#if PC_BVH_WIDE == 16
+typedef Bvh16Node WideNode;
+typedef float16 WideF;
+typedef int16 WideI;
+#elif PC_BVH_WIDE == 8
 typedef Bvh8Node WideNode;
+typedef float8 WideF;
+typedef int8 WideI;
+#elif defined(PC_BVH_WIDE)
+#error "PC_BVH_WIDE: 8 or 16"
 #else
 typedef Bvh4Node WideNode;
+#endif
+#ifdef PC_BVH_WIDE
+#define wide_load(p) PC_CAT(vload, PC_BVH_WIDE)(0, p)
+#define wide_store(v, p) PC_CAT(vstore, PC_BVH_WIDE)(v, 0, p)
 #endif
 
 typedef struct {
@@ -75,7 +91,7 @@ inline RayPrecomp ray_precompute(float3 d) {
   return p;
 }
 
-/* Robust slab test (pbrt-v4) of four or eight boxes at once (ray_boxes_hit4, ray_boxes_hit8), given by
+/* Robust slab test (pbrt-v4) of four, eight or sixteen boxes at once (ray_boxes_hit4, 8, 16), given by
  * coordinate (lo_x holds the boxes' lower x): the far distance is widened by 1 + 2 gamma(3) to cover
  * rounding. The near and far planes are chosen by the sign of inv_d (`negative`), not by comparing
  * distances, so that the NaN of an axis-parallel ray starting exactly on a slab plane (0 * inf) is
@@ -116,25 +132,26 @@ PC_DEFINE_SLAB(float16, int16)
   }
 PC_DEFINE_RAY_BOXES(4)
 PC_DEFINE_RAY_BOXES(8)
+PC_DEFINE_RAY_BOXES(16)
 #undef PC_DEFINE_RAY_BOXES
 
-/* Where fma() is an instruction: the 8-wide single-ray node test of a ray with finite FusedSlabs takes each
+/* Where fma() is an instruction: the 8- or 16-wide single-ray node test of a ray with finite FusedSlabs takes each
  * slab plane distance in one fused multiply-add, fma(plane, inv, off), instead of a subtraction and a
  * multiplication; no NaN can arise there, so the interval's ends are maxima and minima taken pairwise (two
  * levels instead of three), and the far planes are widened through inv_far, so no multiplication follows
  * their minimum. A shorter dependency chain a node: bounce rays on the benchmark terrain +4 %, camera rays
- * +3 % (docs/benchmarks-notes.md). Like ray_boxes_hit8 it enters every box the ray reaches within
+ * +3 % (docs/benchmarks-notes.md). Like ray_boxes_hit8 and 16 it enters every box the ray reaches within
  * [tmin, tmax] (the bound is at fused_slabs; tests/intersect_test.cpp); boxes missed by less than the
  * rounding may be entered by one test and not the other, which changes which nodes are visited, and in
  * which order, never the hits. Packets keep slab_hits: there the fused test measured 0.99x. Elsewhere
- * (PC_FUSED_SLABS undefined) no ray's FusedSlabs are usable, and ray_boxes_hit8 tests every node. */
+ * (PC_FUSED_SLABS undefined) no ray's FusedSlabs are usable, and ray_boxes_hit8 or 16 tests every node. */
 #if defined(__FMA__) || defined(FP_FAST_FMAF)
 #define PC_FUSED_SLABS
 #endif
 typedef struct {
   float3 inv_near, off_near; /* near planes: t = fma(plane, inv_near, off_near) */
   float3 inv_far, off_far;   /* far planes, widened by 1 + 2 gamma(3) as slab_hits widens its exit */
-  /* Where a Bvh8Node's near and far planes of each axis start, in floats from lo_x: lo or hi by the sign
+  /* Where a WideNode's near and far planes of each axis start, in floats from lo_x: lo or hi by the sign
    * of the direction. Loads from these offsets instead of a branch on each sign: bounce rays +2 %, as
    * their first nodes mispredict those branches; camera rays, which predict them, -3 %. */
   int3 near_at, far_at;
@@ -155,8 +172,14 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   float3 q_near = o * f.inv_near, q_far = o * f.inv_far;
   f.off_near = -q_near - fabs(q_near) * 0x1p-22f;
   f.off_far = -q_far + fabs(q_far) * 0x1p-22f;
-  /* lo_x .. hi_z at 0, 8, .. 40 floats (pinned by static asserts in kernels/shared/types.h) */
-  int3 negative = inv_d < 0.0f, lo_at = (int3)(0, 8, 16), hi_at = (int3)(24, 32, 40);
+  /* lo_x .. hi_z at 0, W, .. 5 W floats, W the node's width (pinned by static asserts in
+   * kernels/shared/types.h) */
+#ifdef PC_BVH_WIDE
+  int w = PC_BVH_WIDE;
+#else
+  int w = 8;
+#endif
+  int3 negative = inv_d < 0.0f, lo_at = (int3)(0, w, 2 * w), hi_at = (int3)(3 * w, 4 * w, 5 * w);
   f.near_at = select(lo_at, hi_at, negative);
   f.far_at = select(hi_at, lo_at, negative);
 #ifdef PC_FUSED_SLABS
@@ -167,23 +190,25 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   return f;
 }
 
-/* ray_boxes_hit8 by FusedSlabs (f->usable), the boxes of node n; tmax_far: tmax * (1 + 2 gamma(3)). */
-inline int8 ray_boxes_hit8_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const Bvh8Node* n,
-                                 float8* enter_out) {
+#ifdef PC_BVH_WIDE
+/* ray_boxes_hit8 or 16 by FusedSlabs (f->usable), the boxes of node n; tmax_far: tmax * (1 + 2 gamma(3)). */
+inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const WideNode* n,
+                                      WideF* enter_out) {
   __global const float* planes = n->lo_x;
-  float8 nx = fma(vload8(0, planes + f->near_at.x), (float8)(f->inv_near.x), (float8)(f->off_near.x));
-  float8 ny = fma(vload8(0, planes + f->near_at.y), (float8)(f->inv_near.y), (float8)(f->off_near.y));
-  float8 nz = fma(vload8(0, planes + f->near_at.z), (float8)(f->inv_near.z), (float8)(f->off_near.z));
-  float8 fx = fma(vload8(0, planes + f->far_at.x), (float8)(f->inv_far.x), (float8)(f->off_far.x));
-  float8 fy = fma(vload8(0, planes + f->far_at.y), (float8)(f->inv_far.y), (float8)(f->off_far.y));
-  float8 fz = fma(vload8(0, planes + f->far_at.z), (float8)(f->inv_far.z), (float8)(f->off_far.z));
-  float8 t0 = (float8)(tmin), t1 = (float8)(tmax_far);
-  float8 nxy = select(ny, nx, nx > ny), nzt = select(t0, nz, nz > t0);
-  float8 fxy = select(fy, fx, fx < fy), fzt = select(t1, fz, fz < t1);
-  float8 enter = select(nzt, nxy, nxy > nzt), exit = select(fzt, fxy, fxy < fzt);
+  WideF nx = fma(wide_load(planes + f->near_at.x), (WideF)(f->inv_near.x), (WideF)(f->off_near.x));
+  WideF ny = fma(wide_load(planes + f->near_at.y), (WideF)(f->inv_near.y), (WideF)(f->off_near.y));
+  WideF nz = fma(wide_load(planes + f->near_at.z), (WideF)(f->inv_near.z), (WideF)(f->off_near.z));
+  WideF fx = fma(wide_load(planes + f->far_at.x), (WideF)(f->inv_far.x), (WideF)(f->off_far.x));
+  WideF fy = fma(wide_load(planes + f->far_at.y), (WideF)(f->inv_far.y), (WideF)(f->off_far.y));
+  WideF fz = fma(wide_load(planes + f->far_at.z), (WideF)(f->inv_far.z), (WideF)(f->off_far.z));
+  WideF t0 = (WideF)(tmin), t1 = (WideF)(tmax_far);
+  WideF nxy = select(ny, nx, nx > ny), nzt = select(t0, nz, nz > t0);
+  WideF fxy = select(fy, fx, fx < fy), fzt = select(t1, fz, fz < t1);
+  WideF enter = select(nzt, nxy, nxy > nzt), exit = select(fzt, fxy, fxy < fzt);
   *enter_out = enter;
   return enter <= exit;
 }
+#endif
 
 /* Each of four boxes' entry distance, or INFINITY when it is missed within [tmin, tmax]. */
 inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
@@ -450,50 +475,59 @@ __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut,
   return found && any_hit;
 }
 
-/* The 8-wide BVH's node at interior reference ref, and the first block of leaf reference ref: both in
- * bvh8, references in 8-byte words (kernels/shared/types.h), so the address is one scaled addition. */
-inline __global const Bvh8Node* bvh8_node(__global const Bvh8Node* bvh8, uint ref) {
-  return (__global const Bvh8Node*)((__global const ulong*)bvh8 + ref);
+#ifdef PC_BVH_WIDE
+/* The 8- or 16-wide BVH's node at interior reference ref, and the first block of leaf reference ref: both
+ * in bvh8 or bvh16, references in 8-byte words (kernels/shared/types.h), so the address is one scaled
+ * addition. */
+inline __global const WideNode* wide_node(__global const WideNode* wide, uint ref) {
+  return (__global const WideNode*)((__global const ulong*)wide + ref);
 }
-inline __global const LeafBlock* bvh8_leaf(__global const LeafBlock* bvh8, uint ref) {
-  return (__global const LeafBlock*)((__global const ulong*)bvh8 + (ref & ~PC_BVH4_LEAF));
+inline __global const LeafBlock* wide_leaf(__global const LeafBlock* wide, uint ref) {
+  return (__global const LeafBlock*)((__global const ulong*)wide + (ref & ~PC_BVH4_LEAF));
 }
 
 /* The leaf reference's blocks (kernels/shared/types.h); with any_hit, true at the first hit. */
 __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut, __global const LeafBlock* blocks,
                                                             __global const Primitive* prims, uint ref, const Ray* ray,
                                                             const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  for (__global const LeafBlock* b = bvh8_leaf(blocks, ref);; ++b) {
+  for (__global const LeafBlock* b = wide_leaf(blocks, ref);; ++b) {
     if (intersect_block(cut, b, prims, ray, rp, any_hit, hit, kz)) return true;
     if (b->last) return false;
   }
 }
 
-/* Asks the cache for the node or the leaf blocks of reference ref, which traversal has pushed and will pop
- * after the subtree it goes on with: on PoCL's x86 targets (clang's prefetch instruction; OpenCL's
- * prefetch() is empty there), nothing elsewhere. Bounce rays on the benchmark terrain +8 %, camera rays
- * +8 % (docs/benchmarks-notes.md). */
-inline void prefetch_subtree(__global const Bvh8Node* nodes, __global const LeafBlock* blocks, uint ref) {
+/* Asks the cache for the node (all its lines) or the leaf blocks (four lines) of reference ref, which
+ * traversal has pushed and will pop after the subtree it goes on with: on PoCL's x86 targets (clang's
+ * prefetch instruction; OpenCL's prefetch() is empty there), nothing elsewhere. Bounce rays on the
+ * benchmark terrain +8 %, camera rays +8 % (docs/benchmarks-notes.md). */
+inline void prefetch_subtree(__global const WideNode* nodes, __global const LeafBlock* blocks, uint ref) {
 #if defined(__clang__) && defined(__x86_64__)
-  __global const char* p = (ref & PC_BVH4_LEAF) ? (__global const char*)bvh8_leaf(blocks, ref)
-                                                : (__global const char*)bvh8_node(nodes, ref);
+  __global const char* p = (ref & PC_BVH4_LEAF) ? (__global const char*)wide_leaf(blocks, ref)
+                                                : (__global const char*)wide_node(nodes, ref);
   __builtin_prefetch(p);
   __builtin_prefetch(p + 64);
   __builtin_prefetch(p + 128);
   __builtin_prefetch(p + 192);
+#if PC_BVH_WIDE == 16
+  if (!(ref & PC_BVH4_LEAF)) {
+    __builtin_prefetch(p + 256);
+    __builtin_prefetch(p + 320);
+    __builtin_prefetch(p + 384);
+  }
+#endif
 #endif
 }
 
-/* Traversal of the 8-wide BVH (CPU devices) from node root, as trace_bvh4_axis: one float8 slab test per node. As in Embree, one hit child
- * is entered at once, of two the nearer is entered and the other pushed, more are insertion-sorted onto
- * the stack by entry distance, nearest on top, and the nearest is popped. The stack holds at most 7
- * entries per level. */
-__attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut, __global const Bvh8Node* nodes,
+/* Traversal of the 8- or 16-wide BVH (CPU devices) from node root, as trace_bvh4_axis: one float8 or
+ * float16 slab test per node. As in Embree, one hit child is entered at once, of two the nearer is entered
+ * and the other pushed, more are insertion-sorted onto the stack by entry distance, nearest on top, and
+ * the nearest is popped. The stack holds at most PC_BVH_WIDE - 1 entries per level. */
+__attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut, __global const WideNode* nodes,
                                                            __global const LeafBlock* blocks,
                                                            __global const Primitive* prims, uint root, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
-  uint stack[7 * PC_BVH_STACK];
-  float stack_entry[7 * PC_BVH_STACK];
+  uint stack[(PC_BVH_WIDE - 1) * PC_BVH_STACK];
+  float stack_entry[(PC_BVH_WIDE - 1) * PC_BVH_STACK];
   int sp = 0;
   int3 negative = rp->inv_d < 0.0f;
   uint ref = root;
@@ -506,17 +540,17 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
       nearest = hit->t;
       nearest_far = nearest * slab_widening();
     } else {
-      __global const Bvh8Node* n = bvh8_node(nodes, ref);
-      float8 entry;
+      __global const WideNode* n = wide_node(nodes, ref);
+      WideF entry;
       /* Bit i of mask: child i is hit. */
-      uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit8_fused(&fused, ray->tmin, nearest_far, n, &entry)
-                                            : ray_boxes_hit8(ray->o, rp->inv_d, negative, ray->tmin, nearest,
-                                                             vload8(0, n->lo_x), vload8(0, n->lo_y), vload8(0, n->lo_z),
-                                                             vload8(0, n->hi_x), vload8(0, n->hi_y), vload8(0, n->hi_z),
-                                                             &entry));
+      uint mask = pc_lane_bits(fused.usable ? ray_boxes_hit_wide_fused(&fused, ray->tmin, nearest_far, n, &entry)
+                                            : PC_CAT(ray_boxes_hit, PC_BVH_WIDE)(
+                                                  ray->o, rp->inv_d, negative, ray->tmin, nearest, wide_load(n->lo_x),
+                                                  wide_load(n->lo_y), wide_load(n->lo_z), wide_load(n->hi_x),
+                                                  wide_load(n->hi_y), wide_load(n->hi_z), &entry));
       if (mask != 0u) {
-        float d[8];
-        vstore8(entry, 0, d);
+        float d[PC_BVH_WIDE];
+        wide_store(entry, d);
         uint i = pc_lowest_bit(mask);
         mask &= mask - 1u;
         uint near_ref = n->child[i];
@@ -569,6 +603,7 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
     if (!pop_subtree(stack, stack_entry, &sp, nearest, &ref)) return hit->slot != PC_INVALID;
   }
 }
+#endif /* PC_BVH_WIDE */
 
 /* The tree of the device's layout from node root, updating *hit as trace_bvh4_axis does, with the ray's
  * ray_precompute rp; kz as a literal, so each copy's triangle test has constant axis indices. cut: the
@@ -576,8 +611,8 @@ __attribute__((always_inline)) inline bool trace_bvh8_axis(const SceneData* cut,
 inline bool trace_tree_precomputed(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
                                    __global const Primitive* prims, uint root, const Ray* ray, const RayPrecomp* rp,
                                    bool any_hit, Hit* hit) {
-#ifdef PC_BVH8
-#define PC_TRACE_AXIS(kz) trace_bvh8_axis(cut, nodes, blocks, prims, root, ray, rp, any_hit, hit, kz)
+#ifdef PC_BVH_WIDE
+#define PC_TRACE_AXIS(kz) trace_wide_axis(cut, nodes, blocks, prims, root, ray, rp, any_hit, hit, kz)
 #else
 #define PC_TRACE_AXIS(kz) trace_bvh4_axis(cut, nodes, prims, root, ray, rp, any_hit, hit, kz)
 #endif
@@ -638,7 +673,9 @@ inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, co
   /* Equal-t hits of this instance win against a higher instance's (prim PC_INVALID: any primitive
    * index is lower) and lose against a lower one's (prim 0: none is lower). */
   h.prim = hit->instance == k ? hit->prim : hit->instance < k ? 0u : PC_INVALID;
-#ifdef PC_BVH8
+#if PC_BVH_WIDE == 16
+  uint root = inst->root16;
+#elif PC_BVH_WIDE == 8
   uint root = inst->root8;
 #else
   uint root = inst->root4;

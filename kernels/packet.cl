@@ -1,4 +1,4 @@
-/* Packet traversal of the 8-wide BVH (issue 15): the W = 8 or 16 rays of a lane-generic work item traced
+/* Packet traversal of the 8- or 16-wide BVH (issue 15): the W = 8 or 16 rays of a lane-generic work item traced
  * together, each node's boxes and each leaf's triangles tested against all W rays at once in vector
  * registers. Each lane does the operations of the single-ray code (kernels/intersect.cl: the slab test,
  * the watertight test of intersect_block, the (t, primitive) order of intersect_prim), and a lane keeps
@@ -11,7 +11,7 @@
 #include "intersect.cl"
 #include "lanes.cl"
 
-#ifdef PC_BVH8
+#ifdef PC_BVH_WIDE
 
 /* W rays (lane3 origins and directions, tmin per lane, the primitive each leaves from or PC_INVALID, and
  * their cut-out seeds) and their hits: t starts at the ray's tmax and is the nearest hit's, prim and slot
@@ -121,7 +121,7 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
   }                                                                                                       \
   /* Each lane in bits alone through the subtree at node root with the single-ray traversal, for subtrees \
    * few lanes entered. Returns the lanes whose hit changed. */                                           \
-  inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const Bvh8Node* nodes,       \
+  inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const WideNode* nodes,       \
                                              __global const LeafBlock* blocks, __global const Primitive* prims, \
                                              uint root, const PacketByLane##N* l, uint bits, bool any_hit, \
                                              HitPacket##N* h) {                                           \
@@ -165,7 +165,7 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
     F okx, oky, okz;                                                                                      \
     pc_permute_lanes(r->o, axes.z_is_x, axes.z_is_y, axes.z_is_z, &okx, &oky, &okz);                      \
     I changed = (I)(0);                                                                                   \
-    for (__global const LeafBlock* b = bvh8_leaf(blocks, ref);; ++b) {                                   \
+    for (__global const LeafBlock* b = wide_leaf(blocks, ref);; ++b) {                                   \
       __global const float* c = (__global const float*)b; /* ax ay az bx by bz cx cy cz, 4 lanes each */ \
       for (uint i = 0u; i < b->count; ++i) {                                                              \
         if (b->sphere_mask & (1u << i)) {                                                                 \
@@ -216,7 +216,7 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
    * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's entry   \
    * distance per lane (NaN where the lane's ray missed its box): when popped, a lane enters it where the  \
    * single ray would, where that distance is no farther than its nearest hit so far. */                  \
-  inline PC_OVL I trace_packet(const SceneData* cut, __global const Bvh8Node* nodes,                      \
+  inline PC_OVL I trace_packet(const SceneData* cut, __global const WideNode* nodes,                      \
                                __global const LeafBlock* blocks, __global const Primitive* prims, uint root, \
                                const RayPacket##N* r, I active, bool any_hit, HitPacket##N* h) {          \
     /* ray_precompute by lane */                                                                          \
@@ -239,9 +239,9 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
     uint by = pc_lane_bits(active & neg_y), bz = pc_lane_bits(active & neg_z);                            \
     bool one_octant = (bx == 0u || bx == all) && (by == 0u || by == all) && (bz == 0u || bz == all);      \
     I found = (I)(0);                                                                                     \
-    uint stack[7 * PC_BVH_STACK];                                                                         \
-    float stack_key[7 * PC_BVH_STACK];                                                                    \
-    F stack_entry[7 * PC_BVH_STACK]; /* per lane; NaN for a lane that did not enter */                   \
+    uint stack[(PC_BVH_WIDE - 1) * PC_BVH_STACK];                                                         \
+    float stack_key[(PC_BVH_WIDE - 1) * PC_BVH_STACK];                                                    \
+    F stack_entry[(PC_BVH_WIDE - 1) * PC_BVH_STACK]; /* per lane; NaN for a lane that did not enter */   \
     int sp = 0;                                                                                           \
     uint ref = root;                                                                                      \
     I lanes = active;                                                                                     \
@@ -256,9 +256,9 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
           if (!pc_any_(active)) return found;                                                             \
         }                                                                                                 \
       } else {                                                                                            \
-        __global const Bvh8Node* n = bvh8_node(nodes, ref);                                               \
+        __global const WideNode* n = wide_node(nodes, ref);                                               \
         int base = sp;                                                                                    \
-        for (uint c = 0u; c < 8u; ++c) {                                                                  \
+        for (uint c = 0u; c < PC_BVH_WIDE; ++c) {                                                         \
           uint child = n->child[c];                                                                       \
           if (child == PC_INVALID) break; /* the used slots come first (scene/bvh_build.cpp) */          \
           /* ray_boxes_hit8's slab test, one box against each lane's ray. */                              \
@@ -349,7 +349,7 @@ PC_PACKET_LANES(lane3f16, float16, int16, uint16, 16)
 /* rays[0 .. N) through the tree at node 0 as one packet, the lanes set in bits only: hits[j] (instance
  * PC_INVALID) and found[j] for each of those (pathcl rays' packets, the lane kernels' rays). */
 #define PC_TRACE_RAYS_AS_PACKET(V3, F, I, U, N)                                                           \
-  inline void trace_rays_as_packet##N(const SceneData* cut, __global const Bvh8Node* nodes,               \
+  inline void trace_rays_as_packet##N(const SceneData* cut, __global const WideNode* nodes,               \
                                       __global const LeafBlock* blocks, __global const Primitive* prims,  \
                                       const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) {  \
     float v[8][N];                                                                                        \
@@ -392,5 +392,5 @@ PC_TRACE_RAYS_AS_PACKET(lane3f8, float8, int8, uint8, 8)
 PC_TRACE_RAYS_AS_PACKET(lane3f16, float16, int16, uint16, 16)
 #undef PC_TRACE_RAYS_AS_PACKET
 
-#endif /* PC_BVH8 */
+#endif /* PC_BVH_WIDE */
 #endif

@@ -15,8 +15,11 @@ typedef struct {
 #undef PC_SCENE_FIELD
 
 /* The BVH of the layout this program was built for, as trace_bvh's first two arguments: the nodes and
- * the leaf blocks (kernels/intersect.cl), for the 8-wide layout both in bvh8; the 4-wide one has none. */
-#ifdef PC_BVH8
+ * the leaf blocks (kernels/intersect.cl), for the 8- and 16-wide layouts both in bvh8 or bvh16; the
+ * 4-wide one has none. */
+#if PC_BVH_WIDE == 16
+#define PC_SCENE_BVH(sc) (__global const Bvh16Node*)(sc)->bvh16, (__global const LeafBlock*)(sc)->bvh16
+#elif PC_BVH_WIDE == 8
 #define PC_SCENE_BVH(sc) (__global const Bvh8Node*)(sc)->bvh8, (__global const LeafBlock*)(sc)->bvh8
 #else
 #define PC_SCENE_BVH(sc) (sc)->nodes, (__global const LeafBlock*)(sc)->bvh8

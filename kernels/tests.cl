@@ -49,24 +49,29 @@ __kernel void ray_box_test(__global const RayRecord* rays, __global const float*
   out[i] = others_missed && others_missed8 && same ? mine : NAN;
 }
 
-/* The same rays and boxes (box i in lane i % 8) through the 8-wide node tests: bit 0 of out, entered by
- * ray_boxes_hit8; bit 1, by the traversal's test (ray_boxes_hit8_fused where the ray's FusedSlabs are
- * usable, else ray_boxes_hit8; nodes: room for one node per ray, where the box is put for it); bit 2, the
- * fused test ran; bit 3, it is compiled in (PC_FUSED_SLABS). */
-__kernel void ray_box_fused_test(__global const RayRecord* rays, __global const float* boxes, __global Bvh8Node* nodes,
+#ifdef PC_BVH_WIDE
+/* The same rays and boxes (box i in lane i % W) through the W = 8- or 16-wide node tests of the program's
+ * layout: bit 0 of out, entered by ray_boxes_hit8 or 16; bit 1, by the traversal's test
+ * (ray_boxes_hit_wide_fused where the ray's FusedSlabs are usable, else the former; nodes: room for one node
+ * per ray, where the box is put for it); bit 2, the fused test ran; bit 3, it is compiled in
+ * (PC_FUSED_SLABS). */
+__kernel void ray_box_fused_test(__global const RayRecord* rays, __global const float* boxes, __global WideNode* nodes,
                                  __global uint* out) {
-  uint i = get_global_id(0);
+  uint i = get_global_id(0), at = i % PC_BVH_WIDE;
   __global const float* r = (__global const float*)(rays + i);
   float3 o = vload3(0, r), d = vload3(0, r + 4);
   RayPrecomp rp = ray_precompute(d);
   int3 negative = rp.inv_d < 0.0f;
   float3 lo = vload3(0, boxes + 6 * i), hi = vload3(0, boxes + 6 * i + 3);
-  int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7) == (int8)(i % 8u);
-  float8 lo_x = select((float8)(INFINITY), (float8)(lo.x), lane), lo_y = select((float8)(INFINITY), (float8)(lo.y), lane);
-  float8 lo_z = select((float8)(INFINITY), (float8)(lo.z), lane), hi_x = select((float8)(-INFINITY), (float8)(hi.x), lane);
-  float8 hi_y = select((float8)(-INFINITY), (float8)(hi.y), lane), hi_z = select((float8)(-INFINITY), (float8)(hi.z), lane);
-  float8 enter;
-  uint robust = pc_lane_bits(ray_boxes_hit8(o, rp.inv_d, negative, r[3], r[7], lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter));
+  float slot[PC_BVH_WIDE];
+  for (uint k = 0u; k < PC_BVH_WIDE; ++k) slot[k] = (float)k;
+  WideI lane = wide_load(slot) == (WideF)((float)at);
+  WideF lo_x = select((WideF)(INFINITY), (WideF)(lo.x), lane), lo_y = select((WideF)(INFINITY), (WideF)(lo.y), lane);
+  WideF lo_z = select((WideF)(INFINITY), (WideF)(lo.z), lane), hi_x = select((WideF)(-INFINITY), (WideF)(hi.x), lane);
+  WideF hi_y = select((WideF)(-INFINITY), (WideF)(hi.y), lane), hi_z = select((WideF)(-INFINITY), (WideF)(hi.z), lane);
+  WideF enter;
+  uint robust = pc_lane_bits(
+      PC_CAT(ray_boxes_hit, PC_BVH_WIDE)(o, rp.inv_d, negative, r[3], r[7], lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter));
   uint traversal = robust, flags = 0u;
 #ifdef PC_FUSED_SLABS
   flags |= 8u;
@@ -74,17 +79,17 @@ __kernel void ray_box_fused_test(__global const RayRecord* rays, __global const 
   FusedSlabs f = fused_slabs(o, rp.inv_d);
   if (f.usable) {
     flags |= 4u;
-    Bvh8Node node;
-    vstore8(lo_x, 0, node.lo_x), vstore8(lo_y, 0, node.lo_y), vstore8(lo_z, 0, node.lo_z);
-    vstore8(hi_x, 0, node.hi_x), vstore8(hi_y, 0, node.hi_y), vstore8(hi_z, 0, node.hi_z);
+    WideNode node;
+    wide_store(lo_x, node.lo_x), wide_store(lo_y, node.lo_y), wide_store(lo_z, node.lo_z);
+    wide_store(hi_x, node.hi_x), wide_store(hi_y, node.hi_y), wide_store(hi_z, node.hi_z);
     nodes[i] = node;
-    traversal = pc_lane_bits(
-        ray_boxes_hit8_fused(&f, r[3], r[7] * slab_widening(), nodes + i, &enter));
+    traversal = pc_lane_bits(ray_boxes_hit_wide_fused(&f, r[3], r[7] * slab_widening(), nodes + i, &enter));
   }
   /* An empty lane entered shows as bit 4. */
-  out[i] = flags | (robust == (1u << (i % 8u)) ? 1u : 0u) | (traversal == (1u << (i % 8u)) ? 2u : 0u) |
-           ((robust | traversal) & ~(1u << (i % 8u)) ? 16u : 0u);
+  out[i] = flags | (robust == (1u << at) ? 1u : 0u) | (traversal == (1u << at) ? 2u : 0u) |
+           ((robust | traversal) & ~(1u << at) ? 16u : 0u);
 }
+#endif
 
 /* One triangle (9 floats) per ray; out as HitRecord with prim 0 for a hit. */
 __kernel void ray_triangle_test(__global const RayRecord* rays, __global const float* tris, __global HitRecord* out) {

@@ -26,7 +26,7 @@ __kernel void trace_rays(__global const WideNode* nodes, __global const LeafBloc
   hits[i] = hit_record(found, &hit);
 }
 
-#ifdef PC_BVH8
+#ifdef PC_BVH_WIDE
 #include "packet.cl"
 
 /* The same as packets (kernels/packet.cl): work item i traces rays [N i, N i + N) together; the lanes

@@ -25,7 +25,7 @@ typedef struct {
 } HitLanes;
 #endif
 
-#if PC_LANES > 1 && defined(PC_BVH8) && !defined(PC_HAS_INSTANCES)
+#if PC_LANES > 1 && defined(PC_BVH_WIDE) && !defined(PC_HAS_INSTANCES)
 #define PC_TRACE_PACKETS
 #define PC_PACKET_OF_LANES_(N) RayPacket##N
 #define PC_HITS_OF_LANES_(N) HitPacket##N

@@ -85,9 +85,11 @@ uint32_t bvh_width(const DeviceInfo& device) {
   if (const char* forced = std::getenv("PATHCL_BVH_WIDTH")) {
     if (std::string(forced) == "4") return 4;
     if (std::string(forced) == "8") return 8;
-    throw UsageError(std::string("PATHCL_BVH_WIDTH=") + forced + ": expected 4 or 8");
+    if (std::string(forced) == "16") return 16;
+    throw UsageError(std::string("PATHCL_BVH_WIDTH=") + forced + ": expected 4, 8 or 16");
   }
-  return device.is_cpu ? 8 : 4;
+  if (!device.is_cpu) return 4;
+  return device.preferred_float_width >= 16 ? 16 : 8;
 }
 
 uint32_t path_lanes(const DeviceInfo& device) {

@@ -36,10 +36,11 @@ DeviceInfo select_device(const std::string& selector);
 // cannot run optimised kernels (runtime/kernel_program.cpp).
 bool is_oclgrind(const DeviceInfo& device);
 
-// The BVH layout for the device, 4 or 8 children a node (kernels/shared/types.h): 8 on CPU devices, whose
-// float8 slab test is one AVX instruction (or two SSE ones), 4 on the others. PATHCL_BVH_WIDTH=4 or 8
-// chooses for every device (tests and benchmarks of the layouts); any other value is a UsageError. The
-// hits, and so the images, are the same in both.
+// The BVH layout for the device, 4, 8 or 16 children a node (kernels/shared/types.h): on CPU devices 16
+// where the preferred float vector is 16 wide (AVX-512: the float16 slab test is one instruction, and the
+// tree half as deep), else 8 (a float8 test is one AVX instruction, or two SSE ones); 4 on the others.
+// PATHCL_BVH_WIDTH=4, 8 or 16 chooses for every device (tests and benchmarks of the layouts); any other
+// value is a UsageError. The hits, and so the images, are the same in all.
 uint32_t bvh_width(const DeviceInfo& device);
 
 // Paths per work item of the path integrator on the device (kernels/lanes.cl): 1 on GPUs and Oclgrind,

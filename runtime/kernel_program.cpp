@@ -166,7 +166,8 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   // 3 ulp): with contraction off, every operation of the kernels is then exactly defined.
   std::string options = requested;
   if (cl.info.correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  if (bvh_width(cl.info) == 8) options += " -DPC_BVH8";  // the device's BVH layout (runtime/device.h)
+  // The device's BVH layout (runtime/device.h): PC_BVH_WIDE for the 8- and 16-wide ones, with leaf blocks.
+  if (bvh_width(cl.info) != 4) options += " -DPC_BVH_WIDE=" + std::to_string(bvh_width(cl.info));
   // Oclgrind 21.10 cannot execute the llvm.bitreverse that clang's optimiser makes of sampler.cl's bit
   // reversal; unoptimised, the same source computes the same bits.
   if (is_oclgrind(cl.info)) options += " -cl-opt-disable";

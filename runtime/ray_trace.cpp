@@ -14,9 +14,9 @@ std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene
                                          bool any_hit) {
   if (lanes != 1 && lanes != 8 && lanes != 16)
     throw UsageError("--lanes " + std::to_string(lanes) + ": rays are traced one at a time (1) or as packets of 8 or 16");
-  if (lanes > 1 && bvh_width(cl.info) != 8)
-    throw UsageError("--lanes " + std::to_string(lanes) + ": packets traverse the 8-wide BVH, and " + cl.info.name +
-                     " uses the " + std::to_string(bvh_width(cl.info)) + "-wide one");
+  if (lanes > 1 && bvh_width(cl.info) == 4)
+    throw UsageError("--lanes " + std::to_string(lanes) + ": packets traverse the 8- or 16-wide BVH, and " +
+                     cl.info.name + " uses the 4-wide one");
   KernelProgram program = build_kernel_program(cl, "trace.cl", kernel_options(scene.features));
   timing.kernel_build_ms = program.build_ms;
   timing.kernel_from_cache = program.from_cache;

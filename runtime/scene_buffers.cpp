@@ -5,6 +5,7 @@
 bool scene_array_used(const char* name, uint32_t bvh_width) {
   if (std::strcmp(name, "nodes") == 0) return bvh_width == 4;
   if (std::strcmp(name, "bvh8") == 0) return bvh_width == 8;
+  if (std::strcmp(name, "bvh16") == 0) return bvh_width == 16;
   return true;
 }
 
@@ -19,10 +20,11 @@ size_t scene_bytes(const DeviceScene& scene, uint32_t width) {
 
 BvhBuffers upload_bvh(ClContext& cl, const DeviceScene& scene) {
   if (bvh_width(cl.info) == 8) return {upload(cl, scene.bvh8)};
+  if (bvh_width(cl.info) == 16) return {upload(cl, scene.bvh16)};
   return {upload(cl, scene.nodes)};
 }
 
-// The 8-wide layout's nodes and leaf blocks are one buffer, bound as both.
+// The 8- and 16-wide layouts' nodes and leaf blocks are one buffer, bound as both.
 cl_uint BvhBuffers::bind(ClKernel& kernel, cl_uint first) const {
   kernel.arg(first, tree.mem);
   kernel.arg(first + 1, tree.mem);

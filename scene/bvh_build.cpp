@@ -273,21 +273,22 @@ Bvh build_bvh(const std::vector<Aabb>& prim_boxes) {
 namespace {
 
 void set_lane(pc_float4& v, int lane, float x) { (lane == 0 ? v.x : lane == 1 ? v.y : lane == 2 ? v.z : v.w) = x; }
-void set_lane(float (&v)[8], int lane, float x) { v[lane] = x; }
+template <size_t N>
+void set_lane(float (&v)[N], int lane, float x) { v[lane] = x; }
 
 float node_half_area(const BvhNode& n) {
   return Aabb{{n.lo[0], n.lo[1], n.lo[2]}, {n.hi[0], n.hi[1], n.hi[2]}}.half_area();
 }
 
-// The cheapest 8-wide tree by the surface area heuristic over the ways of collapsing the binary tree
+// The cheapest kWidth-wide tree by the surface area heuristic over the ways of collapsing the binary tree
 // (Ylitie, Karras and Laine 2017, "Efficient incoherent ray traversal on GPUs through compressed wide
 // BVHs", section 4.1), by the costs of scene/bvh_build.h (kWideNodeCost, kLeafBlockCost). For each binary
 // node n and i = 1..8, the least cost of its subtree as at most i subtrees of the wide tree (i = 1: one wide
 // leaf or node) is found from its children's; split[n][i - 1] keeps how it is reached (kFewer: with i - 1;
 // else the left child's share of the i). Against the greedy collapse with leaves of up to 4 primitives: a third fewer nodes on
 // the benchmark terrain, 5.79 -> 6.15 M bounce and 11.0 -> 11.5 M camera rays/s.
+template <int kWidth>
 struct WideCollapseCost {
-  static constexpr int kWidth = 8;
   static constexpr uint8_t kLeaf = 0, kNode = 255, kFewer = 254;  // split values that are no share
   std::vector<std::array<uint8_t, kWidth>> split;  // i = 1: kLeaf or kNode
   std::vector<uint8_t> node_split;  // as a wide node: the left child's share of its kWidth children
@@ -325,7 +326,9 @@ struct WideCollapseCost {
         }
       }
       float area = node_half_area(b);
-      float leaf = count[n] > 0 && count[n] <= kBvhMaxLeafSize ? kLeafBlockCost * area * float((count[n] + 3) / 4) : INFINITY;
+      float leaf = count[n] > 0 && count[n] <= kBvhMaxLeafSize
+                       ? area * (kLeafCost + kLeafBlockCost * float((count[n] + 3) / 4))
+                       : INFINITY;
       float node = interior ? kWideNodeCost * area + spread[kWidth - 1] : INFINITY;
       Pending p{uint32_t(n), {}};
       p.cost[0] = std::min(leaf, node);
@@ -362,9 +365,10 @@ struct Collapser {
   const std::vector<BvhNode>& binary;
   WideBvh<Node>& out;
   std::vector<uint32_t> subtree_first, subtree_count;  // per binary node: its leaf slots
-  // The leaves and children of the least-cost 8-wide tree; without it (4-wide), the binary leaves and
-  // the greedy opening of the largest child.
-  std::unique_ptr<WideCollapseCost> sah;
+  // The leaves and children of the least-cost 8- or 16-wide tree; without it (4-wide), the binary leaves
+  // and the greedy opening of the largest child.
+  using Cost = WideCollapseCost<Width>;
+  std::unique_ptr<Cost> sah;
 
   void count_subtrees() {
     subtree_first.resize(binary.size());
@@ -377,7 +381,7 @@ struct Collapser {
     }
   }
   bool is_leaf(uint32_t b) const {
-    return sah ? sah->split[b][0] == WideCollapseCost::kLeaf : binary[b].prim_count > 0;
+    return sah ? sah->split[b][0] == Cost::kLeaf : binary[b].prim_count > 0;
   }
 
   // Fills out.nodes[wide] with the subtrees of binary node `b`: its children, opened further (largest
@@ -436,7 +440,7 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
   out.nodes.emplace_back();
   Collapser<Node, Width> collapser{binary, out, {}, {}, {}};
   collapser.count_subtrees();
-  if (Width == WideCollapseCost::kWidth) collapser.sah = std::make_unique<WideCollapseCost>(binary, collapser.subtree_count);
+  if (Width >= 8) collapser.sah = std::make_unique<WideCollapseCost<Width>>(binary, collapser.subtree_count);
   collapser.fill(0, 0, 0);
   return out;
 }
@@ -445,6 +449,7 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
 
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary) { return collapse<Bvh4Node, 4>(binary); }
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary) { return collapse<Bvh8Node, 8>(binary); }
+Bvh16 collapse_to_bvh16(const std::vector<BvhNode>& binary) { return collapse<Bvh16Node, 16>(binary); }
 
 namespace {
 
@@ -469,30 +474,29 @@ LeafBlock leaf_block(const std::vector<Primitive>& prims, uint32_t first, uint32
   return b;
 }
 
-constexpr size_t kWord = 8;  // bvh8's references count these (kernels/shared/types.h)
+constexpr size_t kWord = 8;  // the references of bvh8 and bvh16 count these (kernels/shared/types.h)
 
-}  // namespace
-
-uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
-                     std::vector<pc_float4>& bvh8) {
+template <class Node>
+uint32_t append_wide(const std::vector<Node>& nodes, const std::vector<Primitive>& prims, std::vector<pc_float4>& wide) {
   // Where everything goes: each node at a multiple of 64 bytes, then its leaves' blocks.
   std::vector<size_t> node_at(nodes.size());
-  size_t end = bvh8.size() * sizeof(pc_float4);
+  size_t end = wide.size() * sizeof(pc_float4);
   for (size_t k = 0; k < nodes.size(); ++k) {
     end = (end + 63) / 64 * 64;
     node_at[k] = end;
-    end += sizeof(Bvh8Node);
+    end += sizeof(Node);
     for (pc_uint ref : nodes[k].child)
       if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) end += (PC_LEAF_COUNT(ref) + 3) / 4 * sizeof(LeafBlock);
   }
   if (end / kWord > PC_BVH8_MAX_WORDS)
-    throw std::length_error("the 8-wide BVH takes " + std::to_string(end >> 20) + " MiB; at most " +
+    throw std::length_error("the " + std::to_string(sizeof(Node::child) / sizeof(pc_uint)) + "-wide BVH takes " +
+                            std::to_string(end >> 20) + " MiB; at most " +
                             std::to_string((size_t(PC_BVH8_MAX_WORDS) * kWord) >> 20) + " are supported");
-  bvh8.resize(end / sizeof(pc_float4));  // zero-filled: the padding before nodes and in them
-  char* bytes = reinterpret_cast<char*>(bvh8.data());
+  wide.resize(end / sizeof(pc_float4));  // zero-filled: the padding before nodes and in them
+  char* bytes = reinterpret_cast<char*>(wide.data());
   for (size_t k = 0; k < nodes.size(); ++k) {
-    Bvh8Node node = nodes[k];
-    size_t at = node_at[k] + sizeof(Bvh8Node);
+    Node node = nodes[k];
+    size_t at = node_at[k] + sizeof(Node);
     for (pc_uint& ref : node.child) {
       if (ref == PC_INVALID) continue;
       if (!(ref & PC_BVH4_LEAF)) {
@@ -511,14 +515,29 @@ uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primi
   return pc_uint(node_at[0] / kWord);
 }
 
-Bvh8Node bvh8_node(const std::vector<pc_float4>& bvh8, uint32_t at) {
-  Bvh8Node n;
-  std::memcpy(&n, reinterpret_cast<const char*>(bvh8.data()) + size_t(at) * kWord, sizeof n);
-  return n;
+template <class T>
+T wide_bvh_at(const std::vector<pc_float4>& wide, uint32_t at) {
+  T x;
+  std::memcpy(&x, reinterpret_cast<const char*>(wide.data()) + size_t(at) * kWord, sizeof x);
+  return x;
 }
 
-LeafBlock bvh8_block(const std::vector<pc_float4>& bvh8, uint32_t at) {
-  LeafBlock b;
-  std::memcpy(&b, reinterpret_cast<const char*>(bvh8.data()) + size_t(at) * kWord, sizeof b);
-  return b;
+}  // namespace
+
+uint32_t append_wide_bvh(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& bvh8) {
+  return append_wide(nodes, prims, bvh8);
 }
+uint32_t append_wide_bvh(const std::vector<Bvh16Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& bvh16) {
+  return append_wide(nodes, prims, bvh16);
+}
+
+template <class Node>
+Node wide_bvh_node(const std::vector<pc_float4>& wide, uint32_t at) {
+  return wide_bvh_at<Node>(wide, at);
+}
+template Bvh8Node wide_bvh_node<Bvh8Node>(const std::vector<pc_float4>&, uint32_t);
+template Bvh16Node wide_bvh_node<Bvh16Node>(const std::vector<pc_float4>&, uint32_t);
+
+LeafBlock wide_bvh_block(const std::vector<pc_float4>& wide, uint32_t at) { return wide_bvh_at<LeafBlock>(wide, at); }

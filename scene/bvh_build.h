@@ -50,20 +50,29 @@ struct WideBvh {
 };
 using Bvh4 = WideBvh<Bvh4Node>;
 using Bvh8 = WideBvh<Bvh8Node>;
+using Bvh16 = WideBvh<Bvh16Node>;
 // The 4-wide tree: the binary tree's leaves, each node's children found by opening the child of largest
 // surface area first.
 Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
-// The 8-wide tree: of all the ways to collapse the binary tree into 8-wide nodes whose leaves are binary
-// subtrees (of at most 16 primitives), the one of least SAH cost, where a node visited costs
-// kWideNodeCost and a leaf kLeafBlockCost for each block of four primitives it is tested in. Its
-// references are node indices and, for leaves, primitive slots as in Bvh4Node, until append_bvh8.
-constexpr float kWideNodeCost = 1, kLeafBlockCost = 1;
+// The 8-wide (16-wide) tree: of all the ways to collapse the binary tree into nodes of at most 8 (16)
+// children whose leaves are binary subtrees (of at most 16 primitives), the one of least SAH cost, where a
+// node visited costs kWideNodeCost and a leaf kLeafCost and kLeafBlockCost for each block of four
+// primitives it is tested in. Its references are node indices and, for leaves, primitive slots as in
+// Bvh4Node, until append_wide_bvh. Without kLeafCost (a block's bookkeeping, and a packet's test of each
+// of its blocks) the 16-wide collapse split the Cornell box's few triangles into sixteen half-empty leaves,
+// and its packets ran 5 % slower (docs/benchmarks-notes.md).
+constexpr float kWideNodeCost = 1, kLeafCost = 1, kLeafBlockCost = 1;
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);
-// Appends the 8-wide tree to bvh8 in the device's layout (kernels/shared/types.h): each node, then its
-// leaf children's LeafBlocks of prims (whose slots the leaf references hold), references rewritten to
-// word offsets in bvh8. Returns the root's. Throws std::length_error past PC_BVH8_MAX_WORDS.
-uint32_t append_bvh8(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
-                     std::vector<pc_float4>& bvh8);
-// bvh8's node, or block, at word offset at (a copy).
-Bvh8Node bvh8_node(const std::vector<pc_float4>& bvh8, uint32_t at);
-LeafBlock bvh8_block(const std::vector<pc_float4>& bvh8, uint32_t at);
+Bvh16 collapse_to_bvh16(const std::vector<BvhNode>& binary);
+// Appends the 8- or 16-wide tree to its array (bvh8 or bvh16) in the device's layout
+// (kernels/shared/types.h): each node, then its leaf children's LeafBlocks of prims (whose slots the leaf
+// references hold), references rewritten to word offsets in the array. Returns the root's. Throws
+// std::length_error past PC_BVH8_MAX_WORDS.
+uint32_t append_wide_bvh(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& bvh8);
+uint32_t append_wide_bvh(const std::vector<Bvh16Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& bvh16);
+// The node (Bvh8Node or Bvh16Node), or block, at word offset at of bvh8 or bvh16 (a copy).
+template <class Node>
+Node wide_bvh_node(const std::vector<pc_float4>& wide, uint32_t at);
+LeafBlock wide_bvh_block(const std::vector<pc_float4>& wide, uint32_t at);

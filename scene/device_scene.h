@@ -58,7 +58,9 @@ struct BvhStats {
 // The arrays (PC_SCENE_ARRAYS of kernels/shared/types.h):
 //   nodes      the 4-wide BVH (collapse_to_bvh4 of the binary tree)
 //   bvh8       the 8-wide BVH (collapse_to_bvh8 of the same tree) and its leaves, four primitives a
-//              block, in one array (append_bvh8); a device gets nodes or bvh8
+//              block, in one array (append_wide_bvh)
+//   bvh16      the 16-wide BVH (collapse_to_bvh16) and its leaves, laid out as bvh8; a device gets one
+//              of nodes, bvh8 and bvh16 (runtime/device.h, bvh_width)
 //   prims      geometry in BVH leaf order
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes
@@ -73,7 +75,7 @@ struct BvhStats {
 //   textures, texels
 //   env_dist   the environment map's sampling distribution (kernels/environment.cl)
 //   instances  the rest of the scene (identity) and each placement of an instanced mesh, in the order of
-//              instance_bvh's leaves; nodes, bvh8 and prims hold the rest of the scene's
+//              instance_bvh's leaves; nodes, bvh8, bvh16 and prims hold the rest of the scene's
 //              BVH first (root 0), then each instanced mesh's
 //   instance_bvh  the binary BVH over the instances' boxes
 struct DeviceScene {
@@ -92,4 +94,6 @@ struct DeviceScene {
   uint32_t wide_depth = 0;           // depth of the 4-wide tree
   uint32_t wide8_depth = 0;          // depth of the 8-wide tree
   uint32_t wide8_nodes = 0;          // its nodes (in bvh8, among the leaf blocks)
+  uint32_t wide16_depth = 0;         // depth of the 16-wide tree
+  uint32_t wide16_nodes = 0;         // its nodes (in bvh16, among the leaf blocks)
 };

@@ -92,19 +92,20 @@ namespace {
 
 // Where a BVH appended to the device scene starts, and what it bounds.
 struct TreeRoots {
-  uint32_t root4 = 0, root8 = 0;  // root node in nodes, and word offset of the root in bvh8
+  uint32_t root4 = 0, root8 = 0, root16 = 0;  // root node in nodes, word offsets of the root in bvh8, bvh16
   Aabb box;                        // of its primitives, in the coordinates they are stored in
 };
 
 // Builds the BVH over prims[first, end) (in scene order; boxes alike) and appends it to out: those
 // primitives in its leaf order (out.prims must hold exactly `first` of them before), their leaf slots,
-// its 4- and 8-wide nodes after out's with references offset, and its leaf blocks.
+// its 4-, 8- and 16-wide nodes after out's with references offset, and their leaf blocks.
 TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, const std::vector<Aabb>& boxes, uint32_t first,
                       uint32_t end, BvhStats* stats) {
   Bvh bvh = build_bvh(std::vector<Aabb>(boxes.begin() + first, boxes.begin() + end));
   auto collapse_start = std::chrono::steady_clock::now();
   Bvh4 wide = collapse_to_bvh4(bvh.nodes);
   Bvh8 wide8 = collapse_to_bvh8(bvh.nodes);
+  Bvh16 wide16 = collapse_to_bvh16(bvh.nodes);
   bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
   bvh.node_count = uint32_t(bvh.nodes.size());
   *stats = bvh;
@@ -126,14 +127,22 @@ TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, con
   };
   for (Bvh4Node& n : wide.nodes)
     for (pc_uint& ref : n.child) offset(ref, roots.root4, first);
-  for (Bvh8Node& n : wide8.nodes)  // leaf slots as in out.prims; append_bvh8 places the rest
-    for (pc_uint& ref : n.child)
-      if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) offset(ref, 0, first);
+  // Leaf slots as in out.prims; append_wide_bvh places the rest.
+  auto offset_leaves = [&](auto& nodes) {
+    for (auto& n : nodes)
+      for (pc_uint& ref : n.child)
+        if (ref != PC_INVALID && (ref & PC_BVH4_LEAF)) offset(ref, 0, first);
+  };
+  offset_leaves(wide8.nodes);
+  offset_leaves(wide16.nodes);
   out.nodes.insert(out.nodes.end(), wide.nodes.begin(), wide.nodes.end());
-  roots.root8 = append_bvh8(wide8.nodes, out.prims, out.bvh8);
+  roots.root8 = append_wide_bvh(wide8.nodes, out.prims, out.bvh8);
+  roots.root16 = append_wide_bvh(wide16.nodes, out.prims, out.bvh16);
   out.wide8_nodes += uint32_t(wide8.nodes.size());
+  out.wide16_nodes += uint32_t(wide16.nodes.size());
   out.wide_depth = std::max(out.wide_depth, wide.depth);
   out.wide8_depth = std::max(out.wide8_depth, wide8.depth);
+  out.wide16_depth = std::max(out.wide16_depth, wide16.depth);
   return roots;
 }
 
@@ -148,6 +157,7 @@ Instance instance_of_transform(const glm::dmat4& to_device, const TreeRoots& tre
   set_rows(inst.to_mesh, glm::inverse(to_device));
   inst.root4 = tree.root4;
   inst.root8 = tree.root8;
+  inst.root16 = tree.root16;
   return inst;
 }
 
@@ -379,6 +389,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     Instance world_instance{};
     world_instance.root4 = world.root4;
     world_instance.root8 = world.root8;
+    world_instance.root16 = world.root16;
     world_instance.flags = PC_INSTANCE_IDENTITY;
     items.push_back(world_instance);
     item_boxes.push_back(world.box);

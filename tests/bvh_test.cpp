@@ -48,7 +48,10 @@ std::vector<RayRecord> random_rays(size_t n, uint32_t seed) {
 }
 
 float lane(const pc_float4& v, int i) { return i == 0 ? v.x : i == 1 ? v.y : i == 2 ? v.z : v.w; }
-float lane(const float (&v)[8], int i) { return v[i]; }
+template <size_t N>
+float lane(const float (&v)[N], int i) {
+  return v[i];
+}
 
 // Lane i's box of a wide node, as {lo, hi}.
 template <class Node>
@@ -56,40 +59,49 @@ std::pair<glm::vec3, glm::vec3> lane_box(const Node& n, int i) {
   return {{lane(n.lo_x, i), lane(n.lo_y, i), lane(n.lo_z, i)}, {lane(n.hi_x, i), lane(n.hi_y, i), lane(n.hi_z, i)}};
 }
 
-// A wide tree's nodes by reference: the 4-wide tree's are indices into nodes; the 8-wide tree's are word
-// offsets into bvh8, where each node is followed by its leaves' blocks (kernels/shared/types.h).
+// A wide tree's nodes by reference: the 4-wide tree's are indices into nodes; the 8- and 16-wide trees' are
+// word offsets into bvh8 or bvh16, where each node is followed by its leaves' blocks
+// (kernels/shared/types.h).
 struct Tree4 {
   const DeviceScene& scene;
   const Bvh4Node& node(uint32_t ref) const { return scene.nodes.at(ref); }
   size_t node_count() const { return scene.nodes.size(); }
 };
-struct Tree8 {
+template <class Node>
+struct TreeWide {
   const DeviceScene& scene;
-  Bvh8Node node(uint32_t ref) const {
+  const std::vector<pc_float4>& array;  // bvh8 or bvh16
+  uint32_t nodes;
+  Node node(uint32_t ref) const {
     EXPECT_EQ(ref % (64 / 8), 0u) << "a node at a multiple of 64 bytes";
-    EXPECT_LE((size_t(ref) * 8 + sizeof(Bvh8Node)) / sizeof(pc_float4), scene.bvh8.size());
-    return bvh8_node(scene.bvh8, ref);
+    EXPECT_LE((size_t(ref) * 8 + sizeof(Node)) / sizeof(pc_float4), array.size());
+    return wide_bvh_node<Node>(array, ref);
   }
-  size_t node_count() const { return scene.wide8_nodes; }
+  size_t node_count() const { return nodes; }
 };
+using Tree8 = TreeWide<Bvh8Node>;
+using Tree16 = TreeWide<Bvh16Node>;
+Tree8 tree8(const DeviceScene& scene) { return {scene, scene.bvh8, scene.wide8_nodes}; }
+Tree16 tree16(const DeviceScene& scene) { return {scene, scene.bvh16, scene.wide16_nodes}; }
 
 // The leaf slots of a wide leaf reference of the node at node_ref: its references hold slots (4-wide) or
-// its first block (8-wide), whose blocks hold full lanes up to the last.
+// its first block (8- and 16-wide), whose blocks hold full lanes up to the last.
 std::vector<uint32_t> leaf_slots(const Tree4&, uint32_t, uint32_t ref) {
   std::vector<uint32_t> slots;
   for (uint32_t k = 0; k < PC_LEAF_COUNT(ref); ++k) slots.push_back(PC_LEAF_FIRST(ref) + k);
   return slots;
 }
-std::vector<uint32_t> leaf_slots(const Tree8& tree, uint32_t node_ref, uint32_t ref) {
+template <class Node>
+std::vector<uint32_t> leaf_slots(const TreeWide<Node>& tree, uint32_t node_ref, uint32_t ref) {
   std::vector<uint32_t> slots;
   uint32_t at = ref & ~PC_BVH4_LEAF;
-  EXPECT_GE(at, node_ref + sizeof(Bvh8Node) / 8) << "a leaf's blocks after its node";
+  EXPECT_GE(at, node_ref + sizeof(Node) / 8) << "a leaf's blocks after its node";
   for (;; at += sizeof(LeafBlock) / 8) {
-    if (size_t(at) * 8 + sizeof(LeafBlock) > tree.scene.bvh8.size() * sizeof(pc_float4)) {
-      ADD_FAILURE() << "a leaf's blocks past the end of bvh8, or no last block";
+    if (size_t(at) * 8 + sizeof(LeafBlock) > tree.array.size() * sizeof(pc_float4)) {
+      ADD_FAILURE() << "a leaf's blocks past the end of the array, or no last block";
       break;
     }
-    LeafBlock b = bvh8_block(tree.scene.bvh8, at);
+    LeafBlock b = wide_bvh_block(tree.array, at);
     EXPECT_TRUE(b.count >= 1 && b.count <= 4 && (b.last || b.count == 4)) << "count " << b.count;
     for (uint32_t k = 0; k < b.count; ++k) {
       uint32_t slot = b.first_slot + k;
@@ -194,40 +206,47 @@ TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
   DeviceScene scene = load_device_scene(write_temp_file("bvh-structure.json", random_scene_json(3000, 30, 1)));
   ASSERT_EQ(scene.prims.size(), 3030u);
   check_wide_tree<4>(scene, Tree4{scene}, scene.wide_depth);
-  check_wide_tree<8>(scene, Tree8{scene}, scene.wide8_depth);
+  check_wide_tree<8>(scene, tree8(scene), scene.wide8_depth);
+  check_wide_tree<16>(scene, tree16(scene), scene.wide16_depth);
   EXPECT_LT(scene.wide8_depth, scene.wide_depth);
+  EXPECT_LE(scene.wide16_depth, scene.wide8_depth);
+  EXPECT_LT(scene.wide16_nodes, scene.wide8_nodes);
   EXPECT_LE(scene.bvh.depth, kBvhMaxDepth);
   // A SAH tree over 3000 scattered primitives is far cheaper than testing them all.
   EXPECT_LT(scene.bvh.sah_cost, 100.0);
   EXPECT_GT(scene.bvh.sah_cost, 1.0);
 }
 
-// The SAH cost of an 8-wide tree of collapse_to_bvh8 over binary tree `binary`, by scene/bvh_build.h's costs:
-// each node's box (its parent's lane box; the root's is the binary root's) and each leaf's box by the
-// blocks of four primitives it is tested in.
-double wide_tree_cost(const Bvh8& wide, const std::vector<BvhNode>& binary) {
+// The SAH cost of a leaf of count primitives with box area `area`, by scene/bvh_build.h's costs: the leaf
+// and the blocks of four primitives it is tested in.
+double leaf_cost(double area, uint32_t count) { return area * (kLeafCost + kLeafBlockCost * ((count + 3) / 4)); }
+
+// The SAH cost of an 8- or 16-wide tree of collapse_to_bvh8 or 16 over binary tree `binary`: each node's box
+// (its parent's lane box; the root's is the binary root's) and each leaf's.
+template <class Node>
+double wide_tree_cost(const WideBvh<Node>& wide, const std::vector<BvhNode>& binary) {
   auto area = [](glm::vec3 lo, glm::vec3 hi) { return double(Aabb{lo, hi}.half_area()); };
   double cost = kWideNodeCost * area({binary[0].lo[0], binary[0].lo[1], binary[0].lo[2]},
                                      {binary[0].hi[0], binary[0].hi[1], binary[0].hi[2]});
-  for (const Bvh8Node& n : wide.nodes)
-    for (int i = 0; i < 8; ++i) {
+  for (const Node& n : wide.nodes)
+    for (int i = 0; i < int(std::size(n.child)); ++i) {
       if (n.child[i] == PC_INVALID) continue;
       auto [lo, hi] = lane_box(n, i);
-      uint32_t count = PC_LEAF_COUNT(n.child[i]);
-      cost += n.child[i] & PC_BVH4_LEAF ? kLeafBlockCost * area(lo, hi) * ((count + 3) / 4) : kWideNodeCost * area(lo, hi);
+      cost += n.child[i] & PC_BVH4_LEAF ? leaf_cost(area(lo, hi), PC_LEAF_COUNT(n.child[i])) : kWideNodeCost * area(lo, hi);
     }
   return cost;
 }
 
 // The least cost of any collapse of the binary subtree at n, by enumeration: n as a leaf (a binary subtree of
-// at most 16 primitives), or as a node whose children are a cut of its subtree of at most 8 subtrees, each
-// the least cost of itself. (The cuts of a subtree: itself, or a cut of each child together.)
+// at most 16 primitives), or as a node whose children are a cut of its subtree of at most `width` subtrees,
+// each the least cost of itself. (The cuts of a subtree: itself, or a cut of each child together.)
 struct BruteForceCollapse {
   const std::vector<BvhNode>& binary;
+  size_t width;
   std::vector<uint32_t> count;
   std::vector<double> best;
 
-  explicit BruteForceCollapse(const std::vector<BvhNode>& b) : binary(b), count(b.size()), best(b.size(), -1) {
+  BruteForceCollapse(const std::vector<BvhNode>& b, size_t w) : binary(b), width(w), count(b.size()), best(b.size(), -1) {
     for (size_t n = b.size(); n-- > 0;)
       count[n] = interior(uint32_t(n)) ? count[n + 1] + count[b[n].left_first] : b[n].prim_count;
   }
@@ -249,10 +268,10 @@ struct BruteForceCollapse {
   }
   double least(uint32_t n) {
     if (best[n] >= 0) return best[n];
-    double c = count[n] <= kBvhMaxLeafSize ? kLeafBlockCost * area(n) * ((count[n] + 3) / 4) : INFINITY;
+    double c = count[n] <= kBvhMaxLeafSize ? leaf_cost(area(n), count[n]) : INFINITY;
     if (interior(n))
-      for (const auto& a : cuts(n + 1, 7))
-        for (const auto& b : cuts(binary[n].left_first, 8 - a.size())) {
+      for (const auto& a : cuts(n + 1, width - 1))
+        for (const auto& b : cuts(binary[n].left_first, width - a.size())) {
           double sum = kWideNodeCost * area(n);
           for (uint32_t k : a) sum += least(k);
           for (uint32_t k : b) sum += least(k);
@@ -262,22 +281,27 @@ struct BruteForceCollapse {
   }
 };
 
-TEST(Bvh, EightWideTreeHasTheLeastCostOfAllCollapses) {
-  for (uint32_t seed : {1u, 2u, 3u}) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> pos(-10, 10), size(0.05f, 3.0f);
-    std::vector<Aabb> boxes(200);
-    for (Aabb& b : boxes) {
-      glm::vec3 c(pos(rng), pos(rng), pos(rng));
-      b = {c - size(rng), c + size(rng)};
+TEST(Bvh, WideTreesHaveTheLeastCostOfAllCollapses) {
+  // 16 children a node have far more cuts to enumerate: a smaller soup.
+  for (size_t width : {8, 16}) {
+    for (uint32_t seed : {1u, 2u, 3u}) {
+      std::mt19937 rng(seed);
+      std::uniform_real_distribution<float> pos(-10, 10), size(0.05f, 3.0f);
+      std::vector<Aabb> boxes(width == 8 ? 200 : 80);
+      for (Aabb& b : boxes) {
+        glm::vec3 c(pos(rng), pos(rng), pos(rng));
+        b = {c - size(rng), c + size(rng)};
+      }
+      Bvh binary = build_bvh(boxes);
+      BruteForceCollapse brute(binary.nodes, width);
+      double least = brute.least(0);
+      double got = width == 8 ? wide_tree_cost(collapse_to_bvh8(binary.nodes), binary.nodes)
+                              : wide_tree_cost(collapse_to_bvh16(binary.nodes), binary.nodes);
+      EXPECT_NEAR(got, least, 1e-5 * least) << width << "-wide, seed " << seed;
+      // Not merely the binary leaves under greedily filled nodes: leaves merge small subtrees.
+      size_t nodes = width == 8 ? collapse_to_bvh8(binary.nodes).nodes.size() : collapse_to_bvh16(binary.nodes).nodes.size();
+      EXPECT_LT(nodes, binary.nodes.size() / 4) << width << "-wide, seed " << seed;
     }
-    Bvh binary = build_bvh(boxes);
-    Bvh8 wide = collapse_to_bvh8(binary.nodes);
-    BruteForceCollapse brute(binary.nodes);
-    double least = brute.least(0), got = wide_tree_cost(wide, binary.nodes);
-    EXPECT_NEAR(got, least, 1e-5 * least) << "seed " << seed;
-    // Not merely the binary leaves under greedily filled nodes: leaves merge small subtrees.
-    EXPECT_LT(wide.nodes.size(), binary.nodes.size() / 4);
   }
 }
 
@@ -288,10 +312,15 @@ TEST(Bvh, SmallSceneIsOneLeafUnderTheRoot) {
   EXPECT_EQ(root.child[0], PC_BVH4_LEAF | 0u);  // slot 0, one primitive
   for (int i = 1; i < 4; ++i) EXPECT_GT(lane_box(root, i).first.x, lane_box(root, i).second.x);
   ASSERT_EQ(scene.wide8_nodes, 1u);
-  const Bvh8Node root8 = bvh8_node(scene.bvh8, 0);
+  const Bvh8Node root8 = wide_bvh_node<Bvh8Node>(scene.bvh8, 0);
   EXPECT_EQ(root8.child[0], PC_BVH4_LEAF | uint32_t(sizeof(Bvh8Node) / 8));  // its one block right after it
   for (int i = 1; i < 8; ++i) EXPECT_GT(lane_box(root8, i).first.x, lane_box(root8, i).second.x);
   EXPECT_EQ(scene.bvh8.size() * sizeof(pc_float4), sizeof(Bvh8Node) + sizeof(LeafBlock));
+  ASSERT_EQ(scene.wide16_nodes, 1u);
+  const Bvh16Node root16 = wide_bvh_node<Bvh16Node>(scene.bvh16, 0);
+  EXPECT_EQ(root16.child[0], PC_BVH4_LEAF | uint32_t(sizeof(Bvh16Node) / 8));
+  for (int i = 1; i < 16; ++i) EXPECT_GT(lane_box(root16, i).first.x, lane_box(root16, i).second.x);
+  EXPECT_EQ(scene.bvh16.size() * sizeof(pc_float4), sizeof(Bvh16Node) + sizeof(LeafBlock));
 }
 
 // A random soup, plus a 12 x 12 grid of quads placed twice (two shapes, the same triangles): rays through
@@ -330,9 +359,9 @@ std::vector<RayRecord> rays_with_ties(size_t n, uint32_t seed) {
   return rays;
 }
 
-// Both layouts against brute force: the nearest hit by (t, primitive index) is one total order's minimum,
+// Every layout against brute force: the nearest hit by (t, primitive index) is one total order's minimum,
 // so they agree exactly, ties included (kernels/intersect.cl, intersect_prim).
-TEST(Bvh, BothLayoutsMatchBruteForceExactlyTiesIncluded) {
+TEST(Bvh, EveryLayoutMatchesBruteForceExactlyTiesIncluded) {
   ClContext& cl = test_device();
   // World origin: the brute-force kernel gets the (world) rays as they are.
   DeviceScene scene = load_device_scene(write_temp_file("bvh-ties.json", scene_with_ties_json()), DeviceOrigin::world);
@@ -356,7 +385,7 @@ TEST(Bvh, BothLayoutsMatchBruteForceExactlyTiesIncluded) {
   EXPECT_GT(hits, rays.size() / 2);  // the test means something only if many rays hit
   EXPECT_LT(hits, rays.size());
   EXPECT_GT(grid_hits, rays.size() / 4);  // and many of them meet the doubled grid
-  for (uint32_t width : {4u, 8u}) {
+  for (uint32_t width : {4u, 8u, 16u}) {
     BvhWidthScope scope(width);
     TraceTiming timing;
     std::vector<HitRecord> bvh = trace_ray_records(cl, scene, rays, 1, timing);
@@ -370,37 +399,40 @@ TEST(Bvh, BothLayoutsMatchBruteForceExactlyTiesIncluded) {
     }
     EXPECT_EQ(mismatches, 0u) << width << "-wide";
   }
-  // Packets of 8 and 16 rays (kernels/packet.cl, the 8-wide BVH): the same records, for packets mixing the
+  // Packets of 8 and 16 rays (kernels/packet.cl, the 8- and 16-wide BVHs): the same records, for packets mixing the
   // grid's parallel rays with random ones as above, and for packets of only one or only the other kind.
   std::vector<size_t> grouped;
   for (size_t start : {0, 1})
     for (size_t i = start; i < rays.size(); i += 2) grouped.push_back(i);
   std::vector<RayRecord> grouped_rays;
   for (size_t i : grouped) grouped_rays.push_back(rays[i]);
-  BvhWidthScope scope(8);
-  for (uint32_t lanes : {8u, 16u}) {
-    for (bool mixed : {true, false}) {
-      TraceTiming timing;
-      std::vector<HitRecord> packet = trace_ray_records(cl, scene, mixed ? rays : grouped_rays, 1, timing, 0, lanes);
-      size_t mismatches = 0;
-      for (size_t k = 0; k < rays.size(); ++k) {
-        const HitRecord &want = brute[mixed ? k : grouped[k]], &got = packet[k];
-        bool same = want.t == got.t && want.prim == got.prim &&
-                    (want.prim == PC_INVALID || (want.u == got.u && want.v == got.v));
-        if (!same && ++mismatches < 10)
-          ADD_FAILURE() << lanes << " lanes, " << (mixed ? "mixed" : "grouped") << ", ray " << k << ": brute force t="
-                        << want.t << " prim=" << want.prim << ", packet t=" << got.t << " prim=" << got.prim;
+  for (uint32_t width : {8u, 16u}) {
+    BvhWidthScope scope(width);
+    for (uint32_t lanes : {8u, 16u}) {
+      for (bool mixed : {true, false}) {
+        TraceTiming timing;
+        std::vector<HitRecord> packet = trace_ray_records(cl, scene, mixed ? rays : grouped_rays, 1, timing, 0, lanes);
+        size_t mismatches = 0;
+        for (size_t k = 0; k < rays.size(); ++k) {
+          const HitRecord &want = brute[mixed ? k : grouped[k]], &got = packet[k];
+          bool same = want.t == got.t && want.prim == got.prim &&
+                      (want.prim == PC_INVALID || (want.u == got.u && want.v == got.v));
+          if (!same && ++mismatches < 10)
+            ADD_FAILURE() << width << "-wide, " << lanes << " lanes, " << (mixed ? "mixed" : "grouped") << ", ray "
+                          << k << ": brute force t=" << want.t << " prim=" << want.prim << ", packet t=" << got.t
+                          << " prim=" << got.prim;
+        }
+        EXPECT_EQ(mismatches, 0u) << width << "-wide, " << lanes << " lanes, " << (mixed ? "mixed" : "grouped");
       }
-      EXPECT_EQ(mismatches, 0u) << lanes << " lanes, " << (mixed ? "mixed" : "grouped");
     }
-  }
-  // Any hit (shadow rays), one ray or packets: a hit exactly where brute force finds the nearest one.
-  for (uint32_t lanes : {1u, 8u, 16u}) {
-    TraceTiming timing;
-    std::vector<HitRecord> any = trace_ray_records(cl, scene, rays, 1, timing, 0, lanes, true);
-    size_t mismatches = 0;
-    for (size_t k = 0; k < rays.size(); ++k) mismatches += (any[k].prim == PC_INVALID) != (brute[k].prim == PC_INVALID);
-    EXPECT_EQ(mismatches, 0u) << lanes << " lanes, any hit";
+    // Any hit (shadow rays), one ray or packets: a hit exactly where brute force finds the nearest one.
+    for (uint32_t lanes : {1u, 8u, 16u}) {
+      TraceTiming timing;
+      std::vector<HitRecord> any = trace_ray_records(cl, scene, rays, 1, timing, 0, lanes, true);
+      size_t mismatches = 0;
+      for (size_t k = 0; k < rays.size(); ++k) mismatches += (any[k].prim == PC_INVALID) != (brute[k].prim == PC_INVALID);
+      EXPECT_EQ(mismatches, 0u) << width << "-wide, " << lanes << " lanes, any hit";
+    }
   }
 }
 

@@ -76,7 +76,7 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
 }
 
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
-constexpr size_t kCases = 17;
+constexpr size_t kCases = 18;
 
 std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
@@ -96,13 +96,16 @@ std::array<Case, kCases> make_cases() {
           // 8 and 16 lanes on Oclgrind too (the other cases: PoCL at its default width, Oclgrind at one lane).
           {"every material and light, 8 lanes", resized("materials", 16, 12, 1), "--lanes 8"},
           {"cornell box, 16 lanes", cornell, "--lanes 16"},
-          // Packets (the 8-wide layout) on Oclgrind too: where PoCL's clang targets AVX-512, packet_leaf looks
-          // vertex coordinates up with a permutation instruction, elsewhere it selects them with masks.
-          {"cornell box, 16 lanes, packets", cornell, "--lanes 16", 8},
+          // Packets (the 16- and 8-wide layouts) on Oclgrind too: where PoCL's clang targets AVX-512,
+          // packet_leaf looks vertex coordinates up with a permutation instruction, elsewhere it selects them
+          // with masks.
+          {"cornell box, 16 lanes, packets", cornell, "--lanes 16", 16},
           {"every material and light, 8 lanes, packets", resized("materials", 16, 12, 1), "--lanes 8", 8},
-          // Single rays through the 8-wide layout: where fma is an instruction (PoCL) the node test takes the
-          // fused slab planes, elsewhere (Oclgrind) the unfused ones; they visit other nodes, never other hits.
+          // Single rays through the 8- and 16-wide layouts: where fma is an instruction (PoCL) the node test
+          // takes the fused slab planes, elsewhere (Oclgrind) the unfused ones; they visit other nodes, never
+          // other hits.
           {"cornell box, single rays, 8-wide layout", cornell, "--lanes 1", 8},
+          {"cornell box, single rays, 16-wide layout", cornell, "--lanes 1", 16},
           {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},
           {"instances: moved, scaled, mirrored, smooth, cut-out",
            resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}}};

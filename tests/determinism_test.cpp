@@ -117,7 +117,7 @@ TEST_P(EveryScene, EveryLaneWidthAndBvhLayoutGiveIdenticalPixels) {
   }
   bool black = one.film.mean == std::vector<float>(one.film.mean.size(), 0.0f);
   EXPECT_EQ(black, std::filesystem::path(file).filename() == "empty.json") << "only empty.json renders black";
-  for (uint32_t width : {4u, 8u}) {
+  for (uint32_t width : {4u, 8u, 16u}) {
     BvhWidthScope layout(width);
     for (uint32_t lanes : {1u, 8u, 16u}) {
       for (bool split : {false, true}) {

@@ -45,17 +45,19 @@ using Boxes = std::vector<std::pair<glm::vec3, glm::vec3>>;
 
 // Runs test kernel `name` over the rays and boxes (ray i against box i): its arguments the rays, the boxes
 // (lo.xyz, hi.xyz), scratch_bytes a ray of device memory when nonzero, and one T a ray out.
+// program: tests.cl built for the device's own layout where null.
 template <class T>
 std::vector<T> run_box_kernel(const char* name, const std::vector<RayRecord>& rays, const Boxes& boxes,
-                              size_t scratch_bytes = 0) {
+                              size_t scratch_bytes = 0, KernelProgram* program = nullptr) {
   ClContext& cl = test_device();
-  static KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
+  static KernelProgram own = build_kernel_program(cl, "tests.cl", kernel_options(kFeatureAll));
+  if (!program) program = &own;
   std::vector<float> flat;
   for (auto& [lo, hi] : boxes) flat.insert(flat.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
   ClBuffer rb = upload(cl, rays), bb = upload(cl, flat);
   ClBuffer scratch(cl, CL_MEM_READ_WRITE, std::max<size_t>(1, rays.size() * scratch_bytes));
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(T));
-  ClKernel k(program.kernel(name));
+  ClKernel k(program->kernel(name));
   cl_uint arg = 0;
   k.arg(arg++, rb.mem);
   k.arg(arg++, bb.mem);
@@ -73,10 +75,14 @@ std::vector<float> box_entries(const std::vector<RayRecord>& rays, const Boxes& 
   return run_box_kernel<float>("ray_box_test", rays, boxes);
 }
 
-// Per ray and box: bit 0 entered by ray_boxes_hit8, bit 1 by the 8-wide traversal's test (the fused one
-// where it ran), bit 2 the fused test ran, bit 3 it is compiled in, bit 4 an empty lane was entered.
-std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays, const Boxes& boxes) {
-  return run_box_kernel<uint32_t>("ray_box_fused_test", rays, boxes, sizeof(Bvh8Node));
+// Per ray and box, through the node tests of the 8- or 16-wide layout (width): bit 0 entered by
+// ray_boxes_hit8 or 16, bit 1 by the traversal's test (the fused one where it ran), bit 2 the fused test
+// ran, bit 3 it is compiled in, bit 4 an empty lane was entered.
+std::vector<uint32_t> node_test_entries(const std::vector<RayRecord>& rays, const Boxes& boxes, uint32_t width) {
+  BvhWidthScope layout(width);
+  KernelProgram program = build_kernel_program(test_device(), "tests.cl", kernel_options(kFeatureAll));
+  return run_box_kernel<uint32_t>("ray_box_fused_test", rays, boxes, width == 16 ? sizeof(Bvh16Node) : sizeof(Bvh8Node),
+                                  &program);
 }
 
 const Tri kUnit{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -200,8 +206,8 @@ TEST(RayBox, FlatBoxOfAnAxisAlignedTriangleIsEntered) {
 }
 
 TEST(RayBox, FusedNodeTestEntersTouchedAndCrossedBoxes) {
-  // The 8-wide traversal's fused slab test (kernels/intersect.cl, where fma is an instruction) must enter
-  // every box the ray truly reaches within [tmin, tmax], as ray_boxes_hit8 does, also where it only
+  // The 8- and 16-wide traversals' fused slab test (kernels/intersect.cl, where fma is an instruction) must
+  // enter every box the ray truly reaches within [tmin, tmax], as ray_boxes_hit8 and 16 do, also where it only
   // touches it: at a corner, along an edge, from a corner it starts on, at exactly tmax; near and far
   // from the origin. And it must still miss boxes the ray clearly misses.
   std::vector<RayRecord> rays;
@@ -254,20 +260,22 @@ TEST(RayBox, FusedNodeTestEntersTouchedAndCrossedBoxes) {
     glm::dvec3 shift = across * (glm::length(glm::dvec3(hi - lo)) + 1e-3 * (scale + t * glm::length(glm::dvec3(df))));
     add(ray(of, df), glm::vec3(glm::dvec3(lo) + shift), glm::vec3(glm::dvec3(hi) + shift), false);
   }
-  auto e = node_test_entries(rays, boxes);
-  int fused = 0, compiled = 0;
-  for (size_t i = 0; i < rays.size(); ++i) {
-    ASSERT_EQ(e[i] & 16u, 0u) << "case " << i << ": an empty lane was entered";
-    EXPECT_EQ((e[i] & 1u) != 0, bool(reached[i])) << "case " << i << ": ray_boxes_hit8";
-    EXPECT_EQ((e[i] & 2u) != 0, bool(reached[i])) << "case " << i << ": the traversal's test";
-    fused += (e[i] & 4u) != 0;
-    compiled += (e[i] & 8u) != 0;
+  for (uint32_t width : {8u, 16u}) {
+    auto e = node_test_entries(rays, boxes, width);
+    int fused = 0, compiled = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      ASSERT_EQ(e[i] & 16u, 0u) << width << "-wide, case " << i << ": an empty lane was entered";
+      EXPECT_EQ((e[i] & 1u) != 0, bool(reached[i])) << width << "-wide, case " << i << ": ray_boxes_hit" << width;
+      EXPECT_EQ((e[i] & 2u) != 0, bool(reached[i])) << width << "-wide, case " << i << ": the traversal's test";
+      fused += (e[i] & 4u) != 0;
+      compiled += (e[i] & 8u) != 0;
+    }
+    // Where the fused test is compiled in (PoCL on x86 with FMA), every one of these rays takes it: none is
+    // parallel to an axis.
+    if (compiled) {
+      EXPECT_EQ(fused, int(rays.size()));
+    }
+    std::printf("%u-wide fused slab test %s: %d of %zu cases\n", width,
+                compiled ? "compiled in" : "not compiled in (no fast fma)", fused, rays.size());
   }
-  // Where the fused test is compiled in (PoCL on x86 with FMA), every one of these rays takes it: none is
-  // parallel to an axis.
-  if (compiled) {
-    EXPECT_EQ(fused, int(rays.size()));
-  }
-  std::printf("fused slab test %s: %d of %zu cases\n", compiled ? "compiled in" : "not compiled in (no fast fma)", fused,
-              rays.size());
 }

@@ -65,9 +65,9 @@ typedef uint32_t pc_uint;
 #define PC_FLAG_SMOOTH 4u      /* shading normals in the normals array */
 #define PC_FLAG_VERTEX_COLORS 8u /* corner colours in the colors array */
 
-/* The device's BVH, in the layout chosen for the device (runtime/device.h, bvh_width): 4-wide (GPUs) or
- * 8-wide (CPUs), collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened depth-first.
- * Both layouts have the binary tree's leaves and primitive order, and a hit is the nearest by (t, primitive
+/* The device's BVH, in the layout chosen for the device (runtime/device.h, bvh_width): 4-wide (GPUs),
+ * 8-wide or 16-wide (CPUs), collapsed from the host's binary SAH tree (scene/bvh_build.h), flattened
+ * depth-first. All layouts have the binary tree's leaves and primitive order, and a hit is the nearest by (t, primitive
  * index), so every layout gives the same hit records (kernels/intersect.cl). 4-wide: Child boxes are stored by coordinate so one float4 slab test checks all four:
  * lo_x, lo_y, lo_z, hi_x, hi_y, hi_z (6 x 16) + child (16) = 112 bytes.
  * child[i] is an interior node index, or a leaf reference (PC_BVH4_LEAF set) of primitives
@@ -103,7 +103,18 @@ typedef struct {
   pc_uint pad[8]; /* zero */
 } Bvh8Node;
 
-/* Up to four primitives of an 8-wide BVH leaf (in bvh8, after its parent node), vertices by coordinate, so
+/* 16-wide (CPUs with AVX-512: one float16 slab test checks all sixteen children, as fast there as float8):
+ * child (64) + lo_x .. hi_z (6 x 64) = 448 bytes, seven whole cache lines, laid out in bvh16 and referenced
+ * as Bvh8Node is in bvh8 (the same LeafBlocks after each node). A tree of two thirds the 8-wide one's
+ * depth: a bounce ray on the benchmark terrain visits 7.0 nodes instead of 9.4, and is traced 14 % faster
+ * (docs/benchmarks-notes.md). */
+typedef struct {
+  pc_uint child[16];
+  float lo_x[16], lo_y[16], lo_z[16];
+  float hi_x[16], hi_y[16], hi_z[16];
+} Bvh16Node;
+
+/* Up to four primitives of an 8- or 16-wide BVH leaf (in bvh8 or bvh16, after its parent node), vertices by coordinate, so
  * that one float4 watertight test checks four triangles: a, b, c by coordinate (9 x 16) + prim (16) +
  * first_slot, count, sphere_mask, last (16) = 176 bytes. Lane i is prims[first_slot + i]; a sphere's lane
  * is tested alone. */
@@ -127,19 +138,19 @@ typedef struct {
   pc_uint prim_count;
 } BvhNode;
 
-/* A placement of a mesh (PC_HAS_INSTANCES): the mesh's own BVH (its root in nodes and in bvh8, over its
+/* A placement of a mesh (PC_HAS_INSTANCES): the mesh's own BVH (its root in nodes, bvh8 and bvh16, over its
  * primitives, which are stored once in the mesh's coordinates) and the affine transforms between the
  * mesh's and the device's coordinates as three rows (x, y, z, translation) each. Instance 0 is the rest of
  * the scene, stored in device coordinates (PC_INSTANCE_IDENTITY: no transform is applied).
- * to_device (3 x 16) + to_mesh (3 x 16) + root4 (4) + root8 (4) + flags (4) + pad (4) = 112 bytes. */
+ * to_device (3 x 16) + to_mesh (3 x 16) + root4 (4) + root8 (4) + root16 (4) + flags (4) = 112 bytes. */
 #define PC_INSTANCE_IDENTITY 1u
 typedef struct {
   pc_float4 to_device[3];
   pc_float4 to_mesh[3];
   pc_uint root4; /* the mesh's root node in nodes (4-wide layout) */
   pc_uint root8; /* the root's offset in bvh8, in 8-byte words (8-wide layout) */
+  pc_uint root16; /* the root's offset in bvh16, in 8-byte words (16-wide layout) */
   pc_uint flags; /* PC_INSTANCE_* */
-  pc_uint pad;
 } Instance;
 
 /* Geometry in BVH leaf order: 3 x 16 = 48 bytes.
@@ -309,20 +320,21 @@ typedef struct {
  * SceneData (kernels/scene.cl), DeviceScene's vectors (scene/device_scene.h), their upload and binding
  * (runtime/scene_buffers.h) and the checkpoint key (runtime/checkpoint.cpp). A new array is one line here. */
 #define PC_SCENE_ARRAYS(X)                                                                              \
-  X(Bvh4Node, nodes) X(pc_float4, bvh8) X(Primitive, prims) X(PrimShading, shading)  \
+  X(Bvh4Node, nodes) X(pc_float4, bvh8) X(pc_float4, bvh16) X(Primitive, prims) X(PrimShading, shading)  \
   X(pc_float4, normals) X(pc_float4, uvs) X(pc_float4, colors) X(Material, materials) X(Light, lights) X(float, light_cdf) X(LightBvhNode, light_bvh)          \
   X(Texture, textures) X(pc_uint, texels)                                                                      \
   X(float, env_dist) X(Instance, instances) X(BvhNode, instance_bvh)
 
 /* X-macro of every shared struct and field; the layout test compares sizeof and offsetof on both sides. */
 #define PC_LAYOUT_STRUCTS(X) \
-  X(BvhNode) X(Instance) X(Bvh4Node) X(Bvh8Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(LightBvhNode) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
+  X(BvhNode) X(Instance) X(Bvh4Node) X(Bvh8Node) X(Bvh16Node) X(LeafBlock) X(Primitive) X(PrimShading) X(Material) X(Light) X(LightBvhNode) X(Texture) X(SceneHeader) X(UnitStats) X(RayRecord) X(HitRecord)
 #define PC_LAYOUT_FIELDS(X)                                                                                \
   X(BvhNode, lo) X(BvhNode, left_first) X(BvhNode, hi) X(BvhNode, prim_count) X(Instance, to_device) X(Instance, to_mesh) \
-  X(Instance, root4) X(Instance, root8) X(Instance, flags) \
+  X(Instance, root4) X(Instance, root8) X(Instance, root16) X(Instance, flags) \
   X(Bvh4Node, lo_x) X(Bvh4Node, lo_y) X(Bvh4Node, lo_z) \
   X(Bvh4Node, hi_x) X(Bvh4Node, hi_y) X(Bvh4Node, hi_z) X(Bvh4Node, child) X(Bvh8Node, lo_x) X(Bvh8Node, lo_y) \
-  X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(LeafBlock, ax) \
+  X(Bvh8Node, lo_z) X(Bvh8Node, hi_x) X(Bvh8Node, hi_y) X(Bvh8Node, hi_z) X(Bvh8Node, child) X(Bvh16Node, lo_x) \
+  X(Bvh16Node, lo_y) X(Bvh16Node, lo_z) X(Bvh16Node, hi_x) X(Bvh16Node, hi_y) X(Bvh16Node, hi_z) X(Bvh16Node, child) X(LeafBlock, ax) \
   X(LeafBlock, cz) X(LeafBlock, prim) X(LeafBlock, first_slot) X(LeafBlock, count) X(LeafBlock, sphere_mask) X(LeafBlock, last) X(Primitive, a)                \
   X(Primitive, b) X(Primitive, c) X(PrimShading, material) X(PrimShading, light) X(PrimShading, flags)      \
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
@@ -350,6 +362,13 @@ static_assert(offsetof(Bvh8Node, lo_y) - offsetof(Bvh8Node, lo_x) == 8 * sizeof(
                   offsetof(Bvh8Node, hi_y) - offsetof(Bvh8Node, lo_x) == 32 * sizeof(float) &&
                   offsetof(Bvh8Node, hi_z) - offsetof(Bvh8Node, lo_x) == 40 * sizeof(float),
               "Bvh8Node's planes are eight floats apart, lo_x .. hi_z");
+static_assert(sizeof(Bvh16Node) == 448, "Bvh16Node is 448 bytes");
+static_assert(offsetof(Bvh16Node, lo_y) - offsetof(Bvh16Node, lo_x) == 16 * sizeof(float) &&
+                  offsetof(Bvh16Node, lo_z) - offsetof(Bvh16Node, lo_x) == 32 * sizeof(float) &&
+                  offsetof(Bvh16Node, hi_x) - offsetof(Bvh16Node, lo_x) == 48 * sizeof(float) &&
+                  offsetof(Bvh16Node, hi_y) - offsetof(Bvh16Node, lo_x) == 64 * sizeof(float) &&
+                  offsetof(Bvh16Node, hi_z) - offsetof(Bvh16Node, lo_x) == 80 * sizeof(float),
+              "Bvh16Node's planes are sixteen floats apart, lo_x .. hi_z");
 static_assert(sizeof(LeafBlock) == 176, "LeafBlock is 176 bytes");
 static_assert(sizeof(Primitive) == 48, "Primitive is 48 bytes");
 static_assert(sizeof(PrimShading) == 16, "PrimShading is 16 bytes");

@@ -1,10 +1,11 @@
-"""BVH layouts side by side (issue 15; a benchmark, not a test): `pathcl rays` with the 4- and the 8-wide
-BVH (PATHCL_BVH_WIDTH), and with the 8-wide one as packets of 8 and 16 rays (--lanes), against Embree's
-rtcIntersect1 (bench/embree_rays.cpp, 1 and 2 threads, and 2 threads with RTC_SCENE_FLAG_ROBUST) on the same
-camera and diffuse-bounce rays of the benchmark suite's 524,288-triangle terrain, and render samples/s of
-the suite's scenes with each layout. Rounds alternate A B C A B C; figures are medians over the rounds.
-Checks that both layouts and the packets give the same hit records as each other, and counts what a ray
-visits on pathcl's 8-wide tree and on one built by Embree's builder (bench/bvh_visits.cpp).
+"""BVH layouts side by side (issue 15; a benchmark, not a test): `pathcl rays` with the 4-, 8- and 16-wide
+BVH (PATHCL_BVH_WIDTH), and with the 16-wide one (the default on AVX-512 CPUs, as on the machine this was
+written on) as packets of 8 and 16 rays (--lanes), against Embree's rtcIntersect1 (bench/embree_rays.cpp, 1
+and 2 threads, and 2 threads with RTC_SCENE_FLAG_ROBUST) on the same camera and diffuse-bounce rays of the
+benchmark suite's 524,288-triangle terrain, and render samples/s of the suite's scenes with each layout.
+Rounds alternate A B C A B C; figures are medians over the rounds. Checks that the layouts and the packets
+give the same hit records as each other, and counts what a ray visits on pathcl's 8- and 16-wide trees and
+on one built by Embree's builder (bench/bvh_visits.cpp).
 Usage: scripts/bench/layouts [--rounds N] [--size PIXELS] [--bar ROUNDS]   (results: bench/results/layouts/*.json, beside and
 not among the peer runs that scripts/bench/report.py reads)
 """
@@ -24,6 +25,8 @@ PATHCL = os.path.join(BUILD, "pathcl")
 MAKE_RAYS = os.path.join(BUILD, "make_rays")
 EMBREE_RAYS = os.path.join(BUILD, "embree_rays")
 BVH_VISITS = os.path.join(BUILD, "bvh_visits")
+WIDTHS = (4, 8, 16)
+BAR_WIDTH = 16  # the layout that the bar and the packets measure: the CPU default with AVX-512
 
 
 def run(cmd, env=None):
@@ -91,7 +94,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--size", type=int, default=768, help="terrain film side: camera rays, 2 a pixel")
     ap.add_argument("--bar", type=int, default=0, metavar="ROUNDS",
-                    help="only the diffuse-bounce bar: the 8-wide single ray against Embree with 2 threads, alternated "
+                    help="only the diffuse-bounce bar: the 16-wide single ray against Embree with 2 threads, alternated "
                          "ROUNDS times (the per-round ratios narrow the figure on a noisy machine)")
     args = ap.parse_args()
     work = os.path.join(BUILD, "bench-layouts")
@@ -113,15 +116,15 @@ def main():
         save(result)
         return
     for name, rays in (("camera", cam), ("diffuse_bounce", bounce)):
-        runs = {"bvh4": [], "bvh8": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": [],
+        runs = {"bvh4": [], "bvh8": [], "bvh16": [], "packet8": [], "packet16": [], "embree-1": [], "embree-2": [],
                 "embree-2-robust": []}
-        hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in (4, 8)}
+        hits = {w: os.path.join(work, "%s-%d.hits" % (name, w)) for w in WIDTHS}
         packet_hits = {n: os.path.join(work, "%s-packet%d.hits" % (name, n)) for n in (8, 16)}
         for _ in range(args.rounds):
-            for w in (4, 8):
+            for w in WIDTHS:
                 runs["bvh%d" % w].append(pathcl_rays(big, rays, w, work, hits[w]))
             for n in (8, 16):
-                runs["packet%d" % n].append(pathcl_rays(big, rays, 8, work, packet_hits[n], lanes=n))
+                runs["packet%d" % n].append(pathcl_rays(big, rays, BAR_WIDTH, work, packet_hits[n], lanes=n))
             for threads in (1, 2):
                 e = embree_rays(obj, rays, threads, hits[8])
                 runs["embree-%d" % threads].append(e["rays_per_second"])
@@ -130,67 +133,74 @@ def main():
             runs["embree-2-robust"].append(e["rays_per_second"])
             same_robust = e["same_primitive_fraction"]
         visits = bvh_visits(obj, rays)
-        v = {t: visits["per_ray"][t]["all"] for t in ("pathcl", "embree")}
-        print("%s rays visit %.2f nodes and %.2f blocks on pathcl's 8-wide tree, %.2f and %.2f on Embree's builder's" %
-              (name, v["pathcl"]["nodes"], v["pathcl"]["blocks"], v["embree"]["nodes"], v["embree"]["blocks"]))
+        v = {t: visits["per_ray"][t]["all"] for t in ("pathcl", "pathcl16", "embree")}
+        print("%s rays visit %.2f nodes and %.2f blocks on pathcl's 8-wide tree, %.2f and %.2f on its 16-wide one, "
+              "%.2f and %.2f on Embree's builder's" %
+              (name, v["pathcl"]["nodes"], v["pathcl"]["blocks"], v["pathcl16"]["nodes"], v["pathcl16"]["blocks"],
+               v["embree"]["nodes"], v["embree"]["blocks"]))
         records = []
-        for path in (hits[4], hits[8], packet_hits[8], packet_hits[16]):
+        for path in [hits[w] for w in WIDTHS] + [packet_hits[8], packet_hits[16]]:
             with open(path, "rb") as f:
                 records.append(f.read())
         identical = all(r == records[0] for r in records)
         med = {k: statistics.median(v) for k, v in runs.items()}
         # Each round's own ratio: the two programs a few seconds apart, so their spread shows this machine's.
-        by_round = [p / e for p, e in zip(runs["bvh8"], runs["embree-2"])]
+        by_round = [p / e for p, e in zip(runs["bvh16"], runs["embree-2"])]
         result["rays"][name] = {"median_rays_per_second": med, "runs": runs, "layouts_identical_hits": identical,
                                 "embree_same_primitive_fraction": same,
                                 "embree_robust_same_primitive_fraction": same_robust, "visits": visits,
+                                "bvh16_over_embree2": med["bvh16"] / med["embree-2"],
                                 "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
-                                "bvh8_over_embree2_robust": med["bvh8"] / med["embree-2-robust"],
-                                "bvh8_over_embree2_by_round": by_round,
+                                "bvh16_over_embree2_robust": med["bvh16"] / med["embree-2-robust"],
+                                "bvh16_over_embree2_by_round": by_round,
                                 "bvh8_over_bvh4": med["bvh8"] / med["bvh4"],
-                                "packet8_over_bvh8": med["packet8"] / med["bvh8"],
-                                "packet16_over_bvh8": med["packet16"] / med["bvh8"]}
-        print("%s rays: 4-wide %.2f, 8-wide %.2f, packets of 8 %.2f, of 16 %.2f, Embree 1 thread %.2f, 2 threads "
-              "%.2f, robust %.2f Mrays/s; 8-wide / Embree-2 %.2f (rounds %.2f-%.2f), / robust %.2f; hit records of the "
-              "layouts and packets identical: %s; same primitive as Embree: %.4f, robust %.4f" %
-              (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["packet8"] / 1e6, med["packet16"] / 1e6,
-               med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["embree-2-robust"] / 1e6,
-               med["bvh8"] / med["embree-2"], min(by_round), max(by_round),
-               med["bvh8"] / med["embree-2-robust"], identical, same, same_robust))
+                                "bvh16_over_bvh8": med["bvh16"] / med["bvh8"],
+                                "packet8_over_bvh16": med["packet8"] / med["bvh16"],
+                                "packet16_over_bvh16": med["packet16"] / med["bvh16"]}
+        print("%s rays: 4-wide %.2f, 8-wide %.2f, 16-wide %.2f, packets of 8 %.2f, of 16 %.2f, Embree 1 thread %.2f, "
+              "2 threads %.2f, robust %.2f Mrays/s; 16-wide / Embree-2 %.2f (rounds %.2f-%.2f), 8-wide / Embree-2 "
+              "%.2f, 16-wide / robust %.2f; hit records of the layouts and packets identical: %s; same primitive as "
+              "Embree: %.4f, robust %.4f" %
+              (name, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh16"] / 1e6, med["packet8"] / 1e6,
+               med["packet16"] / 1e6, med["embree-1"] / 1e6, med["embree-2"] / 1e6, med["embree-2-robust"] / 1e6,
+               med["bvh16"] / med["embree-2"], min(by_round), max(by_round), med["bvh8"] / med["embree-2"],
+               med["bvh16"] / med["embree-2-robust"], identical, same, same_robust))
     for scene, size, spp in (("cornell-box", 256, 64), ("glass-metal", 256, 64), ("terrain", 256, 16)):
-        runs = {"bvh4": [], "bvh8": []}
+        runs = {"bvh%d" % w: [] for w in WIDTHS}
         file = resized(os.path.join(scenes, scene + ".json"), size, os.path.join(scenes, "%s-%d.json" % (scene, size)))
         for _ in range(args.rounds):
-            for w in (4, 8):
+            for w in WIDTHS:
                 runs["bvh%d" % w].append(pathcl_samples(file, w, work, spp))
         med = {k: statistics.median(v) for k, v in runs.items()}
         result["samples"][scene] = {"size": size, "spp": spp, "median_samples_per_second": med, "runs": runs}
-        print("%s %dx%d, %d spp: 4-wide %.3f, 8-wide %.3f Msamples/s (%.2fx)" %
-              (scene, size, size, spp, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh8"] / med["bvh4"]))
+        print("%s %dx%d, %d spp: 4-wide %.3f, 8-wide %.3f, 16-wide %.3f Msamples/s (%.2fx, %.2fx)" %
+              (scene, size, size, spp, med["bvh4"] / 1e6, med["bvh8"] / 1e6, med["bvh16"] / 1e6,
+               med["bvh8"] / med["bvh4"], med["bvh16"] / med["bvh8"]))
     save(result)
 
 
 def bar(scene, obj, rays, work, rounds):
-    """pathcl's 8-wide single ray and Embree with 2 threads on the bounce rays, alternated (who goes first
+    """pathcl's 16-wide single ray and Embree with 2 threads on the bounce rays, alternated (who goes first
     swaps each round)."""
-    runs = {"bvh8": [], "embree-2": []}
+    key = "bvh%d" % BAR_WIDTH
+    runs = {key: [], "embree-2": []}
     embree = lambda: embree_rays(obj, rays, 2)["rays_per_second"]
     for i in range(rounds):
         if i % 2 == 0:
-            runs["bvh8"].append(pathcl_rays(scene, rays, 8, work))
+            runs[key].append(pathcl_rays(scene, rays, BAR_WIDTH, work))
             runs["embree-2"].append(embree())
         else:
             runs["embree-2"].append(embree())
-            runs["bvh8"].append(pathcl_rays(scene, rays, 8, work))
-    ratios = sorted(p / e for p, e in zip(runs["bvh8"], runs["embree-2"]))
+            runs[key].append(pathcl_rays(scene, rays, BAR_WIDTH, work))
+    ratios = sorted(p / e for p, e in zip(runs[key], runs["embree-2"]))
     med = {k: statistics.median(v) for k, v in runs.items()}
-    out = {"runs": runs, "median_rays_per_second": med, "bvh8_over_embree2": med["bvh8"] / med["embree-2"],
+    out = {"runs": runs, "median_rays_per_second": med, key + "_over_embree2": med[key] / med["embree-2"],
            "round_ratio_median": statistics.median(ratios), "round_ratio_quartiles": [ratios[len(ratios) // 4],
                                                                                     ratios[3 * len(ratios) // 4]],
            "rounds_above_1": sum(r > 1 for r in ratios)}
-    print("diffuse_bounce bar, %d rounds: 8-wide %.2f, Embree 2 threads %.2f Mrays/s, %.3fx; per round %.3fx "
-          "(quartiles %.3f-%.3f, %d above 1)" % (rounds, med["bvh8"] / 1e6, med["embree-2"] / 1e6,
-                                                 out["bvh8_over_embree2"], out["round_ratio_median"],
+    print("diffuse_bounce bar, %d rounds: %d-wide %.2f, Embree 2 threads %.2f Mrays/s, %.3fx; per round %.3fx "
+          "(quartiles %.3f-%.3f, %d above 1)" % (rounds, BAR_WIDTH, med[key] / 1e6, med["embree-2"] / 1e6,
+                                                 out[key + "_over_embree2"], out["round_ratio_median"],
                                                  *out["round_ratio_quartiles"], out["rounds_above_1"]))
     return out
 
