@@ -170,7 +170,9 @@ def main():
                 "%d lanes %.2fx" % (l, entry["pathcl-%d_over_mitsuba-%s" % (l, v)]) for l in lanes)))
     out_dir = os.path.join(ROOT, "bench", "results", "lanes")
     os.makedirs(out_dir, exist_ok=True)
-    out = os.path.join(out_dir, "%s.json" % datetime.datetime.now().strftime("%Y-%m-%dT%H%M"))
+    # A run with --builds is named apart, so that a timing run of the same minute keeps its file.
+    out = os.path.join(out_dir, "%s%s.json" % (datetime.datetime.now().strftime("%Y-%m-%dT%H%M"),
+                                               "-builds" if args.builds else ""))
     with open(out, "w") as f:
         json.dump(result, f, indent=1)
     print("results:", os.path.relpath(out, ROOT))
