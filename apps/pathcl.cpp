@@ -562,7 +562,7 @@ int main(int argc, char** argv) {
   rays_cmd->add_option("--repeat", ya.repeat, "timed repetitions (the median is reported)");
   rays_cmd->add_option("--stats", ya.stats, "write statistics as JSON");
   rays_cmd->add_option("--work-group", ya.work_group, "work-group size (0: 64, or 8 for 8 or 16 lanes)");
-  rays_cmd->add_option("--lanes", ya.lanes, "rays per work item: 1, or packets of 8 or 16 (8-wide BVH devices)");
+  rays_cmd->add_option("--lanes", ya.lanes, "rays per work item: 1, or packets of 8 or 16 (8- or 16-wide BVH devices)");
   rays_cmd->add_flag("--any-hit", ya.any_hit, "stop each ray at its first hit found (shadow rays; only hit or miss is defined)");
 
   add_compare_command(app);

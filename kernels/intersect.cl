@@ -288,8 +288,8 @@ inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
 
 /* Intersects one primitive; updates *hit when closer. Hits at equal t (a shared edge, coplanar faces)
  * go to the lower primitive index, so the nearest hit is one total order's minimum and the same whatever
- * the order the traversal meets the primitives in: the 4- and 8-wide layouts (and with them a CPU and a
- * GPU in one render) give the same hit records. */
+ * the order the traversal meets the primitives in: the 4-, 8- and 16-wide layouts (and with them a CPU and
+ * a GPU in one render) give the same hit records. */
 __attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, __global const Primitive* prims, uint slot,
                                                           const Ray* ray, const RayPrecomp* rp, uint kz, float tmax, Hit* hit) {
   Primitive p = prims[slot];

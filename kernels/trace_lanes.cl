@@ -1,5 +1,5 @@
 /* The rays of a work item's lanes (kernels/lanes.cl) and their hits: traced together as one packet where
- * the device's layout has packets (the 8-wide BVH without instances, kernels/packet.cl), else lane by lane
+ * the device's layout has packets (the 8- or 16-wide BVH without instances, kernels/packet.cl), else lane by lane
  * with trace_scene. Either way each lane's hit is its single ray's, bit for bit. */
 #ifndef PATHCL_TRACE_LANES_CL
 #define PATHCL_TRACE_LANES_CL

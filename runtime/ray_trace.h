@@ -14,7 +14,7 @@ struct TraceTiming {
 
 // Traces every ray `repeat` times (the hits of the last repeat are returned). Rays are in world
 // coordinates, whatever the scene's DeviceOrigin. lanes 8 or 16: as packets of that many consecutive rays
-// (kernels/packet.cl; the 8-wide BVH only), with the hits of lanes = 1, one ray per work item. any_hit:
+// (kernels/packet.cl; the 8- and 16-wide BVHs only), with the hits of lanes = 1, one ray per work item. any_hit:
 // each ray's first hit found (shadow rays), of which only whether there is one is defined.
 std::vector<HitRecord> trace_ray_records(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays,
                                          int repeat, TraceTiming& timing, size_t work_group = 0, uint32_t lanes = 1,

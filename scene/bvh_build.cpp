@@ -309,7 +309,7 @@ struct WideCollapseCost {
       std::array<float, kWidth> left{}, right{};
       if (interior) {
         if (pending.size() < 2 || pending.back().node != n + 1 || pending[pending.size() - 2].node != b.left_first)
-          throw std::logic_error("collapse_to_bvh8: the binary tree is not in depth-first order");
+          throw std::logic_error("collapse_to_bvh" + std::to_string(kWidth) + ": the binary tree is not in depth-first order");
         left = pending.back().cost;
         right = pending[pending.size() - 2].cost;
         pending.resize(pending.size() - 2);

@@ -96,8 +96,8 @@ std::string scene_test_name(const ::testing::TestParamInfo<std::string>& info) {
 }
 
 // The lane kernels (issue 15: 8 or 16 paths per work item, each lane starting its next sample when its path
-// ends, the lanes' rays traced as packets on the 8-wide BVH and one by one on the 4-wide one) and both BVH
-// layouts (kernels/intersect.cl: the same hits, ties included) give the film of one path per work item on
+// ends, the lanes' rays traced as packets on the 8- and 16-wide BVHs and one by one on the 4-wide one) and
+// every BVH layout (kernels/intersect.cl: the same hits, ties included) give the film of one path per work item on
 // the 4-wide BVH (the GPU path) bit for bit, accumulators and ray counts included, on a film whose pixel
 // count is no multiple of the lanes, and with units and passes that split the lanes' pixels.
 TEST_P(EveryScene, EveryLaneWidthAndBvhLayoutGiveIdenticalPixels) {
