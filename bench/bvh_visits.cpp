@@ -70,12 +70,12 @@ void stats(const char* name, const WTree& t) {
 
 // ---------------- pathcl trees ----------------
 template <class Node>
-WTree pathcl_tree(const Bvh& bvh, const WideBvh<Node>& b8, const char* name) {
+WTree pathcl_tree(const Bvh& bvh, const WideBvh<Node>& wide, const char* name) {
   WTree t;
   t.prims = bvh.prim_order;
-  t.nodes.resize(b8.nodes.size());
-  for (size_t k = 0; k < b8.nodes.size(); ++k) {
-    const Node& s = b8.nodes[k];
+  t.nodes.resize(wide.nodes.size());
+  for (size_t k = 0; k < wide.nodes.size(); ++k) {
+    const Node& s = wide.nodes[k];
     WNode& d = t.nodes[k];
     for (int i = 0; i < int(std::size(s.child)); ++i) {
       if (s.child[i] == 0xffffffffu) break;
@@ -98,7 +98,7 @@ WTree pathcl_tree(const Bvh& bvh, const WideBvh<Node>& b8, const char* name) {
       t.rlo[a] = std::min(t.rlo[a], t.nodes[0].lo[a][i]);
       t.rhi[a] = std::max(t.rhi[a], t.nodes[0].hi[a][i]);
     }
-  printf("[%s] binary nodes %u, binary SAH %.4f, depth %u\n", name, bvh.node_count, bvh.sah_cost, b8.depth);
+  printf("[%s] binary nodes %u, binary SAH %.4f, depth %u\n", name, bvh.node_count, bvh.sah_cost, wide.depth);
   return t;
 }
 

@@ -135,6 +135,7 @@ PC_DEFINE_RAY_BOXES(8)
 PC_DEFINE_RAY_BOXES(16)
 #undef PC_DEFINE_RAY_BOXES
 
+#ifdef PC_BVH_WIDE
 /* Where fma() is an instruction: the 8- or 16-wide single-ray node test of a ray with finite FusedSlabs takes each
  * slab plane distance in one fused multiply-add, fma(plane, inv, off), instead of a subtraction and a
  * multiplication; no NaN can arise there, so the interval's ends are maxima and minima taken pairwise (two
@@ -174,11 +175,7 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   f.off_far = -q_far + fabs(q_far) * 0x1p-22f;
   /* lo_x .. hi_z at 0, W, .. 5 W floats, W the node's width (pinned by static asserts in
    * kernels/shared/types.h) */
-#ifdef PC_BVH_WIDE
   int w = PC_BVH_WIDE;
-#else
-  int w = 8;
-#endif
   int3 negative = inv_d < 0.0f, lo_at = (int3)(0, w, 2 * w), hi_at = (int3)(3 * w, 4 * w, 5 * w);
   f.near_at = select(lo_at, hi_at, negative);
   f.far_at = select(hi_at, lo_at, negative);
@@ -190,7 +187,6 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   return f;
 }
 
-#ifdef PC_BVH_WIDE
 /* ray_boxes_hit8 or 16 by FusedSlabs (f->usable), the boxes of node n; tmax_far: tmax * (1 + 2 gamma(3)). */
 inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const WideNode* n,
                                       WideF* enter_out) {
@@ -208,7 +204,7 @@ inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tma
   *enter_out = enter;
   return enter <= exit;
 }
-#endif
+#endif /* PC_BVH_WIDE */
 
 /* Each of four boxes' entry distance, or INFINITY when it is missed within [tmin, tmax]. */
 inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,

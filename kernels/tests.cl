@@ -63,9 +63,7 @@ __kernel void ray_box_fused_test(__global const RayRecord* rays, __global const 
   RayPrecomp rp = ray_precompute(d);
   int3 negative = rp.inv_d < 0.0f;
   float3 lo = vload3(0, boxes + 6 * i), hi = vload3(0, boxes + 6 * i + 3);
-  float slot[PC_BVH_WIDE];
-  for (uint k = 0u; k < PC_BVH_WIDE; ++k) slot[k] = (float)k;
-  WideI lane = wide_load(slot) == (WideF)((float)at);
+  WideI lane = pc_lanes_of_bits(1u << at, (WideI)(0));
   WideF lo_x = select((WideF)(INFINITY), (WideF)(lo.x), lane), lo_y = select((WideF)(INFINITY), (WideF)(lo.y), lane);
   WideF lo_z = select((WideF)(INFINITY), (WideF)(lo.z), lane), hi_x = select((WideF)(-INFINITY), (WideF)(hi.x), lane);
   WideF hi_y = select((WideF)(-INFINITY), (WideF)(hi.y), lane), hi_z = select((WideF)(-INFINITY), (WideF)(hi.z), lane);

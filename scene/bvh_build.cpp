@@ -440,7 +440,7 @@ WideBvh<Node> collapse(const std::vector<BvhNode>& binary) {
   out.nodes.emplace_back();
   Collapser<Node, Width> collapser{binary, out, {}, {}, {}};
   collapser.count_subtrees();
-  if (Width >= 8) collapser.sah = std::make_unique<WideCollapseCost<Width>>(binary, collapser.subtree_count);
+  if constexpr (Width >= 8) collapser.sah = std::make_unique<WideCollapseCost<Width>>(binary, collapser.subtree_count);
   collapser.fill(0, 0, 0);
   return out;
 }
@@ -476,8 +476,18 @@ LeafBlock leaf_block(const std::vector<Primitive>& prims, uint32_t first, uint32
 
 constexpr size_t kWord = 8;  // the references of bvh8 and bvh16 count these (kernels/shared/types.h)
 
+template <class T>
+T wide_bvh_at(const std::vector<pc_float4>& wide, uint32_t at) {
+  T x;
+  std::memcpy(&x, reinterpret_cast<const char*>(wide.data()) + size_t(at) * kWord, sizeof x);
+  return x;
+}
+
+}  // namespace
+
 template <class Node>
-uint32_t append_wide(const std::vector<Node>& nodes, const std::vector<Primitive>& prims, std::vector<pc_float4>& wide) {
+uint32_t append_wide_bvh(const std::vector<Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& wide) {
   // Where everything goes: each node at a multiple of 64 bytes, then its leaves' blocks.
   std::vector<size_t> node_at(nodes.size());
   size_t end = wide.size() * sizeof(pc_float4);
@@ -515,23 +525,8 @@ uint32_t append_wide(const std::vector<Node>& nodes, const std::vector<Primitive
   return pc_uint(node_at[0] / kWord);
 }
 
-template <class T>
-T wide_bvh_at(const std::vector<pc_float4>& wide, uint32_t at) {
-  T x;
-  std::memcpy(&x, reinterpret_cast<const char*>(wide.data()) + size_t(at) * kWord, sizeof x);
-  return x;
-}
-
-}  // namespace
-
-uint32_t append_wide_bvh(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
-                         std::vector<pc_float4>& bvh8) {
-  return append_wide(nodes, prims, bvh8);
-}
-uint32_t append_wide_bvh(const std::vector<Bvh16Node>& nodes, const std::vector<Primitive>& prims,
-                         std::vector<pc_float4>& bvh16) {
-  return append_wide(nodes, prims, bvh16);
-}
+template uint32_t append_wide_bvh(const std::vector<Bvh8Node>&, const std::vector<Primitive>&, std::vector<pc_float4>&);
+template uint32_t append_wide_bvh(const std::vector<Bvh16Node>&, const std::vector<Primitive>&, std::vector<pc_float4>&);
 
 template <class Node>
 Node wide_bvh_node(const std::vector<pc_float4>& wide, uint32_t at) {

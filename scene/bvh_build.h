@@ -64,14 +64,13 @@ Bvh4 collapse_to_bvh4(const std::vector<BvhNode>& binary);
 constexpr float kWideNodeCost = 1, kLeafCost = 1, kLeafBlockCost = 1;
 Bvh8 collapse_to_bvh8(const std::vector<BvhNode>& binary);
 Bvh16 collapse_to_bvh16(const std::vector<BvhNode>& binary);
-// Appends the 8- or 16-wide tree to its array (bvh8 or bvh16) in the device's layout
-// (kernels/shared/types.h): each node, then its leaf children's LeafBlocks of prims (whose slots the leaf
-// references hold), references rewritten to word offsets in the array. Returns the root's. Throws
+// Appends the 8- or 16-wide tree (Node: Bvh8Node or Bvh16Node) to its array (bvh8 or bvh16) in the device's
+// layout (kernels/shared/types.h): each node, then its leaf children's LeafBlocks of prims (whose slots the
+// leaf references hold), references rewritten to word offsets in the array. Returns the root's. Throws
 // std::length_error past PC_BVH8_MAX_WORDS.
-uint32_t append_wide_bvh(const std::vector<Bvh8Node>& nodes, const std::vector<Primitive>& prims,
-                         std::vector<pc_float4>& bvh8);
-uint32_t append_wide_bvh(const std::vector<Bvh16Node>& nodes, const std::vector<Primitive>& prims,
-                         std::vector<pc_float4>& bvh16);
+template <class Node>
+uint32_t append_wide_bvh(const std::vector<Node>& nodes, const std::vector<Primitive>& prims,
+                         std::vector<pc_float4>& wide);
 // The node (Bvh8Node or Bvh16Node), or block, at word offset at of bvh8 or bvh16 (a copy).
 template <class Node>
 Node wide_bvh_node(const std::vector<pc_float4>& wide, uint32_t at);
