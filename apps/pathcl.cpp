@@ -16,7 +16,9 @@
 
 #include "apps/bench_command.h"
 #include "apps/compare_command.h"
+#include "apps/denoise_command.h"
 #include "runtime/checkpoint.h"
+#include "runtime/denoise.h"
 #include "runtime/device.h"
 #include "runtime/errors.h"
 #include "runtime/image_compare.h"
@@ -27,6 +29,7 @@
 #include "runtime/output_files.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
+#include "runtime/technique.h"
 #include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
 #include "scene/scene_limits.h"
@@ -102,13 +105,14 @@ void print_progress(uint64_t done, uint64_t total, double seconds, size_t pixels
 
 struct RenderArgs {
   std::string scene, out, png, stats, device, sampler, integrator, reference, convergence, checkpoint, resume;
+  std::optional<std::string> aovs;
   double checkpoint_every = 60;
   std::optional<int64_t> spp, seed, max_depth;
   std::optional<double> time_budget, target_error;
   int64_t pass_spp = 0;
   size_t work_group = 0;
   uint32_t lanes = 0;
-  bool quiet = false, all_features = false, variance = false, allow_mixed_devices = false;
+  bool quiet = false, all_features = false, variance = false, allow_mixed_devices = false, denoise = false;
 };
 
 // Rows of `--convergence`: one per power of two spp and at the end.
@@ -201,6 +205,36 @@ nlohmann::json device_stats(const RenderResult& r) {
   return list;
 }
 
+// Device time of each named launch, in seconds.
+nlohmann::json phase_stats(const RenderResult& r) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const PhaseTime& p : r.phases) j[p.name] = p.ms * 1e-3;
+  return j;
+}
+
+// The film's AOVs as EXR layers named as --aov takes them, channels by kind (AovInfo::channels); the
+// header's "aovs" lists them, and with material ids "material_id_names" the materials' names in id order
+// (id 1 first; 0 is no hit).
+void add_aov_layers(const Film& film, const SceneDescription& scene, Image& image) {
+  std::string names;
+  for (const Film::Aov& aov : film.aovs) {
+    const AovInfo& info = aov_info(aov.aov);
+    ImageLayer layer;
+    layer.name = info.name;
+    for (const char* c = info.channels; *c; ++c) layer.channels.push_back(std::string(1, *c));
+    layer.values = aov.values;
+    layer.integer = info.id;
+    image.layers.push_back(std::move(layer));
+    names += (names.empty() ? "" : ",") + std::string(info.name);
+    if (aov.aov == PC_AOV_MATERIAL_ID) {
+      std::string materials;
+      for (const MaterialDesc& m : scene.materials) materials += (materials.empty() ? "" : ",") + m.name;
+      image.attributes["material_id_names"] = materials;
+    }
+  }
+  if (!names.empty()) image.attributes["aovs"] = names;
+}
+
 int run_render(const RenderArgs& a) {
   auto started = std::chrono::steady_clock::now();
   // Everything the command line can get wrong is refused before the scene is loaded.
@@ -213,16 +247,20 @@ int run_render(const RenderArgs& a) {
   if (!a.sampler.empty() && !sampler_from_name(a.sampler, &opt.sampler))
     throw UsageError("--sampler " + a.sampler + ": expected independent, stratified, sobol or halton");
   bool integrator_given = !a.integrator.empty();
-  if (integrator_given) {
-    if (!integrator_from_name(a.integrator, &opt.integrator))
-      throw UsageError("--integrator " + a.integrator + ": expected path, light or bdpt");
-  }
+  if (integrator_given) opt.integrator = technique_named(a.integrator, "--integrator").name;
+  if (a.aovs) opt.aovs = aov_mask_from_names(*a.aovs, "--aov");
   if (a.time_budget) opt.time_budget = positive_option("--time", *a.time_budget, false, "a finite number of seconds > 0");
   if (a.target_error) opt.target_error = positive_option("--target-error", *a.target_error, false, "a finite relMSE > 0");
   opt.checkpoint_every = positive_option("--checkpoint-every", a.checkpoint_every, true, "a finite number of seconds >= 0");
   std::string out = a.out.empty() ? std::filesystem::path(a.scene).stem().string() + ".exr" : a.out;
   if (a.variance && image_format("-o", out) != ImageFormat::exr)
     throw UsageError("--variance: the variance layer needs an EXR output, not -o " + out);
+  if (a.aovs && opt.aovs != 0 && image_format("-o", out) != ImageFormat::exr)
+    throw UsageError("--aov: the AOV layers need an EXR output, not -o " + out);
+  if (a.denoise) {  // before the render: a missing library must not cost the render
+    std::string why;
+    if (!denoiser_available(&why)) throw RuntimeFailure("--denoise: " + why);
+  }
   check_output_files({{"-o", out, true}, {"--png", a.png, true}, {"--stats", a.stats},
                       {"--convergence", a.convergence}, {"--checkpoint", a.checkpoint}});
 
@@ -233,7 +271,13 @@ int run_render(const RenderArgs& a) {
   if (!a.seed) opt.seed = s.description.render.seed;
   if (!a.max_depth) opt.max_depth = s.description.render.max_depth;
   if (a.sampler.empty()) opt.sampler = s.description.render.sampler;
-  if (!integrator_given) opt.integrator = s.description.render.integrator;
+  const RenderSettings& rs = s.description.render;
+  if (!integrator_given)
+    opt.integrator = technique_named(rs.integrator, rs.integrator_place.empty() ? "render.integrator" : rs.integrator_place).name;
+  if (!a.aovs)
+    for (size_t i = 0; i < rs.aovs.size(); ++i) opt.aovs |= aov_mask_from_names(rs.aovs[i], rs.aov_places[i]);
+  // The denoiser's guides (Open Image Denoise's albedo and normal), rendered beside the beauty.
+  if (a.denoise) opt.aovs |= 1u << PC_AOV_ALBEDO | 1u << PC_AOV_NORMAL;
   opt.work_group = a.work_group;
   opt.lanes = a.lanes;
   opt.all_features = a.all_features;
@@ -253,7 +297,7 @@ int run_render(const RenderArgs& a) {
   opt.checkpoint_key = render_key(s.device, opt);
   Film resumed;
   if (!a.resume.empty()) {
-    resumed = read_checkpoint(a.resume, opt.checkpoint_key, s.device.header.width, s.device.header.height, opt.integrator);
+    resumed = read_checkpoint(a.resume, s.device, opt);
     opt.resume = &resumed;
   }
 
@@ -279,10 +323,17 @@ int run_render(const RenderArgs& a) {
 
   Image image = ConvergenceLog::film_image(r.film);
   if (a.variance) image.variance = r.film.variance;
-  image.attributes = {{"renderer", "pathcl"}, {"integrator", integrator_name(opt.integrator)},
+  image.attributes = {{"renderer", "pathcl"}, {"integrator", opt.integrator},
                       {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
                       {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
                       {"stop_reason", r.stop_reason}, {"determinism", r.determinism}};
+  add_aov_layers(r.film, s.description, image);
+  double denoise_seconds = 0;
+  if (a.denoise) {  // the beauty denoised, the raw one kept beside it (layer "raw")
+    auto t = std::chrono::steady_clock::now();
+    denoise_image(image, DenoiseOptions{});
+    denoise_seconds = ms_since(t) * 1e-3;
+  }
   write_image(out, image);
   if (!a.png.empty()) write_png(a.png, image);
   if (!log.path.empty()) write_text_file(log.path, log.text);
@@ -299,7 +350,10 @@ int run_render(const RenderArgs& a) {
               {"seed", opt.seed},
               {"max_depth", opt.max_depth},
               {"sampler", sampler_name(opt.sampler)},
-              {"integrator", integrator_name(opt.integrator)},
+              {"integrator", opt.integrator},
+              {"aovs", aov_names(opt.aovs)},
+              {"phases", phase_stats(r)},
+              {"denoise_seconds", denoise_seconds},
               {"lanes", r.devices.front().lanes},
               {"stop_reason", r.stop_reason},
               {"relmse_estimate", estimated_rel_mse(r.film)},
@@ -533,13 +587,19 @@ int main(int argc, char** argv) {
                          "paths per work item of the path integrator: 1, 8 or 16 (the same pixels); 0: the device's "
                          "(16 or 8 on CPU devices, 1 on GPUs)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");
-  render_cmd->add_option("--integrator", ra.integrator, "path (the default), light or bdpt (overrides the scene's render.integrator)");
+  render_cmd->add_option("--integrator", ra.integrator, technique_list() + " (default path; overrides the scene's render.integrator)");
+  render_cmd->add_option("--aov", ra.aovs,
+                         "also write these AOVs as EXR layers, a comma-separated list of albedo, normal, depth, position, "
+                         "uv, shape_id, material_id (overrides the scene's render.aovs)");
   render_cmd->add_option("--sampler", ra.sampler, "independent, stratified, sobol or halton (overrides the scene)");
   render_cmd->add_option("--reference", ra.reference, "reference EXR for the error columns of --convergence");
   render_cmd->add_option("--convergence", ra.convergence, "write time, spp and error at every power of two spp (CSV)");
   render_cmd->add_option("--time", ra.time_budget, "stop after this many seconds of rendering");
   render_cmd->add_option("--target-error", ra.target_error, "stop when the estimated relMSE falls below this");
   render_cmd->add_flag("--variance", ra.variance, "add the per-pixel variance of the mean to the EXR");
+  render_cmd->add_flag("--denoise", ra.denoise,
+                       "denoise the image with Intel Open Image Denoise 2.x, guided by albedo and normal AOVs (rendered "
+                       "for it); the raw beauty is kept as the EXR layer raw");
   render_cmd->add_option("--checkpoint", ra.checkpoint, "keep the render state in this file (atomically replaced)");
   render_cmd->add_option("--checkpoint-every", ra.checkpoint_every, "seconds between checkpoints (default 60)");
   render_cmd->add_option("--resume", ra.resume, "continue a render from a checkpoint of the same scene and settings");
@@ -566,6 +626,7 @@ int main(int argc, char** argv) {
   rays_cmd->add_flag("--any-hit", ya.any_hit, "stop each ray at its first hit found (shadow rays; only hit or miss is defined)");
 
   add_compare_command(app);
+  add_denoise_command(app);
   add_bench_command(app);
 
   try {
@@ -580,6 +641,7 @@ int main(int argc, char** argv) {
     if (info_cmd->parsed()) return run_info(info_scene, info_dump_obj);
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();
+    if (denoise_command_parsed()) return run_denoise_command();
     if (bench_command_parsed()) return run_bench_command(std::string(PATHCL_VERSION) + " (git " + PATHCL_GIT_REVISION + ")");
     return run_devices();
   } catch (const SceneError& e) {

@@ -22,6 +22,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -151,7 +152,7 @@ inline std::string render_problem(const RenderResult& r, const DeviceScene& scen
   const size_t pixels = size_t(scene.header.width) * scene.header.height;
   if (f.width != scene.header.width || f.height != scene.header.height || f.mean.size() != 3 * pixels ||
       f.variance.size() != 3 * pixels || f.even_mean.size() != 3 * pixels || f.odd_mean.size() != 3 * pixels ||
-      f.accumulators.size() != 3 * pixels)
+      f.words.size() != PC_RADIANCE_WORDS * pixels)
     return "the film's size differs from the camera's";
   if (f.spp != options.spp) return "the film has " + std::to_string(f.spp) + " spp, not " + std::to_string(options.spp);
   if (r.nan_samples || r.inf_samples || r.negative_samples)
@@ -160,9 +161,11 @@ inline std::string render_problem(const RenderResult& r, const DeviceScene& scen
   for (const std::vector<float>* v : {&f.mean, &f.variance, &f.even_mean, &f.odd_mean})
     for (float x : *v)
       if (!std::isfinite(x)) return "a film value is not finite";
-  for (const pc_float4& a : f.accumulators)
-    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(a.z) || !std::isfinite(a.w))
-      return "a film accumulator is not finite";
+  for (uint32_t word : f.words) {  // the path integrator's accumulators (floats)
+    float a;
+    std::memcpy(&a, &word, sizeof a);
+    if (!std::isfinite(a)) return "a film accumulator is not finite";
+  }
   return "";
 }
 

@@ -1,6 +1,8 @@
 /* Kernels that only the test suite builds: struct layout as the kernel compiler sees it, and the
  * intersection routines and texture lookups called one by one. */
 #include "shared/types.h"
+#include "shared/light_types.h"
+#include "shared/film_types.h"
 #include "math.cl"
 #include "rng.cl"
 #include "sampling.cl"
@@ -15,6 +17,10 @@ __kernel void layout_report(__global uint* out) {
   uint n = 0;
   PC_LAYOUT_STRUCTS(PC_WRITE_SIZE)
   PC_LAYOUT_FIELDS(PC_WRITE_OFFSET)
+  PC_LIGHT_LAYOUT_STRUCTS(PC_WRITE_SIZE)
+  PC_LIGHT_LAYOUT_FIELDS(PC_WRITE_OFFSET)
+  PC_FILM_LAYOUT_STRUCTS(PC_WRITE_SIZE)
+  PC_FILM_LAYOUT_FIELDS(PC_WRITE_OFFSET)
 }
 
 /* boxes: lo.xyz, hi.xyz per box (6 floats); rays as RayRecord; out: entry distance or +inf.

@@ -10,35 +10,31 @@
 
 #include "runtime/atomic_file.h"
 #include "runtime/hash.h"
-#include "runtime/light_transport.h"  // uses_splat_film
-#include "scene/scene_description.h"  // integrator_name
+#include "runtime/technique.h"
 
 namespace {
 
-constexpr char kMagic[8] = {'P', 'C', 'L', 'C', 'K', 'P', 'T', '1'};
+constexpr char kMagicV1[8] = {'P', 'C', 'L', 'C', 'K', 'P', 'T', '1'};
+constexpr char kMagic[8] = {'P', 'C', 'L', 'C', 'K', 'P', 'T', '2'};
 
-// Followed by the film, then the checksum: for `path`, 3 * width * height pc_float4 accumulators; for
-// `light`, PC_SPLAT_WORDS * width * height uint64_t fixed-point sums (the splat film, exact integers).
-// integrator (PC_INTEGRATOR_*) was a zero pad before light checkpoints: path checkpoints are unchanged.
+// Followed by the film's layer names (FilmLayout::names, names_bytes long), the film's words, then the
+// checksum. Version 1 had no names and `integrator` where `technique` is, then the layers' words.
 struct Header {
   char magic[8];
   uint64_t key;
-  uint32_t width, height, spp, integrator;
+  uint32_t width, height, spp, technique;
+  uint32_t names_bytes, pad;
 };
-
-// The film's words as the file stores them: the accumulators, or the splat sums.
-struct FilmBytes {
-  const void* data;
-  size_t size;
-};
-FilmBytes film_bytes(const Film& film) {
-  if (!film.splats.empty()) return {film.splats.data(), film.splats.size() * sizeof(uint64_t)};
-  return {film.accumulators.data(), film.accumulators.size() * sizeof(pc_float4)};
-}
+constexpr size_t kHeaderV1Bytes = 32;
 
 template <class T>
 uint64_t hash_vector(const std::vector<T>& v, uint64_t h) {
   return fnv1a(v.data(), v.size() * sizeof(T), h);
+}
+
+const char* technique_name_of(uint32_t id) {
+  const Technique* t = technique_with_id(id);
+  return t ? t->name.c_str() : "unknown";
 }
 
 }  // namespace
@@ -50,8 +46,9 @@ uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
 #undef PC_HASH_ARRAY
   const uint32_t settings[] = {options.spp, options.max_depth, options.seed, options.rr_depth, options.sampler};
   h = fnv1a(settings, sizeof settings, h);
-  // Other integrators than `path` are in the key too (path keys are as before they existed).
-  if (options.integrator != PC_INTEGRATOR_PATH) h = fnv1a(&options.integrator, sizeof options.integrator, h);
+  // Other techniques than `path` are in the key too (path keys are as before they existed).
+  const uint32_t id = technique_named(options.integrator, "integrator").id;
+  if (id != PC_INTEGRATOR_PATH) h = fnv1a(&id, sizeof id, h);
   return h;
 }
 
@@ -62,41 +59,55 @@ void write_checkpoint(const std::string& path, uint64_t key, const Film& film) {
   header.width = film.width;
   header.height = film.height;
   header.spp = film.spp;
-  header.integrator = film.integrator;
-  const FilmBytes body = film_bytes(film);
+  header.technique = technique_named(film.technique, "checkpoint").id;
+  const std::string names = film.layout.names();
+  header.names_bytes = uint32_t(names.size());
   uint64_t checksum = fnv1a(&header, sizeof header);
-  checksum = fnv1a(body.data, body.size, checksum);
+  checksum = fnv1a(names.data(), names.size(), checksum);
+  checksum = fnv1a(film.words.data(), film.words.size() * sizeof(uint32_t), checksum);
   write_file_atomically(path, "the checkpoint", [&](const std::string& tmp) {
     errno = 0;
     std::ofstream out(tmp, std::ios::binary);
     out.write(reinterpret_cast<const char*>(&header), sizeof header);
-    out.write(static_cast<const char*>(body.data), std::streamsize(body.size));
+    out.write(names.data(), std::streamsize(names.size()));
+    out.write(reinterpret_cast<const char*>(film.words.data()), std::streamsize(film.words.size() * sizeof(uint32_t)));
     out.write(reinterpret_cast<const char*>(&checksum), sizeof checksum);
     out.flush();
     if (!out) throw std::runtime_error(errno ? std::strerror(errno) : "the write failed");
   });
 }
 
-Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height, uint32_t integrator) {
+Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint32_t height, const Technique& technique,
+                     const FilmLayout& layout) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw UsageError(path + ": cannot open the checkpoint");
   std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  Header header;
-  const bool light = uses_splat_film(integrator);
-  const size_t film_size = light ? PC_SPLAT_WORDS * size_t(width) * height * sizeof(uint64_t)
-                                 : 3 * size_t(width) * height * sizeof(pc_float4);
-  size_t expected = sizeof header + film_size + sizeof(uint64_t);
-  if (bytes.size() < sizeof header || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+  const bool v1 = bytes.size() >= sizeof kMagicV1 && std::memcmp(bytes.data(), kMagicV1, sizeof kMagicV1) == 0;
+  if (!v1 && (bytes.size() < sizeof(Header) || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0))
     throw UsageError(path + ": not a pathcl checkpoint");
-  std::memcpy(&header, bytes.data(), sizeof header);
+  const size_t header_bytes = v1 ? kHeaderV1Bytes : sizeof(Header);
+  if (bytes.size() < header_bytes) throw UsageError(path + ": the checkpoint is truncated or damaged (wrong size)");
+  Header header{};
+  std::memcpy(&header, bytes.data(), header_bytes);
   if (header.width != width || header.height != height)
     throw UsageError(path + ": the checkpoint is for a " + std::to_string(header.width) + "x" +
                      std::to_string(header.height) + " film, this render is " + std::to_string(width) + "x" +
                      std::to_string(height));
-  if (header.integrator != integrator)
-    throw UsageError(path + ": the checkpoint is of the " + integrator_name(header.integrator) +
-                     " integrator, this render uses " + integrator_name(integrator));
-  if (bytes.size() != expected) throw UsageError(path + ": the checkpoint is truncated or damaged (wrong size)");
+  if (header.technique != technique.id)
+    throw UsageError(path + ": the checkpoint is of the " + technique_name_of(header.technique) +
+                     " integrator, this render uses " + technique.name);
+  if (bytes.size() < header_bytes + header.names_bytes)
+    throw UsageError(path + ": the checkpoint is truncated or damaged (wrong size)");
+  // Version 1 held the technique's own layers alone.
+  const std::string names = v1 ? make_film_layout(technique.layers, 0, layout.pixels).names()
+                               : std::string(bytes.data() + header_bytes, header.names_bytes);
+  if (names != layout.names())
+    throw UsageError(path + ": the checkpoint has the film layers " + names + ", this render " + layout.names() +
+                     (v1 ? " (it was written before AOVs existed: resume it without --aov)" : " (--aov must match)"));
+  const size_t film_bytes = layout.total_words() * sizeof(uint32_t);
+  const size_t body = header_bytes + header.names_bytes;
+  if (bytes.size() != body + film_bytes + sizeof(uint64_t))
+    throw UsageError(path + ": the checkpoint is truncated or damaged (wrong size)");
   uint64_t stored;
   std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
   if (fnv1a(bytes.data(), bytes.size() - sizeof stored) != stored)
@@ -104,21 +115,20 @@ Film read_checkpoint(const std::string& path, uint64_t key, uint32_t width, uint
   if (header.key != key)
     throw UsageError(path + ": the checkpoint belongs to another scene or other settings (spp, max_depth, seed, "
                      "sampler must match)");
-  if (light) {
-    // The splat film alone: its sums are what a resumed render adds to (the means need the render's
-    // fixed-point scale, runtime/light_transport.h, and are derived when it ends).
-    Film film;
-    film.width = width;
-    film.height = height;
-    film.spp = header.spp;
-    film.integrator = integrator;
-    film.splats.resize(PC_SPLAT_WORDS * size_t(width) * height);
-    std::memcpy(film.splats.data(), bytes.data() + sizeof header, film_size);
-    return film;
+  Film film = make_film(width, height, technique.name, layout);
+  film.spp = header.spp;
+  std::memcpy(film.words.data(), bytes.data() + body, film_bytes);
+  if (technique.units == UnitKind::pixels && layout.find("radiance") >= 0) {
+    Film check = film;  // the accumulators' counts must agree with the header's spp
+    develop_radiance(check);
+    if (check.spp != header.spp) throw UsageError(path + ": the checkpoint is inconsistent (sample counts differ)");
   }
-  std::vector<pc_float4> acc(3 * size_t(width) * height);
-  std::memcpy(acc.data(), bytes.data() + sizeof header, film_size);
-  Film film = film_from_accumulators(width, height, std::move(acc));
-  if (film.spp != header.spp) throw UsageError(path + ": the checkpoint is inconsistent (sample counts differ)");
   return film;
+}
+
+Film read_checkpoint(const std::string& path, const DeviceScene& scene, const RenderOptions& options) {
+  const Technique& technique = technique_named(options.integrator, "integrator");
+  const uint32_t width = scene.header.width, height = scene.header.height;
+  return read_checkpoint(path, options.checkpoint_key, width, height, technique,
+                         make_film_layout(technique.layers, options.aovs, width * height));
 }

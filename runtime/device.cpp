@@ -244,3 +244,11 @@ double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_gro
   clReleaseEvent(event);
   return double(end - start) * 1e-6;
 }
+
+bool device_has_extension(const DeviceInfo& d, const char* name) {
+  size_t size = 0;
+  CL_CHECK(clGetDeviceInfo(d.device, CL_DEVICE_EXTENSIONS, 0, nullptr, &size));
+  std::string ext(size, '\0');
+  CL_CHECK(clGetDeviceInfo(d.device, CL_DEVICE_EXTENSIONS, size, ext.data(), nullptr));
+  return (" " + ext + " ").find(std::string(" ") + name + " ") != std::string::npos;
+}

@@ -32,6 +32,9 @@ std::vector<DeviceInfo> list_devices();
 // never picks Oclgrind (an interpreter for debugging that calls itself a GPU): it must be named.
 DeviceInfo select_device(const std::string& selector);
 
+// Whether the device lists the OpenCL extension `name` (CL_DEVICE_EXTENSIONS).
+bool device_has_extension(const DeviceInfo& device, const char* name);
+
 // Oclgrind: an interpreter for debugging that calls itself a GPU. Never a default device, and its 21.10
 // cannot run optimised kernels (runtime/kernel_program.cpp).
 bool is_oclgrind(const DeviceInfo& device);

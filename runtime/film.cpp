@@ -1,33 +1,65 @@
 #include "runtime/film.h"
 
 #include <algorithm>
+#include <cstring>
 
-Film film_from_accumulators(uint32_t width, uint32_t height, std::vector<pc_float4> acc) {
-  size_t pixels = size_t(width) * height;
+Film make_film(uint32_t width, uint32_t height, const std::string& technique, const FilmLayout& layout) {
   Film f;
   f.width = width;
   f.height = height;
-  f.mean.resize(3 * pixels);
-  f.variance.resize(3 * pixels);
-  f.even_mean.resize(3 * pixels);
-  f.odd_mean.resize(3 * pixels);
+  f.technique = technique;
+  f.layout = layout;
+  f.words.assign(layout.total_words(), 0u);
+  return f;
+}
+
+void develop_radiance(Film& f) {
+  size_t pixels = size_t(f.width) * f.height;
+  f.mean.assign(3 * pixels, 0.0f);
+  f.variance.assign(3 * pixels, 0.0f);
+  f.even_mean.assign(3 * pixels, 0.0f);
+  f.odd_mean.assign(3 * pixels, 0.0f);
+  const uint32_t* plane = f.layer(size_t(f.layout.find("radiance")));
   for (size_t p = 0; p < pixels; ++p) {
-    const pc_float4 &even = acc[3 * p], &odd = acc[3 * p + 1], &sq = acc[3 * p + 2];
-    double n = double(even.w) + odd.w;
+    float acc[PC_RADIANCE_WORDS];
+    std::memcpy(acc, plane + PC_RADIANCE_WORDS * p, sizeof acc);
+    const float *e = acc, *o = acc + 4, *s = acc + 8;  // even sum and count, odd sum and count, squares
+    double n = double(e[3]) + o[3];
     f.spp = uint32_t(n);
-    const float e[3] = {even.x, even.y, even.z}, o[3] = {odd.x, odd.y, odd.z}, s[3] = {sq.x, sq.y, sq.z};
     for (int c = 0; c < 3; ++c) {
       double sum = double(e[c]) + o[c];
       double mean = n > 0 ? sum / n : 0;
       f.mean[3 * p + c] = float(mean);
-      f.even_mean[3 * p + c] = even.w > 0 ? e[c] / even.w : 0.0f;
-      f.odd_mean[3 * p + c] = odd.w > 0 ? o[c] / odd.w : 0.0f;
+      f.even_mean[3 * p + c] = e[3] > 0 ? e[c] / e[3] : 0.0f;
+      f.odd_mean[3 * p + c] = o[3] > 0 ? o[c] / o[3] : 0.0f;
       double sample_variance = n > 1 ? std::max(0.0, (s[c] - sum * mean) / (n - 1)) : 0.0;
       f.variance[3 * p + c] = float(n > 0 ? sample_variance / n : 0.0);
     }
   }
-  f.accumulators = std::move(acc);
-  return f;
+}
+
+void develop_aovs(Film& f) {
+  f.aovs.clear();
+  size_t pixels = size_t(f.width) * f.height;
+  for (uint32_t a = 0; a < PC_AOV_COUNT; ++a) {
+    const AovInfo& info = aov_info(a);
+    int i = f.layout.find(info.name);
+    if (i < 0) continue;
+    Film::Aov out;
+    out.aov = a;
+    out.values.resize(pixels * info.words);
+    const uint32_t* plane = f.layer(size_t(i));
+    for (size_t k = 0; k < out.values.size(); ++k) {
+      if (info.id) {
+        out.values[k] = float(plane[k]);
+      } else {
+        float sum;
+        std::memcpy(&sum, plane + k, sizeof sum);
+        out.values[k] = f.spp > 0 ? float(double(sum) / f.spp) : 0.0f;
+      }
+    }
+    f.aovs.push_back(std::move(out));
+  }
 }
 
 double estimated_rel_mse(const Film& film) {

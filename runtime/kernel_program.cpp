@@ -7,7 +7,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <deque>
 #include <iterator>
+#include <mutex>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -23,9 +25,19 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Sources registered at run time (register_kernel_source): a test's own technique.
+std::mutex registered_mutex;
+std::deque<std::pair<std::string, std::string>>& registered_sources() {  // a deque: texts never move
+  static std::deque<std::pair<std::string, std::string>> sources;
+  return sources;
+}
+
 const char* find_source(const std::string& name) {
   for (const KernelSourceFile& f : kernel_source_files())
     if (name == f.name) return f.text;
+  std::lock_guard<std::mutex> lock(registered_mutex);
+  for (const auto& [n, text] : registered_sources())
+    if (n == name) return text.c_str();
   return nullptr;
 }
 
@@ -116,6 +128,12 @@ void store_cached(const fs::path& file, const std::vector<unsigned char>& binary
 }
 
 }  // namespace
+
+void register_kernel_source(const std::string& name, const std::string& text) {
+  if (find_source(name)) throw std::logic_error("kernel source \"" + name + "\" exists already");
+  std::lock_guard<std::mutex> lock(registered_mutex);
+  registered_sources().emplace_back(name, text);
+}
 
 std::string assemble_kernel_source(const std::string& main_file) {
   std::set<std::string> seen;

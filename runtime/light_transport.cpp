@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstring>
 
+#include "runtime/device.h"
 #include "runtime/film.h"
+#include "runtime/technique.h"
 
 namespace {
 double luminance(const pc_float4& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
@@ -86,21 +88,19 @@ LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp
   return out;
 }
 
-Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, uint32_t integrator, const LightTransportHeader& lt,
-                      std::vector<uint64_t> splats, uint64_t* overflows) {
-  size_t pixels = size_t(width) * height;
-  Film f;
-  f.width = width;
-  f.height = height;
-  f.spp = spp;
-  f.mean.resize(3 * pixels);
-  f.variance.resize(3 * pixels);
-  f.even_mean.resize(3 * pixels);
-  f.odd_mean.resize(3 * pixels);
+void develop_splats(Film& f, const LightTransportHeader& lt, uint64_t* overflows) {
+  size_t pixels = size_t(f.width) * f.height;
+  const uint32_t spp = f.spp;
+  f.mean.assign(3 * pixels, 0.0f);
+  f.variance.assign(3 * pixels, 0.0f);
+  f.even_mean.assign(3 * pixels, 0.0f);
+  f.odd_mean.assign(3 * pixels, 0.0f);
   double n_even = (spp + 1) / 2, n_odd = spp / 2, paths = double(pixels);
   double unit = 1.0 / lt.splat_scale, unit2 = 1.0 / lt.square_scale;
+  const uint32_t* plane = f.layer(size_t(f.layout.find("splats")));
   for (size_t p = 0; p < pixels; ++p) {
-    const uint64_t* s = &splats[PC_SPLAT_WORDS * p];
+    uint64_t s[PC_SPLAT_WORDS];
+    std::memcpy(s, plane + 2 * PC_SPLAT_WORDS * p, sizeof s);
     for (int c = 0; c < 3; ++c) {
       for (int k : {c, 3 + c, 6 + c, 9 + c})
         if (s[k] >> 63) ++*overflows;
@@ -115,7 +115,8 @@ Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, uint32_t in
       f.variance[3 * p + c] = float(spp > 0 ? per_sample / spp : 0);
     }
   }
-  f.splats = std::move(splats);
-  f.integrator = integrator;
-  return f;
+}
+
+std::string splat_build_options(const TechniqueBuild& b) {
+  return !b.splat_pairs && device_has_extension(*b.device, "cl_khr_int64_base_atomics") ? " -DPC_SPLAT_ATOMIC64" : "";
 }

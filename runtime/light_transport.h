@@ -9,10 +9,6 @@
 #include "kernels/shared/types.h"
 #include "kernels/shared/light_types.h"
 #include "scene/device_scene.h"
-#include "scene/scene_description.h"  // integrator_name
-
-// The integrators whose film is the splat film (light tracing, BDPT): every other is path tracing's.
-inline bool uses_splat_film(uint32_t integrator) { return integrator != PC_INTEGRATOR_PATH; }
 
 // BDPT keeps a light subpath of up to max_depth vertices in each work item's private memory
 // (kernels/light_path.cl's LightVertex, 112 bytes each): max_depth is bounded by this for it.
@@ -32,9 +28,13 @@ struct LightTransportSetup {
 // same for its square.
 LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp);
 
-// The splat film (PC_SPLAT_WORDS sums per pixel) as a Film's means, variances and half images: mean =
-// (even + odd) / (scale spp); variance of the mean from the squares (kernels/light_integrator.cl).
-// overflows: sums at or above 2^63 (a hazard) are counted there.
+// The `splats` layer (PC_SPLAT_WORDS 64-bit sums per pixel) as the film's means, variances and half images
+// at film.spp: mean = (even + odd) / (scale spp); variance of the mean from the squares
+// (kernels/light_integrator.cl). overflows: sums at or above 2^63 (a hazard) are counted there.
 struct Film;
-Film film_from_splats(uint32_t width, uint32_t height, uint32_t spp, uint32_t integrator, const LightTransportHeader& lt,
-                      std::vector<uint64_t> splats, uint64_t* overflows);
+void develop_splats(Film& film, const LightTransportHeader& lt, uint64_t* overflows);
+
+// The splat film's -D flags on a device: 64-bit atomics where it has them (cl_khr_int64_base_atomics),
+// unless the build asks for word pairs.
+struct TechniqueBuild;
+std::string splat_build_options(const TechniqueBuild& build);

@@ -21,10 +21,6 @@ using Clock = std::chrono::steady_clock;
 
 constexpr uint32_t kProbePixels = 64, kProbeSamples = 4;
 constexpr double kGpuUnitSeconds = 0.075;  // 50-100 ms: long enough to amortise a launch, short for watchdogs
-constexpr double kCpuUnitSeconds = 0.25;
-// A splat-film unit (light, bdpt) also clears, reads back and adds the whole film, 96 bytes a pixel (~20 ms
-// at 512 x 512 on a CPU device): longer units keep that under 2 % (measured: bdpt 7.2 s -> 6.8 s, Cornell box).
-constexpr double kSplatUnitSeconds = 1.0;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -76,13 +72,13 @@ class WorkerThread {
   };
   // make_worker runs in the new thread: the device's context is created, used and released there
   // (Oclgrind's uninitialised-value checker keeps thread-local state per context and crashes otherwise).
-  WorkerThread(std::function<std::unique_ptr<DeviceWorker>()> make_worker, uint32_t index, EventQueue& events,
+  WorkerThread(std::function<std::unique_ptr<UnitWorker>()> make_worker, uint32_t index, EventQueue& events,
                Setup setup)
       : index_(index), events_(events) {
     thread_ = std::thread([this, make_worker, setup] { run(make_worker, setup); });
   }
   ~WorkerThread() { stop(); }
-  void submit(WorkUnit unit, std::vector<pc_float4> input) {
+  void submit(WorkUnit unit, std::vector<uint32_t> input) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       job_ = Job{unit, std::move(input)};
@@ -98,14 +94,14 @@ class WorkerThread {
     cv_.notify_one();
     if (thread_.joinable()) thread_.join();
   }
-  DeviceWorker& worker() { return *worker_; }
+  UnitWorker& worker() { return *worker_; }
 
  private:
   struct Job {
     WorkUnit unit;
-    std::vector<pc_float4> input;
+    std::vector<uint32_t> input;
   };
-  void run(const std::function<std::unique_ptr<DeviceWorker>()>& make_worker, const Setup& setup) {
+  void run(const std::function<std::unique_ptr<UnitWorker>()>& make_worker, const Setup& setup) {
     Event ready;
     ready.device = index_;
     try {
@@ -150,7 +146,7 @@ class WorkerThread {
     }
   }
 
-  std::unique_ptr<DeviceWorker> worker_;
+  std::unique_ptr<UnitWorker> worker_;
   uint32_t index_;
   EventQueue& events_;
   std::mutex mutex_;
@@ -171,16 +167,15 @@ bool is_power_of_two(uint32_t s) { return s > 0 && (s & (s - 1)) == 0; }
 // A device to render on, and how its thread makes its worker.
 struct WorkerSource {
   DeviceInfo info;
-  std::function<std::unique_ptr<DeviceWorker>()> make;
+  std::function<std::unique_ptr<UnitWorker>()> make;
 };
 
 RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceScene& scene,
                        const RenderOptions& options, const RenderCallbacks& callbacks) {
   RenderResult result;
   auto setup_start = Clock::now();
-  if (options.integrator == PC_INTEGRATOR_BDPT && options.max_depth > kBdptMaxDepth)
-    throw UsageError("max_depth " + std::to_string(options.max_depth) + ": bdpt keeps each light subpath in private memory and takes max_depth up to " +
-                     std::to_string(kBdptMaxDepth));
+  const Technique& technique = technique_named(options.integrator, "integrator");
+  check_technique_options(technique, options);
   SceneHeader header = scene.header;
   header.max_depth = options.max_depth;
   header.seed = options.seed;
@@ -189,18 +184,17 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   header.spp = options.spp;
   const uint32_t pixels = header.width * header.height;
   const size_t n = workers.size();
+  const FilmLayout layout = make_film_layout(technique.layers, options.aovs, pixels);
 
   uint32_t start_spp = options.resume ? options.resume->spp : 0;
-  const bool light = uses_splat_film(options.integrator);  // light tracing, BDPT
-  const size_t film_words = light ? PC_SPLAT_WORDS : 3;
-  if (options.resume && (light ? options.resume->splats.size() : options.resume->accumulators.size()) != film_words * size_t(pixels))
-    throw RuntimeFailure("the film to resume from has " +
-                         std::to_string((light ? options.resume->splats.size() : options.resume->accumulators.size()) / film_words) +
-                         " pixels of the " + integrator_name(options.integrator) + " integrator, the render " + std::to_string(pixels));
-  // Light tracing: the light paths of a sample are numbered like the pixels (one per pixel), and the
-  // schedule's tiles are runs of path indices; each unit's splats come back as a whole integer image.
+  if (options.resume && !(options.resume->layout == layout))
+    throw RuntimeFailure("the film to resume from has the layers " + options.resume->layout.names() + " of " +
+                         std::to_string(options.resume->layout.pixels) + " pixels, the render " + layout.names() +
+                         " of " + std::to_string(pixels));
+  // Techniques with emission: the light paths of a sample are numbered like the pixels (one per pixel),
+  // and the schedule's tiles are runs of path indices.
   LightTransportSetup light_setup;
-  if (light) light_setup = light_transport_setup(scene, options.spp);
+  if (technique.emission) light_setup = light_transport_setup(scene, options.spp);
   light_setup.header.only_strategy = options.debug_bdpt_strategy_s >= 0
                                          ? uint32_t(options.debug_bdpt_strategy_s) | uint32_t(options.debug_bdpt_strategy_t) << 16
                                          : PC_INVALID;
@@ -223,16 +217,22 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.platform = info.platform_name;
     report.sub_device = info.sub_device;
     report.compute_units = info.compute_units;
-    double target = info.is_gpu ? kGpuUnitSeconds : uses_splat_film(options.integrator) ? kSplatUnitSeconds : kCpuUnitSeconds;
+    double target = info.is_gpu ? kGpuUnitSeconds : technique.cpu_unit_seconds;
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
-    WorkerThread::Setup setup{&scene, header, {build_options, options.work_group, {}}, n > 1};
-    setup.settings.integrator = options.integrator;
-    setup.settings.lanes = options.lanes;
-    setup.settings.light = &light_setup;
-    setup.settings.splat_pairs = options.debug_splat_pairs;
-    setup.settings.max_depth = options.max_depth;
-    if (d < options.faults.size()) setup.settings.fault = options.faults[d];
+    WorkerThread::Setup setup{&scene, header, {}, n > 1};
+    WorkerSettings& ws = setup.settings;
+    ws.technique = &technique;
+    ws.layout = layout;
+    const double origin[3] = {scene.origin.x, scene.origin.y, scene.origin.z};
+    ws.aov = aov_header(layout, origin);
+    ws.build_options = build_options;
+    ws.work_group = options.work_group;
+    ws.lanes = options.lanes;
+    ws.light = &light_setup;
+    ws.splat_pairs = options.debug_splat_pairs;
+    ws.max_depth = options.max_depth;
+    if (d < options.faults.size()) ws.fault = options.faults[d];
     threads.push_back(std::make_unique<WorkerThread>(workers[d].make, uint32_t(d), events, setup));
   }
   std::vector<bool> ready(n, false);
@@ -252,12 +252,12 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     ready[e.device] = true;
     probe[e.device] = e.probe_hash;
     report.probe_seconds = e.probe_seconds;
-    const KernelProgram& program = threads[e.device]->worker().program();
-    report.kernel_build_ms = program.build_ms;
-    report.kernel_from_cache = program.from_cache;
-    report.kernel_options = program.options;
-    report.kernel_private_bytes = threads[e.device]->worker().private_bytes();
-    report.lanes = threads[e.device]->worker().lanes();
+    const WorkerReport w = threads[e.device]->worker().report();
+    report.kernel_build_ms = w.kernel_build_ms;
+    report.kernel_from_cache = w.kernel_from_cache;
+    report.kernel_options = w.kernel_options;
+    report.kernel_private_bytes = w.kernel_private_bytes;
+    report.lanes = w.lanes;
     if (e.probe_seconds > 0) schedule_devices[e.device].rate = double(kProbePixels) * kProbeSamples / e.probe_seconds;
   }
   if (std::none_of(ready.begin(), ready.end(), [](bool r) { return r; })) {
@@ -266,13 +266,24 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   }
   // The host's film only now: a film too large for every device has been refused without the seconds
   // that allocating and clearing gigabytes on the host take.
-  std::vector<pc_float4> film;
-  std::vector<uint64_t> splat_film;
-  if (light)
-    splat_film = options.resume ? options.resume->splats : std::vector<uint64_t>(PC_SPLAT_WORDS * size_t(pixels), 0);
-  else
-    film = options.resume ? options.resume->accumulators
-                          : std::vector<pc_float4>(3 * size_t(pixels), pc_float4{0, 0, 0, 0});
+  Film film = options.resume ? *options.resume : make_film(header.width, header.height, technique.name, layout);
+  // Where each layer's words lie in a unit's payload (UnitOutput::ordered, ::commutative).
+  struct LayerSpan {
+    size_t film_offset, payload_offset;  // payload_offset in words per pixel (ordered) or words (commutative)
+    uint32_t words, kind;
+  };
+  std::vector<LayerSpan> spans;
+  size_t ordered_words = 0, commutative_at = 0;  // per pixel, in all
+  for (size_t i = 0; i < layout.layers.size(); ++i) {
+    const FilmLayer& l = layout.layers[i];
+    if (l.kind == PC_LAYER_ORDERED) {
+      spans.push_back({layout.offset(i), ordered_words, l.words, l.kind});
+      ordered_words += l.words;
+    } else {
+      spans.push_back({layout.offset(i), commutative_at, l.words, l.kind});
+      commutative_at += size_t(l.words) * pixels;
+    }
+  }
   result.kernel_from_cache = true;
   for (size_t d = 0; d < n; ++d) {
     if (!ready[d]) continue;
@@ -321,8 +332,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     return std::max(h, s);
   };
   schedule.set_horizon(next_horizon(start_spp));
-  std::map<uint64_t, std::vector<pc_float4>> kept;  // committed results whose copies still run
-  std::map<uint64_t, std::vector<uint64_t>> kept_splats;  // the same for the light integrator
+  std::map<uint64_t, UnitOutput> kept;  // committed results whose copies still run
   std::vector<bool> busy(n, false);
   double last_checkpoint = 0;
   bool closing = false;
@@ -330,18 +340,40 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   auto checkpoint_due = [&] { return !options.checkpoint.empty() && now() - last_checkpoint >= options.checkpoint_every; };
   auto interrupted = [&] { return options.interrupt && *options.interrupt; };
   auto time_is_up = [&] { return options.time_budget > 0 && now() >= options.time_budget; };
-  uint64_t sum_overflows = 0;  // splat sums that wrapped past 2^64 on the host
+  uint64_t sum_overflows = 0;  // commutative sums that wrapped past 2^64 on the host
+  // The film at the schedule's level, developed by the technique (and its AOVs).
   auto make_film = [&] {
-    if (!light) return film_from_accumulators(header.width, header.height, film);
+    Film f = film;
+    f.spp = schedule.lowest_level();
     uint64_t top_bit = 0;  // sums at or above 2^63
-    Film f = film_from_splats(header.width, header.height, schedule.lowest_level(), options.integrator, light_setup.header, splat_film, &top_bit);
-    result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
+    technique.develop(f, light_setup.header, &top_bit);
+    if (technique.emission) result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
+    develop_aovs(f);
     return f;
   };
   auto write_checkpoint_now = [&](const Film& f) {
     write_checkpoint(options.checkpoint, options.checkpoint_key, f);
     last_checkpoint = now();
     result.checkpoint_spp = f.spp;
+  };
+  // A committed unit into the film: its ordered layers' pixels copied over the film's, its commutative
+  // layers added as 64-bit integers (exact, and the same total in any order of units and devices).
+  auto commit = [&](const WorkUnit& unit, const UnitOutput& out) {
+    for (const LayerSpan& l : spans) {
+      if (l.kind == PC_LAYER_ORDERED) {
+        const uint32_t* from = out.ordered.data() + l.payload_offset * unit.pixel_count;
+        std::copy(from, from + size_t(l.words) * unit.pixel_count, film.words.begin() + l.film_offset + size_t(l.words) * unit.pixel_begin);
+        continue;
+      }
+      for (size_t i = 0; i < size_t(l.words) * pixels; i += 2) {
+        uint32_t* to = film.words.data() + l.film_offset + i;
+        const uint32_t* add = out.commutative.data() + l.payload_offset + i;
+        uint64_t a = uint64_t(to[1]) << 32 | to[0], b = uint64_t(add[1]) << 32 | add[0], sum = a + b;
+        sum_overflows += sum < a;
+        to[0] = uint32_t(sum);
+        to[1] = uint32_t(sum >> 32);
+      }
+    }
   };
   auto handle = [&](Event& e) {
     busy[e.device] = false;
@@ -359,42 +391,25 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.transfer_seconds += std::max(0.0, e.output.seconds - e.output.kernel_ms * 1e-3);
     result.kernel_ms += e.output.kernel_ms;
     result.launches++;
-    // The worker's read-back buffer stays valid until its next unit, which is given only after this.
-    const std::vector<pc_float4>& accumulators = threads[e.device]->worker().result();
-    const std::vector<uint64_t>& splats = threads[e.device]->worker().splats();
-    if (f.outcome == UnitOutcome::committed && light) {
-      // Integer addition: exact, and the same total in any order of units and devices.
-      for (size_t i = 0; i < splat_film.size(); ++i) {
-        uint64_t sum = splat_film[i] + splats[i];
-        sum_overflows += sum < splat_film[i];
-        splat_film[i] = sum;
-      }
-      result.splat_overflows += e.output.splat_overflows;
+    for (const PhaseTime& p : e.output.phases) {
+      auto it = std::find_if(result.phases.begin(), result.phases.end(), [&](const PhaseTime& q) { return q.name == p.name; });
+      if (it == result.phases.end()) result.phases.push_back(p);
+      else it->ms += p.ms;
     }
     if (f.outcome == UnitOutcome::committed) {
-      if (!light) std::copy(accumulators.begin(), accumulators.end(), film.begin() + 3 * size_t(unit.pixel_begin));
+      commit(unit, e.output);
+      result.splat_overflows += e.output.splat_overflows;
       const UnitStats& s = e.output.stats;
       result.rays += uint64_t(s.rays_hi) << 32 | s.rays_lo;
       result.nan_samples += s.nan_samples;
       result.inf_samples += s.inf_samples;
       result.negative_samples += s.negative_samples;
-      if (f.twin != 0) {
-        if (light) kept_splats[e.unit] = splats;
-        else kept[e.unit] = accumulators;
-      }
+      if (f.twin != 0) kept[e.unit] = std::move(e.output);
       if (callbacks.progress) callbacks.progress(schedule.samples_done(), samples_total, now());
     } else if (f.outcome == UnitOutcome::compare) {
-      bool same;
-      if (light) {
-        auto twin = kept_splats.find(f.twin);
-        same = twin->second == splats;
-        kept_splats.erase(twin);
-      } else {
-        auto twin = kept.find(f.twin);
-        same = twin->second.size() == accumulators.size() &&
-               std::memcmp(twin->second.data(), accumulators.data(), accumulators.size() * sizeof(pc_float4)) == 0;
-        kept.erase(twin);
-      }
+      auto twin = kept.find(f.twin);
+      bool same = twin->second.ordered == e.output.ordered && twin->second.commutative == e.output.commutative;
+      kept.erase(twin);
       if (!same)
         throw RuntimeFailure(report.name + " and another device of the same arithmetic class computed different bits "
                              "for pixels " + std::to_string(unit.pixel_begin) + "-" +
@@ -404,7 +419,6 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       result.duplicate_checks++;
     } else if (f.twin != 0) {
       kept.erase(f.twin);
-      kept_splats.erase(f.twin);
     }
   };
 
@@ -413,9 +427,14 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       if (!ready[d] || busy[d]) continue;
       std::optional<WorkUnit> u = schedule.next_unit(uint32_t(d), now());
       if (!u) continue;
-      std::vector<pc_float4> input;
-      if (u->upload && !light)  // light units start from a cleared splat film
-        input.assign(film.begin() + 3 * size_t(u->pixel_begin), film.begin() + 3 * size_t(u->pixel_begin + u->pixel_count));
+      // The ordered layers' words of the unit's pixels (commutative layers start from cleared sums).
+      std::vector<uint32_t> input;
+      if (u->upload)
+        for (const LayerSpan& l : spans)
+          if (l.kind == PC_LAYER_ORDERED) {
+            auto from = film.words.begin() + l.film_offset + size_t(l.words) * u->pixel_begin;
+            input.insert(input.end(), from, from + size_t(l.words) * u->pixel_count);
+          }
       busy[d] = true;
       threads[d]->submit(*u, std::move(input));
     }

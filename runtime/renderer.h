@@ -15,6 +15,7 @@
 #include "runtime/device_worker.h"
 #include "runtime/film.h"
 #include "runtime/light_transport.h"
+#include "runtime/technique.h"
 #include "scene/device_scene.h"
 
 struct RenderOptions {
@@ -25,9 +26,10 @@ struct RenderOptions {
   // Independent samples here, so that a film's per-pixel variance is an unbiased estimate of its error
   // (the statistical tests rely on it); a scene file's default is sobol (scene/scene_description.h).
   uint32_t sampler = PC_SAMPLER_INDEPENDENT;
-  uint32_t integrator = PC_INTEGRATOR_PATH;  // PC_INTEGRATOR_* (kernels/shared/light_types.h)
+  std::string integrator = "path";  // a technique's name (runtime/technique.h)
+  uint32_t aovs = 0;               // AOVs to render beside the beauty: bits 1 << PC_AOV_* (runtime/film_layout.h)
   bool all_features = false;   // build the unspecialised kernel
-  const Film* resume = nullptr; // continue from this film (its accumulators and spp), e.g. a checkpoint
+  const Film* resume = nullptr; // continue from this film (its layers and spp), e.g. a checkpoint
 
   // When to stop before spp, and when to show the whole film at one spp.
   double time_budget = 0;       // > 0: stop at the first horizon after this many seconds of rendering
@@ -43,8 +45,8 @@ struct RenderOptions {
   uint32_t tile_pixels = 0;     // pixels per tile; 0: about 256 tiles
   uint32_t max_unit_pixels = 0; // 0: as the devices' rates allow
   size_t work_group = 0;        // 0: 64 (or the kernel's limit); 8 for the lane kernels
-  // Paths per work item of the path integrator (kernels/lanes.cl): 1, 8 or 16, the same pixels; 0: each
-  // device's own (path_lanes, runtime/device.h), 1 for the other integrators.
+  // Paths per work item of techniques over lanes (path, kernels/lanes.cl): 1, 8 or 16, the same pixels; 0:
+  // each device's own (path_lanes, runtime/device.h), 1 for the other techniques.
   uint32_t lanes = 0;
 
   // Several devices.
@@ -82,7 +84,8 @@ struct RenderResult {
   Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;
   uint64_t splat_overflows = 0;  // light: fixed-point overflows (a hazard: above zero is a bug)
-  LightTransportHeader light{};  // light: the bounds and fixed-point scales the film was made with
+  LightTransportHeader light{};  // techniques with emission: the bounds and fixed-point scales of the film
+  std::vector<PhaseTime> phases;  // device time of each named launch of the units, all devices (ms)
   double kernel_build_ms = 0;  // the slowest device's build (they build at once)
   bool kernel_from_cache = false;  // every device loaded its kernel from the cache
   std::string kernel_options;      // the first device's

@@ -83,15 +83,16 @@ struct RenderSettings {
   uint32_t max_depth = 8;
   uint32_t seed = 1;
   uint32_t sampler = PC_SAMPLER_SOBOL;  // PC_SAMPLER_* of kernels/shared/types.h
-  uint32_t integrator = PC_INTEGRATOR_PATH;  // PC_INTEGRATOR_* of kernels/shared/light_types.h
+  // The technique's name (runtime/technique.h checks it against the registry) and where the file gave
+  // it, for messages ("scene.json: render.integrator"); empty place: the default.
+  std::string integrator = "path", integrator_place;
+  // AOVs to render (runtime/film_layout.h checks the names), each with its place ("render.aovs[1]").
+  std::vector<std::string> aovs, aov_places;
 };
 
 // "independent", "stratified", "sobol", "halton" -> PC_SAMPLER_*; false for an unknown name.
 bool sampler_from_name(const std::string& name, uint32_t* sampler);
 const char* sampler_name(uint32_t sampler);
-// "path", "light", "bdpt" -> PC_INTEGRATOR_*; false for any other name.
-bool integrator_from_name(const std::string& name, uint32_t* integrator);
-const char* integrator_name(uint32_t integrator);
 
 // The largest distance from the camera (in scene units, per axis) that geometry may reach, and so the
 // largest sphere radius. The kernels work in camera-relative floats and square distances across the

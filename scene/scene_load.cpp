@@ -1025,21 +1025,6 @@ bool sampler_from_name(const std::string& name, uint32_t* sampler) {
 
 const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
 
-namespace {
-const char* const kIntegratorNames[] = {"path", "light", "bdpt"};  // by PC_INTEGRATOR_*
-}
-
-bool integrator_from_name(const std::string& name, uint32_t* integrator) {
-  for (uint32_t i = 0; i < 3; ++i)
-    if (name == kIntegratorNames[i]) {
-      *integrator = i;
-      return true;
-    }
-  return false;
-}
-
-const char* integrator_name(uint32_t integrator) { return integrator < 3 ? kIntegratorNames[integrator] : "unknown"; }
-
 SceneDescription load_scene(const std::string& path) {
   const std::string text = read_input_file(path, kSceneInput);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
@@ -1134,7 +1119,7 @@ SceneDescription load_scene(const std::string& path) {
 
   if (top.has("render")) {
     Node r = top.at("render");
-    r.expect_object({"spp", "max_depth", "seed", "sampler", "integrator"});
+    r.expect_object({"spp", "max_depth", "seed", "sampler", "integrator", "aovs"});
     if (r.has("spp")) scene.render.spp = r.at("spp").count(1, kMaxSpp);
     if (r.has("max_depth")) scene.render.max_depth = r.at("max_depth").count(0, kMaxDepth);
     if (r.has("seed")) scene.render.seed = r.at("seed").count(0, 0xffffffffu);
@@ -1142,9 +1127,14 @@ SceneDescription load_scene(const std::string& path) {
       r.at("sampler").fail("unknown sampler \"" + r.at("sampler").string() +
                            "\" (expected independent, stratified, sobol or halton)");
     if (r.has("integrator")) {
-      Node in = r.at("integrator");
-      if (!integrator_from_name(in.string(), &scene.render.integrator))
-        in.fail("unknown integrator \"" + in.string() + "\" (expected path, light or bdpt)");
+      scene.render.integrator = r.at("integrator").string();
+      scene.render.integrator_place = r.at("integrator").place();
+    }
+    if (r.has("aovs")) {
+      for (const Node& a : r.at("aovs").array()) {
+        scene.render.aovs.push_back(a.string());
+        scene.render.aov_places.push_back(a.place());
+      }
     }
   }
   if (!has_light(scene))

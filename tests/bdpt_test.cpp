@@ -48,7 +48,7 @@ std::string textured_scene() {
 
 Options bdpt(uint32_t spp, uint32_t max_depth) {
   Options o;
-  o.integrator = PC_INTEGRATOR_BDPT;
+  o.integrator = "bdpt";
   o.spp = spp;
   o.max_depth = max_depth;
   return o;
@@ -134,7 +134,7 @@ TEST(Bdpt, AgreesWithPathTracingPerPixel) {
     scene.header.height = c.size;
     Options o = bdpt(c.bdpt_spp, 5);
     Film b = render_with(scene, o).film;
-    o.integrator = PC_INTEGRATOR_PATH;
+    o.integrator = "path";
     o.spp = c.path_spp;
     Film p = render_with(scene, o).film;
     PixelComparison cmp = compare_pixels(p, b, nullptr);
@@ -158,7 +158,7 @@ TEST(Bdpt, SplatFilmIsBitwiseDeterministic) {
 TEST(Bdpt, RefusesMaxDepthBeyondItsBound) {
   DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
   RenderOptions opt;
-  opt.integrator = PC_INTEGRATOR_BDPT;
+  opt.integrator = "bdpt";
   opt.max_depth = kBdptMaxDepth + 1;
   EXPECT_THROW(render(test_device(), scene, opt), UsageError);
 }

@@ -35,7 +35,7 @@ TEST(Cli, BadInputExitsWithTwoAndWritesNothing) {
       {scene("bad-huge-sphere.json"), "shapes[0].radius: a sphere radius of 1e+30 is beyond the largest of 1.5e+18"},
       {scene("tiny.json") + " --spp -3", "--spp"},
       {scene("bad-integrator.json"), "render.integrator: unknown integrator \"lite\" (expected path, light or bdpt)"},
-      {scene("tiny.json") + " --integrator foo", "--integrator foo: expected path, light or bdpt"},
+      {scene("tiny.json") + " --integrator foo", "--integrator: unknown integrator \"foo\" (expected path, light or bdpt)"},
       {scene("tiny.json") + " --device no-such-device-xyz", "no-such-device-xyz"},
       {scene("tiny.json") + " --device 99", "no device with that index"},
       {scene("no-such-scene.json"), "cannot open the scene file"},

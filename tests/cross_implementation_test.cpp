@@ -75,6 +75,8 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
   return scene_file(bundled, text);
 }
 
+const std::string kEveryAov = "albedo,normal,depth,position,uv,material_id";
+
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
 constexpr size_t kCases = 18;
 
@@ -92,7 +94,8 @@ std::array<Case, kCases> make_cases() {
           {"cornell box, bdpt", cornell, "--integrator bdpt"},
           {"every material and light type, bdpt, thin lens, gaussian filter", resized("materials", 8, 6, 1), "--integrator bdpt --max-depth 4"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
-          {"glass and metal", resized("glass-metal", 16, 12, 2), ""},
+          // With every AOV (kernels/aov.cl): mirror and glass chains followed for albedo and normal.
+          {"glass and metal, every AOV", resized("glass-metal", 16, 12, 2), "--aov " + kEveryAov},
           // 8 and 16 lanes on Oclgrind too (the other cases: PoCL at its default width, Oclgrind at one lane).
           {"every material and light, 8 lanes", resized("materials", 16, 12, 1), "--lanes 8"},
           {"cornell box, 16 lanes", cornell, "--lanes 16"},
@@ -106,7 +109,7 @@ std::array<Case, kCases> make_cases() {
           // other hits.
           {"cornell box, single rays, 8-wide layout", cornell, "--lanes 1", 8},
           {"cornell box, single rays, 16-wide layout", cornell, "--lanes 1", 16},
-          {"textures, smooth normals, emitting sphere, environment map", textured_scene(), ""},
+          {"textures, smooth normals, emitting sphere, environment map, every AOV", textured_scene(), "--aov " + kEveryAov},
           {"instances: moved, scaled, mirrored, smooth, cut-out",
            resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}}};
 }
@@ -163,6 +166,15 @@ TEST_P(EveryFeature, RendersTheSameBitsOnPoclAndOclgrind) {
   size_t pixels = pocl.image.rgb.size() / 3, same = identical_pixels(pocl.image, grind.image);
   std::printf("%s: %zu of %zu pixels identical\n", c.name.c_str(), same, pixels);
   EXPECT_EQ(same, pixels);
+  ASSERT_EQ(pocl.image.layers.size(), grind.image.layers.size());
+  for (size_t i = 0; i < pocl.image.layers.size(); ++i) {
+    const ImageLayer &a = pocl.image.layers[i], &b = grind.image.layers[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_TRUE(a.values.size() == b.values.size() &&
+                std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)) == 0)
+        << "AOV layer " << a.name << " differs";
+  }
+  if (c.options.find("--aov") != std::string::npos) EXPECT_FALSE(pocl.image.layers.empty());
   double sum = 0;
   for (float v : pocl.image.rgb) sum += v;
   EXPECT_GT(sum / pocl.image.rgb.size(), 1e-3) << "a black image proves little";

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/kernel_sources.h"
-#include "test_support.h"
+#include "test_support.h"  // and through it kernels/shared/types.h, light_types.h and film_types.h
 
 TEST(Layout, SharedStructsMatchTheDevice) {
   ClContext& cl = test_device();
@@ -18,6 +18,10 @@ TEST(Layout, SharedStructsMatchTheDevice) {
   host.push_back(uint32_t(offsetof(S, F)));
   PC_LAYOUT_STRUCTS(HOST_SIZE)
   PC_LAYOUT_FIELDS(HOST_OFFSET)
+  PC_LIGHT_LAYOUT_STRUCTS(HOST_SIZE)
+  PC_LIGHT_LAYOUT_FIELDS(HOST_OFFSET)
+  PC_FILM_LAYOUT_STRUCTS(HOST_SIZE)
+  PC_FILM_LAYOUT_FIELDS(HOST_OFFSET)
   ClBuffer out(cl, CL_MEM_WRITE_ONLY, host.size() * sizeof(uint32_t));
   ClKernel kernel(program.kernel("layout_report"));
   kernel.arg(0, out.mem);

@@ -69,7 +69,7 @@ TEST(LightIntegrator, PointLightInGlassBallLightsTheEnclosureExactly) {
   MeanStd m = seeded_mean(scene, o, 6);
   EXPECT_NEAR(m.mean, exact, 4 * m.std_error) << "error " << m.std_error;
   EXPECT_LT(m.std_error, 0.02 * exact);
-  o.integrator = PC_INTEGRATOR_PATH;
+  o.integrator = "path";
   o.spp = 4;
   Film path = render_with(scene, o).film;
   for (float v : path.mean) ASSERT_EQ(v, 0.0f) << "path tracing cannot reach a point light through glass";
@@ -94,7 +94,7 @@ TEST(LightIntegrator, DirectlySeenLightsAndMirrorImagesAreOutOfReach) {
     o.spp = 8;
     Film light = render_with(scene, o).film;
     for (float v : light.mean) ASSERT_EQ(v, 0.0f) << name;
-    o.integrator = PC_INTEGRATOR_PATH;
+    o.integrator = "path";
     EXPECT_GT(image_mean(render_with(scene, o).film), 0.01) << name;
   }
 }
@@ -107,14 +107,14 @@ TEST(LightIntegrator, AgreesWithPathTracingPerPixelOnTheCornellBox) {
   scene.header.height = 32;
   Options o;
   o.max_depth = 3;
-  o.integrator = PC_INTEGRATOR_PATH;
+  o.integrator = "path";
   o.spp = 64;  // enough to find the pixels the lamp covers only in part
   o.max_depth = 0;
   Film direct = render_with(scene, o).film;
   o.max_depth = 3;
   o.spp = 256;
   Film path = render_with(scene, o).film;
-  o.integrator = PC_INTEGRATOR_LIGHT;
+  o.integrator = "light";
   o.spp = 256;
   Film light = render_with(scene, o).film;
   PixelComparison c = compare_pixels(path, light, [&](size_t p) {

@@ -14,7 +14,7 @@ namespace light_transport_test {
 
 struct Options {
   uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
-  uint32_t integrator = PC_INTEGRATOR_LIGHT;
+  std::string integrator = "light";
   size_t work_group = 0;
   bool pairs = false;
   int strategy_s = -1, strategy_t = -1;  // bdpt: this strategy alone
@@ -100,7 +100,7 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   Film reference = render_with(scene, o).film;
   ASSERT_GT(image_mean(reference), 0.0);
   auto same = [&](const Film& f, const char* what) {
-    EXPECT_EQ(f.splats, reference.splats) << what;
+    EXPECT_EQ(f.words, reference.words) << what;
     EXPECT_EQ(f.mean, reference.mean) << what;
   };
   Options w = o;

@@ -1,0 +1,61 @@
+#include "apps/denoise_command.h"
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "runtime/denoise.h"
+#include "runtime/errors.h"
+#include "runtime/image_io.h"
+#include "runtime/output_files.h"
+
+namespace {
+
+struct DenoiseArgs {
+  std::string input, output;
+  bool no_aux = false, quiet = false;
+  std::string quality = "high";
+  CLI::App* command = nullptr;
+};
+
+DenoiseArgs& args() {
+  static DenoiseArgs a;
+  return a;
+}
+
+}  // namespace
+
+void add_denoise_command(CLI::App& app) {
+  DenoiseArgs& a = args();
+  a.command = app.add_subcommand("denoise", "denoise an EXR image with Intel Open Image Denoise");
+  a.command->add_option("input", a.input, "EXR to denoise (its layers albedo.R/G/B and normal.X/Y/Z guide the denoiser)")
+      ->required();
+  a.command->add_option("-o,--output", a.output, "output EXR: the denoised R, G, B, the input as the layer raw")->required();
+  a.command->add_flag("--no-aux", a.no_aux, "ignore the albedo and normal layers");
+  a.command->add_option("--quality", a.quality, "high (the default), balanced or fast");
+  a.command->add_flag("-q,--quiet", a.quiet, "no summary line on stderr");
+}
+
+bool denoise_command_parsed() { return args().command && args().command->parsed(); }
+
+int run_denoise_command() {
+  const DenoiseArgs& a = args();
+  if (a.quality != "high" && a.quality != "balanced" && a.quality != "fast")
+    throw UsageError("--quality " + a.quality + ": expected high, balanced or fast");
+  check_output_files({{"-o", a.output, true}});
+  Image image = read_exr(a.input);
+  DenoiseOptions options;
+  options.use_albedo = options.use_normal = !a.no_aux;
+  options.quality = a.quality;
+  auto start = std::chrono::steady_clock::now();
+  denoise_image(image, options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_image(a.output, image);
+  if (!a.quiet)
+    std::fprintf(stderr, "%s: denoised %ux%u in %.2f s with %s (quality %s, aux %s) -> %s\n", a.input.c_str(),
+                 image.width, image.height, seconds, image.attributes["denoiser"].c_str(), a.quality.c_str(),
+                 image.attributes["denoiser_aux"].c_str(), a.output.c_str());
+  return 0;
+}

@@ -1,0 +1,278 @@
+#include "runtime/denoise.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <type_traits>
+#include <utility>
+
+#include <dlfcn.h>
+#include <glob.h>
+
+#include "runtime/errors.h"
+
+namespace {
+
+// The parts of OIDN 2.x's C API that pathcl calls, declared here rather than taken from
+// OpenImageDenoise/oidn.h: the library is loaded at run time and its headers are not installed. The
+// values are those of oidn.h in OIDN 2.x (OIDNDeviceType, OIDNFormat, OIDNError, OIDNQuality); the C
+// enums are passed as int, which they are in the x86-64 and AArch64 C ABIs.
+struct OIDNDeviceImpl;
+struct OIDNFilterImpl;
+using OIDNDevice = OIDNDeviceImpl*;
+using OIDNFilter = OIDNFilterImpl*;
+constexpr int OIDN_DEVICE_TYPE_CPU = 1;
+constexpr int OIDN_FORMAT_FLOAT3 = 3;
+constexpr int OIDN_ERROR_NONE = 0;
+constexpr int OIDN_QUALITY_FAST = 4, OIDN_QUALITY_BALANCED = 5, OIDN_QUALITY_HIGH = 6;
+
+struct OidnApi {
+  void* library = nullptr;
+  std::string error;  // why it is not there, with how to get it
+  OIDNDevice (*newDevice)(int type) = nullptr;
+  void (*commitDevice)(OIDNDevice) = nullptr;
+  int (*getDeviceError)(OIDNDevice, const char** message) = nullptr;
+  int (*getDeviceInt)(OIDNDevice, const char* name) = nullptr;
+  void (*releaseDevice)(OIDNDevice) = nullptr;
+  OIDNFilter (*newFilter)(OIDNDevice, const char* type) = nullptr;
+  void (*setSharedFilterImage)(OIDNFilter, const char* name, void* data, int format, size_t width, size_t height,
+                               size_t byte_offset, size_t pixel_byte_stride, size_t row_byte_stride) = nullptr;
+  void (*setFilterBool)(OIDNFilter, const char* name, bool value) = nullptr;
+  void (*setFilterInt)(OIDNFilter, const char* name, int value) = nullptr;
+  void (*commitFilter)(OIDNFilter) = nullptr;
+  void (*executeFilter)(OIDNFilter) = nullptr;
+  void (*releaseFilter)(OIDNFilter) = nullptr;
+};
+
+const char* const how_to_get_it =
+    "denoising needs Intel Open Image Denoise 2.x: scripts/setup installs it from PyPI's pyoidn into "
+    "build/oidn-venv, or set PATHCL_OIDN_LIBRARY to the path of a libOpenImageDenoise.so.2";
+
+// The libraries the search finds, in order (see runtime/denoise.h).
+std::vector<std::string> library_candidates() {
+  if (const char* path = std::getenv("PATHCL_OIDN_LIBRARY"); path && *path)
+    return {path};  // a library named by the user, and no other: a fallback would hide a wrong path
+  std::vector<std::string> found;
+#ifdef PATHCL_OIDN_VENV
+  // pyoidn's wheel keeps the library and the CPU device module it loads beside each other.
+  std::string pattern = std::string(PATHCL_OIDN_VENV) + "/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2*";
+  glob_t g{};
+  if (glob(pattern.c_str(), 0, nullptr, &g) == 0)
+    for (size_t i = 0; i < g.gl_pathc; ++i) found.push_back(g.gl_pathv[i]);  // sorted: .so.2 before .so.2.5.1
+  globfree(&g);
+#endif
+  found.push_back("libOpenImageDenoise.so.2");
+  return found;
+}
+
+OidnApi load_oidn() {
+  OidnApi api;
+  std::string tried, loaded;
+  for (const std::string& path : library_candidates()) {
+    // OIDN's CPU device needs oneTBB's libtbb.so.12: pathcl has Debian's loaded already (scene/ uses it),
+    // and the device binds to that one rather than to the wheel's copy; every symbol it needs is there.
+    api.library = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    loaded = path;
+    if (api.library) break;
+    const char* e = dlerror();
+    tried += (tried.empty() ? "" : "; ") + std::string(e ? e : path + ": cannot load");
+  }
+  if (!api.library) {
+    api.error = std::string(how_to_get_it) + " (not found: " + tried + ")";
+    return api;
+  }
+  std::string missing;
+  auto get = [&](auto& function, const char* name) {
+    function = reinterpret_cast<std::remove_reference_t<decltype(function)>>(dlsym(api.library, name));
+    if (!function) missing += (missing.empty() ? "" : ", ") + std::string(name);
+  };
+  get(api.newDevice, "oidnNewDevice");
+  get(api.commitDevice, "oidnCommitDevice");
+  get(api.getDeviceError, "oidnGetDeviceError");
+  get(api.getDeviceInt, "oidnGetDeviceInt");
+  get(api.releaseDevice, "oidnReleaseDevice");
+  get(api.newFilter, "oidnNewFilter");
+  get(api.setSharedFilterImage, "oidnSetSharedFilterImage");
+  get(api.setFilterBool, "oidnSetFilterBool");
+  get(api.setFilterInt, "oidnSetFilterInt");
+  get(api.commitFilter, "oidnCommitFilter");
+  get(api.executeFilter, "oidnExecuteFilter");
+  get(api.releaseFilter, "oidnReleaseFilter");
+  if (!missing.empty()) {
+    api.error = std::string(how_to_get_it) + " (" + loaded + " is not: it lacks " + missing + ")";
+    dlclose(api.library);
+    api.library = nullptr;
+  }
+  return api;
+}
+
+// Loaded once per process (thread-safe static initialisation); never unloaded.
+const OidnApi& oidn() {
+  static const OidnApi api = load_oidn();
+  if (!api.library) throw RuntimeFailure(api.error);
+  return api;
+}
+
+// Throws RuntimeFailure with OIDN's message if the device holds an error (also for a device that failed
+// to start: OIDN answers for a null device too).
+void check(const OidnApi& api, OIDNDevice device, const char* what) {
+  const char* message = nullptr;
+  if (api.getDeviceError(device, &message) != OIDN_ERROR_NONE)
+    throw RuntimeFailure(std::string("Intel Open Image Denoise: ") + what + ": " + (message ? message : "unknown error"));
+}
+
+// A committed CPU device of OIDN 2.x, released at the end of its scope.
+struct Device {
+  const OidnApi& api;
+  OIDNDevice device;
+  explicit Device(const OidnApi& a) : api(a), device(a.newDevice(OIDN_DEVICE_TYPE_CPU)) {
+    try {
+      check(api, device, "cannot create the CPU device");
+      api.commitDevice(device);
+      check(api, device, "cannot start the CPU device");
+      // Enum values and the ABI may change with a major version.
+      int major = api.getDeviceInt(device, "versionMajor");
+      if (major != 2)
+        throw RuntimeFailure(std::string(how_to_get_it) + " (the library found is version " + std::to_string(major) + ")");
+    } catch (...) {
+      if (device) api.releaseDevice(device);  // the destructor of a half-made object does not run
+      throw;
+    }
+  }
+  ~Device() {
+    if (device) api.releaseDevice(device);
+  }
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+  std::string version() const {
+    int v = api.getDeviceInt(device, "version");  // major * 10000 + minor * 100 + patch
+    return std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100);
+  }
+};
+
+// An "RT" filter, released at the end of its scope.
+struct Filter {
+  const OidnApi& api;
+  OIDNFilter filter;
+  explicit Filter(const Device& d) : api(d.api), filter(d.api.newFilter(d.device, "RT")) { check(api, d.device, "cannot create the RT filter"); }
+  ~Filter() {
+    if (filter) api.releaseFilter(filter);
+  }
+  Filter(const Filter&) = delete;
+  Filter& operator=(const Filter&) = delete;
+  // A shared image: OIDN's CPU device works on the vector's memory, without a copy. Inputs are only read
+  // (so the const_cast is safe); the output is written.
+  void image(const char* name, const std::vector<float>& pixels, uint32_t width, uint32_t height) {
+    api.setSharedFilterImage(filter, name, const_cast<float*>(pixels.data()), OIDN_FORMAT_FLOAT3, width, height, 0, 0, 0);
+  }
+  void set(const char* name, bool value) { api.setFilterBool(filter, name, value); }
+  void run(const Device& d, int quality, const char* what) {
+    api.setFilterInt(filter, "quality", quality);
+    api.commitFilter(filter);
+    check(api, d.device, what);
+    api.executeFilter(filter);
+    check(api, d.device, what);
+  }
+};
+
+int quality_value(const std::string& quality) {
+  if (quality == "high") return OIDN_QUALITY_HIGH;
+  if (quality == "balanced") return OIDN_QUALITY_BALANCED;
+  if (quality == "fast") return OIDN_QUALITY_FAST;
+  throw UsageError("denoiser quality \"" + quality + "\": expected high, balanced or fast");
+}
+
+// The channels of a layer in this order, or empty if the layer or one of them is missing.
+std::vector<float> layer_channels(const Image& image, const std::string& name, const std::vector<std::string>& channels) {
+  const ImageLayer* layer = find_layer(image, name);
+  if (!layer) return {};
+  std::vector<size_t> index;
+  for (const std::string& c : channels) {
+    auto it = std::find(layer->channels.begin(), layer->channels.end(), c);
+    if (it == layer->channels.end()) return {};
+    index.push_back(size_t(it - layer->channels.begin()));
+  }
+  size_t pixels = size_t(image.width) * image.height, n = layer->channels.size();
+  std::vector<float> out(pixels * channels.size());
+  for (size_t p = 0; p < pixels; ++p)
+    for (size_t c = 0; c < index.size(); ++c) out[p * index.size() + c] = layer->values[p * n + index[c]];
+  return out;
+}
+
+}  // namespace
+
+bool denoiser_available(std::string* why) {
+  try {
+    Device device(oidn());
+    return true;
+  } catch (const std::exception& e) {
+    if (why) *why = e.what();
+    return false;
+  }
+}
+
+DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>& rgb, const std::vector<float>* albedo,
+                      const std::vector<float>* normal, const DenoiseOptions& options) {
+  int quality = quality_value(options.quality);
+  size_t floats = size_t(width) * height * 3;
+  for (auto [buffer, name] : {std::pair{&rgb, "image"}, {albedo, "albedo"}, {normal, "normal"}})
+    if (buffer && buffer->size() != floats)
+      throw UsageError(std::string("denoise: the ") + name + " holds " + std::to_string(buffer->size()) +
+                       " floats where " + std::to_string(width) + " x " + std::to_string(height) + " x 3 need " +
+                       std::to_string(floats));
+  if (!albedo) normal = nullptr;  // OIDN's RT filter takes a normal only beside an albedo
+  auto start = std::chrono::steady_clock::now();
+  Device device(oidn());
+  DenoiseResult result;
+  result.library_version = device.version();
+  result.used_albedo = albedo != nullptr;
+  result.used_normal = normal != nullptr;
+  result.rgb.assign(floats, 0.0f);
+  // OIDN's prefiltering (its documentation, "Denoising with prefiltering"): each auxiliary image is first
+  // denoised in place by an RT filter given only that image and the output; the beauty's filter then
+  // takes them as noise-free (cleanAux). OIDN only has clean-feature weights for albedo and normal together.
+  bool prefilter = albedo && normal && options.clean_aux;
+  std::vector<float> clean_albedo, clean_normal;
+  if (prefilter) {
+    clean_albedo = *albedo;
+    clean_normal = *normal;
+    Filter a(device);
+    a.image("albedo", clean_albedo, width, height);
+    a.image("output", clean_albedo, width, height);
+    a.run(device, quality, "prefiltering the albedo");
+    Filter n(device);
+    n.image("normal", clean_normal, width, height);
+    n.image("output", clean_normal, width, height);
+    n.run(device, quality, "prefiltering the normal");
+    albedo = &clean_albedo;
+    normal = &clean_normal;
+  }
+  Filter f(device);
+  f.image("color", rgb, width, height);
+  if (albedo) f.image("albedo", *albedo, width, height);
+  if (normal) f.image("normal", *normal, width, height);
+  f.image("output", result.rgb, width, height);
+  f.set("hdr", true);
+  f.set("cleanAux", prefilter);
+  f.run(device, quality, "denoising");
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+void denoise_image(Image& image, const DenoiseOptions& options) {
+  std::vector<float> albedo, normal;
+  if (options.use_albedo) albedo = layer_channels(image, "albedo", {"R", "G", "B"});
+  if (options.use_normal) normal = layer_channels(image, "normal", {"X", "Y", "Z"});
+  DenoiseResult r = denoise(image.width, image.height, image.rgb, albedo.empty() ? nullptr : &albedo,
+                            normal.empty() ? nullptr : &normal, options);
+  ImageLayer raw{"raw", {"R", "G", "B"}, std::move(image.rgb), false};
+  image.rgb = std::move(r.rgb);
+  auto old = std::find_if(image.layers.begin(), image.layers.end(), [](const ImageLayer& l) { return l.name == "raw"; });
+  if (old != image.layers.end())
+    *old = std::move(raw);
+  else
+    image.layers.push_back(std::move(raw));
+  image.attributes["denoiser"] = "Intel Open Image Denoise " + r.library_version;
+  image.attributes["denoiser_quality"] = options.quality;
+  image.attributes["denoiser_aux"] = r.used_normal ? "albedo,normal" : r.used_albedo ? "albedo" : "none";
+}

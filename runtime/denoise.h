@@ -1,0 +1,48 @@
+// Denoising with Intel Open Image Denoise 2.x (OIDN), loaded at run time with dlopen: pathcl builds and
+// runs without it, and only denoising needs it. The library is searched for at
+//   1. $PATHCL_OIDN_LIBRARY, a file path (when set, only there),
+//   2. the build's build/oidn-venv (the PyPI package pyoidn, which scripts/setup installs), whose
+//      libOpenImageDenoise.so.2* is looked up at run time,
+//   3. dlopen("libOpenImageDenoise.so.2"), i.e. the system's library path.
+// It runs OIDN's CPU device and its "RT" filter in HDR mode.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/image_io.h"
+
+struct DenoiseOptions {
+  bool use_albedo = true, use_normal = true;  // use the layers "albedo" and "normal" where present (denoise_image)
+  // With both albedo and normal: denoise them first (OIDN's prefiltering) and tell the filter that they
+  // are clean (cleanAux). Without it, OIDN takes them as noisy. It costs: at quality high OIDN runs its
+  // large networks for the albedo, the normal and the beauty, about 7x the time of the beauty alone.
+  bool clean_aux = true;
+  std::string quality = "high";  // high, balanced or fast (OIDN's quality modes)
+};
+
+struct DenoiseResult {
+  std::vector<float> rgb;       // width * height * 3, the denoised image
+  std::string library_version;  // "2.5.1"
+  bool used_albedo = false, used_normal = false;
+  double seconds = 0;  // wall time of the call: OIDN device, filters and their execution
+};
+
+// Whether the library loads and its CPU device starts; if not, *why (when given) says why and how to get
+// it.
+bool denoiser_available(std::string* why = nullptr);
+
+// Denoises an HDR image (width * height * 3 floats, interleaved, any row order as long as all images
+// agree), with the optional albedo (values in [0, 1]) and normal (values in [-1, 1]) images of the same
+// size. OIDN takes a normal only beside an albedo: a normal alone is not used (used_normal says so).
+// RuntimeFailure when the library is missing (the message says how to get it) or OIDN fails;
+// UsageError for an unknown quality or buffers of the wrong size.
+DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>& rgb, const std::vector<float>* albedo,
+                      const std::vector<float>* normal, const DenoiseOptions& options);
+
+// Denoises an image in place, as `pathcl denoise` does: rgb becomes the denoised beauty; the beauty it
+// had goes into the layer "raw" (R, G, B; replacing one there); the layers "albedo" (R, G, B) and
+// "normal" (X, Y, Z) are used as options allow; the attributes "denoiser" ("Intel Open Image Denoise
+// 2.5.1"), "denoiser_quality" and "denoiser_aux" ("albedo,normal", "albedo" or "none") are set. Other
+// layers, the variance and the other attributes are kept.
+void denoise_image(Image& image, const DenoiseOptions& options);

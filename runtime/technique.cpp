@@ -1,0 +1,59 @@
+#include "runtime/technique.h"
+
+#include <mutex>
+
+#include "runtime/errors.h"
+#include "runtime/renderer.h"
+
+namespace {
+std::mutex registry_mutex;
+
+std::vector<Technique>& registry() {
+  // The registry: one line per technique.
+  static std::vector<Technique> list = {path_technique(), light_technique(), bdpt_technique()};
+  return list;
+}
+}  // namespace
+
+const std::vector<Technique>& techniques() { return registry(); }
+
+void register_technique(Technique technique) {
+  std::lock_guard<std::mutex> lock(registry_mutex);
+  for (const Technique& t : registry())
+    if (t.name == technique.name || t.id == technique.id)
+      throw std::logic_error("technique " + technique.name + ": its name or id is taken by " + t.name);
+  // Registration happens before renders start (a test's set-up): the vector is not read meanwhile.
+  registry().push_back(std::move(technique));
+}
+
+std::string technique_list() {
+  std::string s;
+  const std::vector<Technique>& list = techniques();
+  for (size_t i = 0; i < list.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == list.size() ? " or " : ", ") + list[i].name;
+  return s;
+}
+
+const Technique& technique_named(const std::string& name, const std::string& where) {
+  for (const Technique& t : techniques())
+    if (t.name == name) return t;
+  throw UsageError(where + ": unknown integrator \"" + name + "\" (expected " + technique_list() + ")");
+}
+
+const Technique* technique_with_id(uint32_t id) {
+  for (const Technique& t : techniques())
+    if (t.id == id) return &t;
+  return nullptr;
+}
+
+void check_technique_options(const Technique& t, const RenderOptions& options) {
+  if (options.lanes != 0 && options.lanes != 1 && options.lanes != 8 && options.lanes != 16)
+    throw UsageError("--lanes " + std::to_string(options.lanes) + ": one path per work item (1) or 8 or 16");
+  if (options.lanes > 1 && !t.lanes)
+    throw UsageError("--lanes " + std::to_string(options.lanes) + ": the " + t.name + " integrator does not run over lanes");
+  if (options.max_depth > t.max_depth_limit)
+    throw UsageError("max_depth " + std::to_string(options.max_depth) + ": the " + t.name +
+                     " integrator takes max_depth up to " + std::to_string(t.max_depth_limit));
+  if ((options.debug_bdpt_strategy_s >= 0 || options.debug_bdpt_strategy_t >= 0) && t.name != "bdpt")
+    throw UsageError("a single BDPT strategy needs the bdpt integrator, not " + t.name);
+}

@@ -1,0 +1,77 @@
+// Techniques: each integrator (path, light, bdpt, and those to come) is one host object, registered once.
+// It names its kernel and entry point, its -D flags, the film layers it writes, how its units cover the
+// film, which render options apply to it and how its film becomes an image. The render loop
+// (runtime/renderer.cpp), the OpenCL worker (runtime/device_worker.cpp), checkpoints and the command line
+// know techniques only through this. A new integrator is its kernel file, its technique file
+// (runtime/technique_*.cpp) and one line in technique.cpp's registry.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "runtime/film_layout.h"  // and kernels/shared/types.h
+#include "kernels/shared/light_types.h"
+
+struct DeviceInfo;
+struct Film;
+struct RenderOptions;
+
+// How a technique's units cover the film (runtime/render_schedule.h schedules both the same way: tiles of
+// indices at levels of samples).
+enum class UnitKind {
+  pixels,  // a unit is samples [s0, s1) of a run of pixels, added in order to their ordered layers
+  paths,   // a unit is samples [s0, s1) of a run of light-path indices (numbered like the pixels), whose
+           // splats land anywhere: the unit returns its commutative layers over the whole image
+};
+
+// What a technique's build_options sees.
+struct TechniqueBuild {
+  const DeviceInfo* device = nullptr;
+  uint32_t lanes = 1;          // the width the kernel is built for (techniques with `lanes`)
+  uint32_t max_depth = 0;
+  bool splat_pairs = false;    // 32-bit word pairs even where 64-bit atomics exist (tests)
+};
+
+struct Technique {
+  std::string name;     // as --integrator and render.integrator take it
+  uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2); never reused
+  std::string summary;  // one line for --help and the docs
+  // The unit kernel: kernel_file's entry, called as
+  //   entry(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+  //         __global film, __global stats, uint begin, uint count, uint stride, uint sample_begin,
+  //         uint sample_count)
+  // film: the film buffer, the technique's layers first (word 0); stats: UnitStats (SplatStats's words).
+  std::string kernel_file, entry;
+  std::vector<FilmLayer> layers;  // its own film layers
+  UnitKind units = UnitKind::pixels;
+  bool lanes = false;        // runs over 8 or 16 SIMD lanes on CPU devices (--lanes)
+  bool emission = false;     // needs the emission distribution and splat scales (runtime/light_transport.h)
+  uint32_t max_depth_limit = 1024;  // largest max_depth it takes (bdpt keeps subpaths in private memory)
+  double cpu_unit_seconds = 0.25;   // unit duration to aim for on CPU devices
+  // Extra -D flags for a device (besides the scene's features); may be empty.
+  std::function<std::string(const TechniqueBuild&)> build_options;
+  // The film's image: fills film.mean, variance, even_mean and odd_mean from the technique's layers at
+  // film.spp (the schedule's level); counts fixed-point sums that reached 2^63 in *overflows.
+  std::function<void(Film& film, const LightTransportHeader& lt, uint64_t* overflows)> develop;
+};
+
+// Every registered technique, in registration order (path, light, bdpt, then any a test adds).
+const std::vector<Technique>& techniques();
+// Adds one (tests: a technique of their own, with a kernel from register_kernel_source); the name and id
+// must be new.
+void register_technique(Technique technique);
+// The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light or bdpt)".
+const Technique& technique_named(const std::string& name, const std::string& where);
+// By id (checkpoints); nullptr if none has it.
+const Technique* technique_with_id(uint32_t id);
+// "path, light or bdpt"
+std::string technique_list();
+
+// Refuses options that do not apply to the technique or exceed its limits (UsageError naming them).
+void check_technique_options(const Technique& t, const RenderOptions& options);
+
+// The registry's lines (runtime/technique_*.cpp).
+Technique path_technique();
+Technique light_technique();
+Technique bdpt_technique();

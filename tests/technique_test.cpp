@@ -1,0 +1,114 @@
+// Techniques (runtime/technique.h): a technique registered from this file alone, with a kernel of its own,
+// renders through the whole engine (schedule, units, several film layers, AOVs beside it, checkpoints'
+// key); the registry refuses taken names and names its techniques in errors.
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "runtime/checkpoint.h"
+#include "runtime/kernel_sources.h"
+#include "runtime/technique.h"
+#include "test_support.h"
+
+namespace {
+
+// Each sample of pixel p adds 0.5 + 0.25 (p % 2) to the first word and 1 to the second: the pixel's mean is
+// their quotient, whatever the split into units.
+const char* kConstantKernel = R"(
+#include "shared/types.h"
+#include "scene.cl"
+__kernel void constant_pass(PC_SCENE_PARAMS, __global float* film, __global UnitStats* stats, uint pixel_begin,
+                            uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
+  uint i = get_global_id(0);
+  if (i >= pixel_count) return;
+  uint p = pixel_begin + i * pixel_stride;
+  for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
+    film[2u * p] += 0.5f + 0.25f * (float)(p % 2u);
+    film[2u * p + 1u] += 1.0f;
+  }
+  if (i == 0u) atomic_add(&stats->rays_lo, 1u);
+}
+)";
+
+const Technique& constant_technique() {
+  static const bool registered = [] {
+    register_kernel_source("test_constant.cl", kConstantKernel);
+    Technique t;
+    t.name = "test-constant";
+    t.id = 1000;
+    t.summary = "test only: a constant per pixel";
+    t.kernel_file = "test_constant.cl";
+    t.entry = "constant_pass";
+    t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
+    t.develop = [](Film& f, const LightTransportHeader&, uint64_t*) {
+      size_t pixels = size_t(f.width) * f.height;
+      f.mean.assign(3 * pixels, 0.0f);
+      f.variance.assign(3 * pixels, 0.0f);
+      for (size_t p = 0; p < pixels; ++p) {
+        float words[2];
+        std::memcpy(words, f.layer(0) + 2 * p, sizeof words);
+        for (int c = 0; c < 3; ++c) f.mean[3 * p + c] = words[1] > 0 ? words[0] / words[1] : 0.0f;
+      }
+      f.even_mean = f.odd_mean = f.mean;
+    };
+    register_technique(t);
+    return true;
+  }();
+  (void)registered;
+  return technique_named("test-constant", "test");
+}
+
+}  // namespace
+
+TEST(Technique, ATestTechniqueRendersThroughTheEngine) {
+  const Technique& t = constant_technique();
+  EXPECT_NE(technique_list().find("test-constant"), std::string::npos);
+  DeviceScene scene = load_device_scene(std::string(PATHCL_TEST_SCENES) + "/tiny.json");
+  RenderOptions o;
+  o.spp = 6;
+  o.integrator = t.name;
+  o.aovs = 1u << PC_AOV_ALBEDO;
+  o.tile_pixels = 37;
+  o.pass_spp = 2;
+  RenderResult r = render(test_device(), scene, o);
+  ASSERT_EQ(r.film.layout.names(), "constant,albedo");
+  EXPECT_EQ(r.film.spp, 6u);
+  const size_t pixels = size_t(scene.header.width) * scene.header.height;
+  for (size_t p = 0; p < pixels; ++p) {
+    EXPECT_EQ(r.film.mean[3 * p], p % 2 ? 0.75f : 0.5f) << p;
+    float count;
+    std::memcpy(&count, r.film.layer(0) + 2 * p + 1, sizeof count);
+    EXPECT_EQ(count, 6.0f) << p;
+  }
+  EXPECT_GT(r.rays, 0u);  // its counters come back
+  ASSERT_EQ(r.phases.size(), 2u);
+  EXPECT_EQ(r.phases[0].name, "render");
+  EXPECT_EQ(r.phases[1].name, "aov");
+  // The albedo beside it is the path integrator's.
+  RenderOptions path = o;
+  path.integrator = "path";
+  Film p = render(test_device(), scene, path).film;
+  EXPECT_EQ(r.film.aovs.at(0).values, p.aovs.at(0).values);
+  // Its id keys checkpoints apart from path's.
+  EXPECT_NE(render_key(scene, o), render_key(scene, path));
+}
+
+TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
+  constant_technique();
+  Technique t = path_technique();
+  EXPECT_THROW(register_technique(t), std::logic_error);
+  try {
+    technique_named("lite", "scene.json: render.integrator");
+    ADD_FAILURE();
+  } catch (const UsageError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt or test-constant)", 0), 0u) << e.what();
+  }
+  RenderOptions o;
+  o.integrator = "light";
+  o.lanes = 8;
+  EXPECT_THROW(check_technique_options(technique_named("light", "test"), o), UsageError);
+  o.integrator = "bdpt";
+  o.lanes = 0;
+  o.max_depth = 65;
+  EXPECT_THROW(check_technique_options(technique_named("bdpt", "test"), o), UsageError);
+}
