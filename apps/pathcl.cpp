@@ -213,8 +213,9 @@ nlohmann::json phase_stats(const RenderResult& r) {
 }
 
 // The film's AOVs as EXR layers named as --aov takes them, channels by kind (AovInfo::channels); the
-// header's "aovs" lists them, and with material ids "material_id_names" the materials' names in id order
-// (id 1 first; 0 is no hit).
+// header's "aovs" lists them, and with ids "shape_id_names" and "material_id_names" say what each id is: a
+// JSON array of the shapes' labels ("shapes[3] (meshes/box.obj)") or the materials' names, id 1 first (0 is
+// no hit).
 void add_aov_layers(const Film& film, const SceneDescription& scene, Image& image) {
   std::string names;
   for (const Film::Aov& aov : film.aovs) {
@@ -226,10 +227,15 @@ void add_aov_layers(const Film& film, const SceneDescription& scene, Image& imag
     layer.integer = info.id;
     image.layers.push_back(std::move(layer));
     names += (names.empty() ? "" : ",") + std::string(info.name);
+    if (aov.aov == PC_AOV_SHAPE_ID) {
+      nlohmann::json shapes = nlohmann::json::array();
+      for (const ShapeDesc& s : scene.shapes) shapes.push_back(s.label);
+      image.attributes["shape_id_names"] = shapes.dump();
+    }
     if (aov.aov == PC_AOV_MATERIAL_ID) {
-      std::string materials;
-      for (const MaterialDesc& m : scene.materials) materials += (materials.empty() ? "" : ",") + m.name;
-      image.attributes["material_id_names"] = materials;
+      nlohmann::json materials = nlohmann::json::array();
+      for (const MaterialDesc& m : scene.materials) materials.push_back(m.name);
+      image.attributes["material_id_names"] = materials.dump();
     }
   }
   if (!names.empty()) image.attributes["aovs"] = names;

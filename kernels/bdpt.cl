@@ -64,13 +64,13 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
                                    const LightVertex* lv, uint lv_count, uint* rays) {
   __constant const SceneHeader* h = sc->h;
   Ray ray;
-  camera_ray(h, px, py, sample4(h, key, 0), &ray.o, &ray.d);
+  camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
   ray.tmin = 0.0f;
   ray.tmax = INFINITY;
   ray.skip_prim = PC_INVALID;
   ray.skip_instance = PC_INVALID;
 #ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = cutout_seed(key, 0u);
+  ray.cutout_seed = cutout_seed(key, PC_RAY_CAMERA);
 #endif
   float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
   float eta_scale = 1.0f;
@@ -129,8 +129,8 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     float3 t, b;
     make_frame(s.ns, &t, &b);
     float3 wo_local = bsdf_to_local(wo, t, b, s.ns);
-    float4 u_light = sample4(h, key, 1 + 2 * depth);
-    float4 u_bsdf = sample4(h, key, 2 + 2 * depth);
+    float4 u_light = sample4(h, key, PC_DIM_LIGHT(depth));
+    float4 u_bsdf = sample4(h, key, PC_DIM_BSDF(depth));
 
     if (!bsdf_is_delta(m)) {
       /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy. */
@@ -158,7 +158,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
                          emit * fabs(pc_dot(ls.wi, s.ng)) / (direct * cos_at_light) * (dvcm + dvc * bsdf_rev);
           float w = strategy_weight(lt, 1u, t_count, others);
 #ifdef PC_HAS_CUTOUTS
-          shadow.cutout_seed = cutout_seed(key, 2u * depth + 1u);
+          shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
 #endif
           Hit blocker;
           if (w != 0.0f) {
@@ -209,7 +209,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     }
     ray = spawn_ray(&s, wi);
 #ifdef PC_HAS_CUTOUTS
-    ray.cutout_seed = cutout_seed(key, 2u * depth + 2u);
+    ray.cutout_seed = cutout_seed(key, PC_RAY_NEXT(depth));
 #endif
   }
   return radiance;

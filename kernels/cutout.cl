@@ -14,8 +14,8 @@
 
 #ifdef PC_HAS_CUTOUTS
 
-/* The cutout_seed of a path's ray_index-th ray (0 the camera ray, then 2 depth + 1 the shadow ray and
- * 2 depth + 2 the next ray of scattering event depth). */
+/* The cutout_seed of a path's ray_index-th ray (PC_RAY_* of sampler.cl: the camera ray, then the shadow
+ * ray and the next ray of each scattering event). */
 inline uint cutout_seed(SampleKey key, uint ray_index) {
   return hash4(key.pixel, key.sample, key.seed ^ 0x3c6ef372u, ray_index);
 }

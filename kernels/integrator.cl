@@ -52,8 +52,7 @@ typedef struct {
   LaneI prev_delta;  /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
 } PathLanes;
 
-/* The cut-out seed of ray ray_index of each lane's path (kernels/cutout.cl: 0 the camera ray, then
- * 2 depth + 1 the shadow ray and 2 depth + 2 the next ray of scattering event depth). */
+/* The cut-out seed of ray ray_index (PC_RAY_* of sampler.cl) of each lane's path (kernels/cutout.cl). */
 inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, LaneU sample, LaneU ray_index) {
   return hash4(pixel, sample, (LaneU)(h->seed ^ 0x3c6ef372u), ray_index);
 }
@@ -62,7 +61,7 @@ inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, Lan
 inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
   __constant const SceneHeader* h = sc->h;
   LaneF u0, u1, u2, u3;
-  sample4_lanes(h, pixel, sample, h->seed, (LaneU)(0u), &u0, &u1, &u2, &u3);
+  sample4_lanes(h, pixel, sample, h->seed, (LaneU)(PC_DIM_CAMERA), &u0, &u1, &u2, &u3);
   PathLanes n;
   camera_ray_lanes(h, pixel % h->width, pixel / h->width, u0, u1, u2, u3, &n.ray.o, &n.ray.d);
 #ifdef PC_DEBUG_PERTURB
@@ -75,7 +74,7 @@ inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Lan
   n.ray.skip_prim = n.ray.skip_instance = (LaneU)(PC_INVALID);
   n.ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  n.ray.cutout_seed = cutout_seed_lanes(h, pixel, sample, (LaneU)(0u));
+  n.ray.cutout_seed = cutout_seed_lanes(h, pixel, sample, (LaneU)(PC_RAY_CAMERA));
 #endif
   Lane3 zero = lane3_splat((float3)(0.0f));
   n.throughput = lane3_splat((float3)(1.0f));
@@ -145,8 +144,8 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
   Lane3 wo_local = lane3(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
   LaneF wo_ng = pc_dot(wo, s.ng);
   LaneF ul0, ul1, ul2, ul3, ub0, ub1, ub2, ub3;
-  sample4_lanes(h, pixel, sample, h->seed, 1u + 2u * depth, &ul0, &ul1, &ul2, &ul3);
-  sample4_lanes(h, pixel, sample, h->seed, 2u + 2u * depth, &ub0, &ub1, &ub2, &ub3);
+  sample4_lanes(h, pixel, sample, h->seed, PC_DIM_LIGHT(depth), &ul0, &ul1, &ul2, &ul3);
+  sample4_lanes(h, pixel, sample, h->seed, PC_DIM_BSDF(depth), &ub0, &ub1, &ub2, &ub3);
 
   /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
   LaneI nee = live & !bsdf_is_delta_lanes(mat.type);
@@ -172,7 +171,7 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
         }
         to_light.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-        to_light.cutout_seed = cutout_seed_lanes(h, pixel, sample, 2u * depth + 1u);
+        to_light.cutout_seed = cutout_seed_lanes(h, pixel, sample, PC_RAY_SHADOW(depth));
 #endif
         *shadow = to_light;
         LaneF w = select(power_heuristic(ls.pdf, bsdf_pdf_lanes(&mat, wo_local, wi_local, nee)), (LaneF)(1.0f), ls.delta);
@@ -211,7 +210,7 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
   spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &next);
   next.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  next.cutout_seed = cutout_seed_lanes(h, pixel, sample, 2u * depth + 2u);
+  next.cutout_seed = cutout_seed_lanes(h, pixel, sample, PC_RAY_NEXT(depth));
 #endif
   st->ray.o = lane3_select(st->ray.o, next.o, live);
   st->ray.d = lane3_select(st->ray.d, next.d, live);

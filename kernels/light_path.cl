@@ -39,8 +39,8 @@
 #include "splat_film.cl"
 
 /* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
- * every group a camera path of the same key (BDPT's camera subpath, the path integrator's numbering:
- * 0, then 1 + 2 depth and 2 + 2 depth) takes, so that the two subpaths of a BDPT sample are independent. */
+ * every group a camera path of the same key takes (PC_DIM_* of sampler.cl: BDPT's camera subpath, the path
+ * integrator's), so that the two subpaths of a BDPT sample are independent. */
 inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
 #define PC_LT_EMIT_POS(h) (light_group_base(h) + 0u)          /* x: light choice, yz: point, w: side */
 #define PC_LT_EMIT_DIR(h) (light_group_base(h) + 1u)          /* xy: direction */

@@ -234,6 +234,20 @@ inline uint4 pcg4d(uint4 v) {
   return (uint4)(x, y, z, w);
 }
 
+/* The groups of a camera path's sample dimensions (the path integrator's, BDPT's camera subpath's and the
+ * AOV pass's, so that all three take the same camera rays and BSDF choices): the camera ray (xy: pixel
+ * position, zw: lens point), then per scattering event `depth` the light sample (xyz: the light and the
+ * point on it; w: Russian roulette) and the BSDF sample (xyz: direction and lobe). Light paths take their
+ * groups above every camera path's (light_path.cl, PC_LT_*). */
+#define PC_DIM_CAMERA 0u
+#define PC_DIM_LIGHT(depth) (1u + 2u * (depth))
+#define PC_DIM_BSDF(depth) (2u + 2u * (depth))
+/* The rays of a camera path, numbered for their cut-out seeds (cutout.cl): the camera ray, then per
+ * scattering event `depth` its shadow ray and the ray leaving it. */
+#define PC_RAY_CAMERA 0u
+#define PC_RAY_SHADOW(depth) (2u * (depth) + 1u)
+#define PC_RAY_NEXT(depth) (2u * (depth) + 2u)
+
 /* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key. */
 inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
   float x, y, z, w;

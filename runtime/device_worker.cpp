@@ -64,13 +64,17 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   private_bytes_ = private_bytes;
   phases_.push_back(std::move(render));
 
-  if (aovs) {  // kernels/aov.cl: (PC_SCENE_PARAMS, aov header, film, unit range), one pixel a work item
+  if (aovs) {  // kernels/aov.cl: (PC_SCENE_PARAMS, aov header, shape tables, film, unit range), a pixel an item
     Phase aov;
     aov.name = "aov";
     aov.kernel = std::make_unique<ClKernel>(aov_program_->kernel("aov_pass"));
     arg = scene_->bind(*aov.kernel);
     aov_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof settings.aov, &settings.aov);
+    prim_shapes_ = upload(cl, scene.prim_shapes);
+    instance_shapes_ = upload(cl, scene.instance_shapes);
     aov.kernel->arg(arg++, aov_header_.mem);
+    aov.kernel->arg(arg++, prim_shapes_.mem);
+    aov.kernel->arg(arg++, instance_shapes_.mem);
     aov.kernel->arg(arg++, film_.mem);
     aov.first_unit_arg = arg;
     aov.work_group = kernel_work_group(cl, aov.kernel->k, settings.work_group, 1, "aov");

@@ -49,7 +49,7 @@ class DeviceWorker : public UnitWorker {
   std::optional<KernelProgram> program_, aov_program_;
   std::unique_ptr<SceneBuffers> scene_;
   std::vector<Phase> phases_;
-  ClBuffer film_, stats_, light_header_, emission_cdf_, aov_header_;
+  ClBuffer film_, stats_, light_header_, emission_cdf_, aov_header_, prim_shapes_, instance_shapes_;
   uint32_t lanes_ = 1;
   uint64_t private_bytes_ = 0;
   DeviceFault fault_;

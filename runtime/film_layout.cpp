@@ -5,7 +5,8 @@
 namespace {
 const AovInfo kAovs[PC_AOV_COUNT] = {
     {"albedo", 3, "RGB", false}, {"normal", 3, "XYZ", false}, {"depth", 1, "Z", false},
-    {"position", 3, "XYZ", false}, {"uv", 2, "UV", false}, {"material_id", 1, "I", true},
+    {"position", 3, "XYZ", false}, {"uv", 2, "UV", false}, {"shape_id", 1, "I", true},
+    {"material_id", 1, "I", true},
 };
 }  // namespace
 

@@ -85,6 +85,11 @@ struct DeviceScene {
   PC_SCENE_ARRAYS(PC_DEVICE_SCENE_VECTOR)
 #undef PC_DEVICE_SCENE_VECTOR
   std::vector<uint32_t> leaf_slot;    // scene-order primitive index -> index into prims (host only)
+  // The shape-id AOV's tables (uploaded for the AOV pass alone, kernels/aov.cl): per scene-order primitive
+  // the index of its shape in SceneDescription::shapes (PC_INVALID for an instanced mesh's own triangles,
+  // whose placements give the shape), and per instance (in instances' order) the shape that places it
+  // (PC_INVALID for the rest of the scene).
+  std::vector<uint32_t> prim_shapes, instance_shapes;
   uint32_t features = 0;
   uint32_t triangle_count = 0, sphere_count = 0;  // as stored (an instanced mesh's triangles once)
   uint32_t instance_count = 0;            // placements of instanced meshes

@@ -230,8 +230,9 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   const bool textures = out.features & kFeatureTextures;
   // A mesh's triangles (positions: its vertices in the coordinates they are stored in, device or the
   // instanced mesh's own), in mesh order, with their shading, uvs, normals and emitters.
-  auto add_triangles = [&](const ShapeDesc& s, const TriangleMesh& mesh, const std::vector<glm::vec3>& positions,
-                           const std::vector<uint32_t>& triangle_materials) {
+  // shape: the index of the shape in scene.shapes (PC_INVALID for an instanced mesh's triangles).
+  auto add_triangles = [&](const ShapeDesc& s, uint32_t shape, const TriangleMesh& mesh,
+                           const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& triangle_materials) {
     uint32_t flags = s.two_sided ? PC_FLAG_TWO_SIDED : 0;
     auto material_of = [&](size_t t) { return triangle_materials.empty() ? s.material : triangle_materials[t]; };
     const bool has_normals = !mesh.normals.empty();
@@ -245,6 +246,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       uint32_t index = uint32_t(prims.size());
       glm::vec3 a = positions[t[0]], b = positions[t[1]], c = positions[t[2]];
       prims.push_back({f4(a, bits_to_float(index)), f4(b, bits_to_float(PC_PRIM_TRIANGLE)), f4(c)});
+      out.prim_shapes.push_back(shape);
       Aabb box;
       box.grow(a);
       box.grow(b);
@@ -309,6 +311,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       continue;
     }
     const ShapeDesc& s = placed.instance_of == PC_INVALID ? placed : flattened[next_flattened++];
+    const uint32_t shape = uint32_t(&placed - scene.shapes.data());
     uint32_t flags = (s.two_sided ? PC_FLAG_TWO_SIDED : 0) | (s.flip_normals ? PC_FLAG_FLIP_NORMAL : 0);
     if (s.is_sphere) {
       bool emits = s.emission.x > 0 || s.emission.y > 0 || s.emission.z > 0;
@@ -323,6 +326,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       glm::vec3 center = to_device(s, s.center, s.radius);
       float radius = float(s.radius);
       prims.push_back({f4(center, bits_to_float(index)), {radius, 0, 0, bits_to_float(PC_PRIM_SPHERE)}, {}});
+      out.prim_shapes.push_back(shape);
       boxes.push_back({center - glm::vec3(radius), center + glm::vec3(radius)});
       out.shading.push_back({s.material, PC_INVALID, flags, PC_PRIM_SPHERE});
       out.normals.insert(out.normals.end(), 3, pc_float4{0, 0, 0, 0});  // 3 per primitive, as for triangles
@@ -349,7 +353,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     std::vector<glm::vec3> positions;
     positions.reserve(s.mesh.positions.size());
     for (const glm::dvec3& p : s.mesh.positions) positions.push_back(to_device(s, p));
-    add_triangles(s, s.mesh, positions, s.triangle_materials);
+    add_triangles(s, shape, s.mesh, positions, s.triangle_materials);
   }
   const uint32_t world_prims = uint32_t(prims.size());
   // Each instanced mesh that a shape places: its triangles once, in the mesh's own coordinates.
@@ -361,7 +365,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     mesh_first[p->instance_of] = uint32_t(prims.size());
     mesh_used.push_back(p->instance_of);
     std::vector<glm::vec3> positions(m.mesh.positions.begin(), m.mesh.positions.end());
-    add_triangles(*p, m.mesh, positions, m.triangle_materials);
+    add_triangles(*p, PC_INVALID, m.mesh, positions, m.triangle_materials);
   }
   if (!(out.features & kFeatureSmoothNormals)) out.normals.clear();
   if (!(out.features & kFeatureVertexColors)) out.colors.clear();
@@ -385,6 +389,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   // instance BVH's leaves.
   std::vector<Instance> items;
   std::vector<Aabb> item_boxes;
+  std::vector<uint32_t> item_shapes;
   if (world_prims > 0) {
     Instance world_instance{};
     world_instance.root4 = world.root4;
@@ -393,12 +398,14 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     world_instance.flags = PC_INSTANCE_IDENTITY;
     items.push_back(world_instance);
     item_boxes.push_back(world.box);
+    item_shapes.push_back(PC_INVALID);
   }
   for (const ShapeDesc* p : placements) {
     const TreeRoots& tree = mesh_tree[p->instance_of];
     if (scene.instanced_meshes[p->instance_of].mesh.triangles.empty()) continue;  // nothing to place
     glm::dmat4 to_device = glm::translate(glm::dmat4(1.0), -out.origin) * p->transform;
     items.push_back(instance_of_transform(to_device, tree));
+    item_shapes.push_back(uint32_t(p - scene.shapes.data()));
     item_boxes.push_back(placed_box(tree.box, to_device));
     out.instance_count++;
     out.instanced_triangle_count += scene.instanced_meshes[p->instance_of].mesh.triangles.size();
@@ -406,7 +413,10 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   if (out.instance_count > 0) out.features |= kFeatureInstances;
   Bvh instance_bvh = build_bvh(item_boxes);
   out.instance_bvh = std::move(instance_bvh.nodes);
-  for (uint32_t slot : instance_bvh.prim_order) out.instances.push_back(items[slot]);
+  for (uint32_t slot : instance_bvh.prim_order) {
+    out.instances.push_back(items[slot]);
+    out.instance_shapes.push_back(item_shapes[slot]);
+  }
   // Every light: area lights first, in primitive order, then point and spot lights, then the lights at
   // infinity (directional, environment). The first two kinds go into the light BVH with their bounds.
   std::vector<LightBounds> bounds;

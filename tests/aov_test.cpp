@@ -3,6 +3,7 @@
 // render, and the command line's --aov and render.aovs with their EXR layers.
 #include <cmath>
 #include <cstring>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -100,7 +101,30 @@ TEST(Aov, PlaneAgainstClosedForm) {
       EXPECT_GE(pos[3 * p] / 2, a0 - 1e-6);
       EXPECT_LE(pos[3 * p] / 2, a1 + 1e-6);
       EXPECT_EQ(aov_of(f, PC_AOV_MATERIAL_ID).values[p], 1.0f);
+      EXPECT_EQ(aov_of(f, PC_AOV_SHAPE_ID).values[p], 1.0f);  // shapes[0]
     }
+}
+
+// Shape ids of instances are the placing shapes' (each placement its own), of the rest the shapes'
+// own; escaped rays give 0.
+TEST(Aov, ShapeIdsNameThePlacingShapes) {
+  const std::string path = std::string(PATHCL_TEST_SCENES) + "/instances.json";
+  SceneDescription description = load_scene(path);
+  DeviceScene scene = load_device_scene(path);
+  RenderOptions o = aov_options(1);
+  o.aovs = 1u << PC_AOV_SHAPE_ID;
+  Film f = render(test_device(), scene, o).film;
+  std::set<uint32_t> seen(f.aovs.at(0).values.begin(), f.aovs.at(0).values.end());
+  std::set<uint32_t> instances, others;
+  for (size_t i = 0; i < description.shapes.size(); ++i)
+    (description.shapes[i].instance_of != PC_INVALID ? instances : others).insert(uint32_t(i + 1));
+  ASSERT_GE(instances.size(), 2u);
+  size_t instances_seen = 0;
+  for (uint32_t id : seen) {
+    EXPECT_TRUE(id == 0 || instances.count(id) || others.count(id)) << id;
+    instances_seen += instances.count(id);
+  }
+  EXPECT_GE(instances_seen, 2u) << "two placements of one mesh must have two ids";
 }
 
 // Seen through a mirror, the albedo is the mirror's reflectance times the ceiling's (products of short
@@ -128,7 +152,7 @@ TEST(Aov, AlbedoThroughAMirrorIsTheProductOfReflectances) {
 // every technique (they follow the same camera rays), lane width and split into units.
 TEST(Aov, BeautyUnchangedAndAovsTheSameEverywhere) {
   DeviceScene scene = load_device_scene(std::string(PATHCL_TEST_SCENES) + "/tiny.json");
-  std::vector<uint32_t> reference_aovs;
+  std::vector<uint32_t> reference_aovs;  // every AOV of the path integrator
   for (const char* technique : {"path", "light", "bdpt"}) {
     SCOPED_TRACE(technique);
     RenderOptions plain = aov_options();
@@ -195,7 +219,7 @@ TEST(Aov, CommandLineAndSceneFileWriteExrLayers) {
   ASSERT_EQ(run_pathcl("render " + scene + " --spp 2 -q --aov albedo,normal,depth,material_id -o " + out, &err), 0) << err;
   Image image = read_exr(out);
   EXPECT_EQ(image.attributes["aovs"], "albedo,normal,depth,material_id");
-  EXPECT_EQ(image.attributes["material_id_names"], "wall");
+  EXPECT_EQ(image.attributes["material_id_names"], R"(["wall"])");
   const ImageLayer* albedo = find_layer(image, "albedo");
   ASSERT_NE(albedo, nullptr);
   EXPECT_EQ(albedo->channels, (std::vector<std::string>{"R", "G", "B"}));

@@ -27,8 +27,9 @@
 #define PC_AOV_DEPTH 2u       /* 1: distance along the camera ray to the first hit */
 #define PC_AOV_POSITION 3u    /* 3: world-space position of the first hit */
 #define PC_AOV_UV 4u          /* 2: texture coordinates of the first hit */
-#define PC_AOV_MATERIAL_ID 5u /* 1 (uint): the first hit's material index + 1, 0 where the ray escapes */
-#define PC_AOV_COUNT 6u
+#define PC_AOV_SHAPE_ID 5u    /* 1 (uint): the first hit's shape index + 1, 0 where the ray escapes */
+#define PC_AOV_MATERIAL_ID 6u /* 1 (uint): the first hit's material index + 1, 0 where the ray escapes */
+#define PC_AOV_COUNT 7u
 
 /* Where the AOV pass writes: the word offset of each AOV's plane in the film buffer (PC_INVALID where it
  * is not rendered), and the world position of the device coordinates' origin (the camera's: positions on
