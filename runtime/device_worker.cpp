@@ -40,35 +40,54 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   film_ = ClBuffer(cl, CL_MEM_READ_WRITE, film_size);
   stats_ = ClBuffer(cl, CL_MEM_READ_WRITE, sizeof(UnitStats));
 
-  // The technique's kernel: (PC_SCENE_PARAMS, [lt, emission_cdf,] film, stats, unit range).
-  Phase render;
-  render.name = "render";
-  render.kernel = std::make_unique<ClKernel>(program_->kernel(t.entry.c_str()));
-  cl_uint arg = scene_->bind(*render.kernel);
   if (t.emission) {
     const LightTransportSetup& lt = *settings.light;
     light_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof lt.header, &lt.header);
     emission_cdf_ = upload(cl, lt.emission_cdf);
-    render.kernel->arg(arg++, light_header_.mem);
-    render.kernel->arg(arg++, emission_cdf_.mem);
   }
-  render.kernel->arg(arg++, film_.mem);
-  render.kernel->arg(arg++, stats_.mem);
-  render.first_unit_arg = arg;
-  render.strided = t.units == UnitKind::pixels;
-  render.item_pixels = lanes_ > 1 ? lanes_ * PC_LANE_PIXELS : 1;  // kernels/integrator.cl, PC_ITEM_PIXELS
-  render.work_group = kernel_work_group(cl, render.kernel->k, settings.work_group, lanes_, "render");
-  cl_ulong private_bytes = 0;
-  CL_CHECK(clGetKernelWorkGroupInfo(render.kernel->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE,
-                                    sizeof private_bytes, &private_bytes, nullptr));
-  private_bytes_ = private_bytes;
-  phases_.push_back(std::move(render));
+  for (const TechniqueBuffer& b : t.buffers) {
+    const cl_uint zero = 0;
+    size_t bytes = std::max<size_t>(b.bytes(layout_.pixels), sizeof zero);
+    bytes = (bytes + sizeof zero - 1) / sizeof zero * sizeof zero;
+    ClBuffer& buffer = technique_buffers_.emplace_back(cl, CL_MEM_READ_WRITE, bytes);
+    CL_CHECK(clEnqueueFillBuffer(cl.queue, buffer.mem, &zero, sizeof zero, 0, bytes, 0, nullptr, nullptr));
+  }
+  // The technique's phases: (PC_SCENE_PARAMS, then their arguments by name; TechniquePhase).
+  for (const TechniquePhase& tp : t.phases) {
+    Phase p;
+    p.name = tp.name;
+    p.kernel = std::make_unique<ClKernel>(program_->kernel(tp.entry.c_str()));
+    cl_uint arg = scene_->bind(*p.kernel);
+    for (const std::string& name : tp.args) {
+      const ClBuffer* buffer = name == "film" ? &film_ : name == "stats" ? &stats_ : nullptr;
+      if (t.emission && name == "lt") buffer = &light_header_;
+      if (t.emission && name == "emission_cdf") buffer = &emission_cdf_;
+      for (size_t i = 0; i < t.buffers.size(); ++i)
+        if (t.buffers[i].name == name) buffer = &technique_buffers_[i];
+      if (name == "unit") {
+        p.first_unit_arg = arg;
+        arg += t.units == UnitKind::pixels ? 5 : 4;
+      } else if (buffer) {
+        p.kernel->arg(arg++, buffer->mem);
+      } else {
+        throw std::logic_error("technique " + t.name + ", phase " + tp.name + ": no argument called " + name);
+      }
+    }
+    p.strided = t.units == UnitKind::pixels;
+    p.item_pixels = lanes_ > 1 ? lanes_ * PC_LANE_PIXELS : 1;  // kernels/integrator.cl, PC_ITEM_PIXELS
+    p.work_group = kernel_work_group(cl, p.kernel->k, settings.work_group, lanes_, tp.name);
+    cl_ulong private_bytes = 0;
+    CL_CHECK(clGetKernelWorkGroupInfo(p.kernel->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
+                                      &private_bytes, nullptr));
+    private_bytes_ = std::max<uint64_t>(private_bytes_, private_bytes);
+    phases_.push_back(std::move(p));
+  }
 
   if (aovs) {  // kernels/aov.cl: (PC_SCENE_PARAMS, aov header, shape tables, film, unit range), a pixel an item
     Phase aov;
     aov.name = "aov";
     aov.kernel = std::make_unique<ClKernel>(aov_program_->kernel("aov_pass"));
-    arg = scene_->bind(*aov.kernel);
+    cl_uint arg = scene_->bind(*aov.kernel);
     aov_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof settings.aov, &settings.aov);
     prim_shapes_ = upload(cl, scene.prim_shapes);
     instance_shapes_ = upload(cl, scene.instance_shapes);

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,7 @@ class DeviceWorker : public UnitWorker {
   std::unique_ptr<SceneBuffers> scene_;
   std::vector<Phase> phases_;
   ClBuffer film_, stats_, light_header_, emission_cdf_, aov_header_, prim_shapes_, instance_shapes_;
+  std::deque<ClBuffer> technique_buffers_;  // Technique::buffers, in order (a deque: bound by address)
   uint32_t lanes_ = 1;
   uint64_t private_bytes_ = 0;
   DeviceFault fault_;

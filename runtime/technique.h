@@ -33,16 +33,35 @@ struct TechniqueBuild {
   bool splat_pairs = false;    // 32-bit word pairs even where 64-bit atomics exist (tests)
 };
 
+// One launch of a unit: a kernel of the technique's file and its arguments after PC_SCENE_PARAMS, by name:
+//   "film"          the film buffer (the technique's layers first, at word 0; then the AOVs)
+//   "stats"         UnitStats, cleared before the unit's first phase (SplatStats's words for splats)
+//   "lt", "emission_cdf"  the light-transport header and emission distribution (techniques with emission)
+//   a name of one of the technique's buffers (Technique::buffers)
+//   "unit"          the unit's range: uint begin, uint count, [uint stride (pixel units only),]
+//                   uint sample_begin, uint sample_count
+// Every phase runs over the unit's range, ceil(count / items) work items (items: 1, or the lane kernels'
+// pixels per work item). Phases run in order; each is timed and named in --stats.
+struct TechniquePhase {
+  std::string name;  // "render"
+  std::string entry;
+  std::vector<std::string> args;
+};
+
+// A device buffer of the technique's own, made at set-up, cleared to zero once, and kept for the whole
+// render: what one phase leaves for the next, or for the next unit (a photon map's grid).
+struct TechniqueBuffer {
+  std::string name;
+  std::function<size_t(uint32_t pixels)> bytes;
+};
+
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
   uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2); never reused
   std::string summary;  // one line for --help and the docs
-  // The unit kernel: kernel_file's entry, called as
-  //   entry(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-  //         __global film, __global stats, uint begin, uint count, uint stride, uint sample_begin,
-  //         uint sample_count)
-  // film: the film buffer, the technique's layers first (word 0); stats: UnitStats (SplatStats's words).
-  std::string kernel_file, entry;
+  std::string kernel_file;             // its program's main file under kernels/
+  std::vector<TechniquePhase> phases;  // what a unit runs
+  std::vector<TechniqueBuffer> buffers;
   std::vector<FilmLayer> layers;  // its own film layers
   UnitKind units = UnitKind::pixels;
   bool lanes = false;        // runs over 8 or 16 SIMD lanes on CPU devices (--lanes)

@@ -11,7 +11,7 @@ Technique bdpt_technique() {
   t.id = PC_INTEGRATOR_BDPT;
   t.summary = "bidirectional path tracing, every strategy weighted by MIS";
   t.kernel_file = "bdpt.cl";
-  t.entry = "bdpt_pass";
+  t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "unit"}}};
   t.max_depth_limit = kBdptMaxDepth;  // each light subpath is kept in private memory
   t.build_options = [](const TechniqueBuild& b) {
     return splat_build_options(b) + " -DPC_BDPT_MAX_VERTICES=" + std::to_string(std::max<uint32_t>(b.max_depth, 1));

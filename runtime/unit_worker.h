@@ -59,7 +59,7 @@ struct WorkerReport {
   double kernel_build_ms = 0;  // its programs' builds (or cache loads), summed
   bool kernel_from_cache = false;
   std::string kernel_options;  // the technique's program's
-  uint64_t kernel_private_bytes = 0;  // the technique's kernel's private memory per work item
+  uint64_t kernel_private_bytes = 0;  // the most private memory per work item of the technique's kernels
   uint32_t lanes = 1;
 };
 

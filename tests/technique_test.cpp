@@ -1,6 +1,7 @@
-// Techniques (runtime/technique.h): a technique registered from this file alone, with a kernel of its own,
-// renders through the whole engine (schedule, units, several film layers, AOVs beside it, checkpoints'
-// key); the registry refuses taken names and names its techniques in errors.
+// Techniques (runtime/technique.h): a technique registered from this file alone, with a kernel of its own
+// (two phases and a buffer kept between them), renders through the whole engine (schedule, units, several
+// film layers, AOVs beside it, checkpoints' key); the registry refuses taken names and names its
+// techniques in errors.
 #include <cstring>
 
 #include <gtest/gtest.h>
@@ -12,18 +13,26 @@
 
 namespace {
 
-// Each sample of pixel p adds 0.5 + 0.25 (p % 2) to the first word and 1 to the second: the pixel's mean is
+// Two phases and a buffer of the technique's own between them: `weigh` leaves 0.5 + 0.25 (p % 2) for pixel p
+// in `weights`; `add` adds it per sample to the film's first word and 1 to the second. The pixel's mean is
 // their quotient, whatever the split into units.
 const char* kConstantKernel = R"(
 #include "shared/types.h"
 #include "scene.cl"
-__kernel void constant_pass(PC_SCENE_PARAMS, __global float* film, __global UnitStats* stats, uint pixel_begin,
-                            uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
+__kernel void weigh(PC_SCENE_PARAMS, __global float* weights, uint pixel_begin, uint pixel_count, uint pixel_stride,
+                    uint sample_begin, uint sample_count) {
+  uint i = get_global_id(0);
+  if (i >= pixel_count) return;
+  uint p = pixel_begin + i * pixel_stride;
+  weights[p] = 0.5f + 0.25f * (float)(p % 2u);
+}
+__kernel void add(PC_SCENE_PARAMS, __global float* film, __global UnitStats* stats, __global const float* weights,
+                  uint pixel_begin, uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
   uint i = get_global_id(0);
   if (i >= pixel_count) return;
   uint p = pixel_begin + i * pixel_stride;
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
-    film[2u * p] += 0.5f + 0.25f * (float)(p % 2u);
+    film[2u * p] += weights[p];
     film[2u * p + 1u] += 1.0f;
   }
   if (i == 0u) atomic_add(&stats->rays_lo, 1u);
@@ -38,7 +47,8 @@ const Technique& constant_technique() {
     t.id = 1000;
     t.summary = "test only: a constant per pixel";
     t.kernel_file = "test_constant.cl";
-    t.entry = "constant_pass";
+    t.phases = {{"weigh", "weigh", {"weights", "unit"}}, {"add", "add", {"film", "stats", "weights", "unit"}}};
+    t.buffers = {{"weights", [](uint32_t pixels) { return pixels * sizeof(float); }}};
     t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
     t.develop = [](Film& f, const LightTransportHeader&, uint64_t*) {
       size_t pixels = size_t(f.width) * f.height;
@@ -81,9 +91,10 @@ TEST(Technique, ATestTechniqueRendersThroughTheEngine) {
     EXPECT_EQ(count, 6.0f) << p;
   }
   EXPECT_GT(r.rays, 0u);  // its counters come back
-  ASSERT_EQ(r.phases.size(), 2u);
-  EXPECT_EQ(r.phases[0].name, "render");
-  EXPECT_EQ(r.phases[1].name, "aov");
+  ASSERT_EQ(r.phases.size(), 3u);  // named and timed
+  EXPECT_EQ(r.phases[0].name, "weigh");
+  EXPECT_EQ(r.phases[1].name, "add");
+  EXPECT_EQ(r.phases[2].name, "aov");
   // The albedo beside it is the path integrator's.
   RenderOptions path = o;
   path.integrator = "path";
