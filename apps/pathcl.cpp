@@ -285,7 +285,11 @@ int run_render(const RenderArgs& a) {
   // The denoiser's guides (Open Image Denoise's albedo and normal), rendered beside the beauty.
   if (a.denoise) opt.aovs |= 1u << PC_AOV_ALBEDO | 1u << PC_AOV_NORMAL;
   opt.work_group = a.work_group;
-  opt.lanes = a.lanes;
+  // The scene's options of its own technique; the command line's --lanes overrides.
+  if (rs.integrator == opt.integrator)
+    apply_technique_options(technique_named(opt.integrator, "render.integrator"), rs.integrator_options,
+                            rs.integrator_place, opt);
+  if (a.lanes != 0) opt.lanes = a.lanes;
   opt.all_features = a.all_features;
   opt.power_of_two_horizons = !a.convergence.empty();
   opt.allow_mixed_devices = a.allow_mixed_devices;

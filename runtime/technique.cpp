@@ -2,6 +2,8 @@
 
 #include <mutex>
 
+#include <nlohmann/json.hpp>
+
 #include "runtime/errors.h"
 #include "runtime/renderer.h"
 
@@ -56,4 +58,22 @@ void check_technique_options(const Technique& t, const RenderOptions& options) {
                      " integrator takes max_depth up to " + std::to_string(t.max_depth_limit));
   if ((options.debug_bdpt_strategy_s >= 0 || options.debug_bdpt_strategy_t >= 0) && t.name != "bdpt")
     throw UsageError("a single BDPT strategy needs the bdpt integrator, not " + t.name);
+}
+
+void apply_technique_options(const Technique& t, const std::string& json_object, const std::string& place,
+                             RenderOptions& options) {
+  const nlohmann::json j = nlohmann::json::parse(json_object);
+  for (const auto& [key, value] : j.items()) {
+    const TechniqueOption* option = nullptr;
+    for (const TechniqueOption& o : t.options)
+      if (o.name == key) option = &o;
+    if (!option) {
+      std::string known;
+      for (const TechniqueOption& o : t.options) known += (known.empty() ? "" : ", ") + o.name;
+      throw UsageError(place + "." + key + ": the " + t.name + " integrator has no option \"" + key + "\" (" +
+                       (known.empty() ? "it has none" : "it has " + known) + ")");
+    }
+    if (!value.is_number() || !option->set(value.get<double>(), options))
+      throw UsageError(place + "." + key + ": expected " + option->expected + ", got " + value.dump());
+  }
 }

@@ -55,6 +55,14 @@ struct TechniqueBuffer {
   std::function<size_t(uint32_t pixels)> bytes;
 };
 
+// An option of the technique's own, set in the scene file as render.integrator's key (`{"type": "path",
+// "lanes": 8}`): a number the technique checks and stores into the render's options.
+struct TechniqueOption {
+  std::string name;
+  std::string expected;  // for messages: "1, 8 or 16"
+  std::function<bool(double value, RenderOptions& options)> set;  // false: not an expected value
+};
+
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
   uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2); never reused
@@ -68,6 +76,7 @@ struct Technique {
   bool emission = false;     // needs the emission distribution and splat scales (runtime/light_transport.h)
   uint32_t max_depth_limit = 1024;  // largest max_depth it takes (bdpt keeps subpaths in private memory)
   double cpu_unit_seconds = 0.25;   // unit duration to aim for on CPU devices
+  std::vector<TechniqueOption> options;
   // Extra -D flags for a device (besides the scene's features); may be empty.
   std::function<std::string(const TechniqueBuild&)> build_options;
   // The film's image: fills film.mean, variance, even_mean and odd_mean from the technique's layers at
@@ -89,6 +98,10 @@ std::string technique_list();
 
 // Refuses options that do not apply to the technique or exceed its limits (UsageError naming them).
 void check_technique_options(const Technique& t, const RenderOptions& options);
+// Sets the technique's own options from a JSON object's text (SceneDescription's integrator_options); an
+// unknown key or a bad value is a UsageError naming its place ("scene.json: render.integrator.lanes: ...").
+void apply_technique_options(const Technique& t, const std::string& json_object, const std::string& place,
+                             RenderOptions& options);
 
 // The registry's lines (runtime/technique_*.cpp).
 Technique path_technique();

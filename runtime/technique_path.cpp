@@ -1,6 +1,7 @@
 // Path tracing with next-event estimation and MIS (kernels/integrator.cl), over 1, 8 or 16 SIMD lanes.
 #include "runtime/device.h"
 #include "runtime/film.h"
+#include "runtime/renderer.h"
 #include "runtime/technique.h"
 
 Technique path_technique() {
@@ -13,6 +14,11 @@ Technique path_technique() {
   t.layers = {{"radiance", PC_LAYER_ORDERED, PC_RADIANCE_WORDS}};
   t.units = UnitKind::pixels;
   t.lanes = true;
+  t.options = {{"lanes", "1, 8 or 16 (paths per work item; the same pixels)", [](double v, RenderOptions& o) {
+                  if (v != 1 && v != 8 && v != 16) return false;
+                  o.lanes = uint32_t(v);
+                  return true;
+                }}};
   t.build_options = [](const TechniqueBuild& b) {
     return b.lanes > 1 ? " -DPC_LANES=" + std::to_string(b.lanes) : std::string();  // kernels/lanes.cl
   };

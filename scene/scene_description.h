@@ -86,6 +86,9 @@ struct RenderSettings {
   // The technique's name (runtime/technique.h checks it against the registry) and where the file gave
   // it, for messages ("scene.json: render.integrator"); empty place: the default.
   std::string integrator = "path", integrator_place;
+  // render.integrator as an object ({"type": NAME, OPTION: VALUE, ...}): its options as a JSON object's text,
+  // which the technique checks (runtime/technique.h); "{}" for none.
+  std::string integrator_options = "{}";
   // AOVs to render (runtime/film_layout.h checks the names), each with its place ("render.aovs[1]").
   std::vector<std::string> aovs, aov_places;
 };

@@ -1127,8 +1127,18 @@ SceneDescription load_scene(const std::string& path) {
       r.at("sampler").fail("unknown sampler \"" + r.at("sampler").string() +
                            "\" (expected independent, stratified, sobol or halton)");
     if (r.has("integrator")) {
-      scene.render.integrator = r.at("integrator").string();
-      scene.render.integrator_place = r.at("integrator").place();
+      Node in = r.at("integrator");
+      scene.render.integrator_place = in.place();
+      if (in.value.is_object()) {  // {"type": NAME, and the technique's own options}
+        if (!in.has("type")) in.fail("missing key \"type\" (the integrator's name)");
+        scene.render.integrator = in.at("type").string();
+        json options = in.value;
+        options.erase("type");
+        scene.render.integrator_options = options.dump();
+      } else {
+        if (!in.value.is_string()) in.fail("expected an integrator's name or {\"type\": NAME, ...options}");
+        scene.render.integrator = in.string();
+      }
     }
     if (r.has("aovs")) {
       for (const Node& a : r.at("aovs").array()) {

@@ -123,3 +123,35 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
   o.max_depth = 65;
   EXPECT_THROW(check_technique_options(technique_named("bdpt", "test"), o), UsageError);
 }
+
+// A technique's own options: render.integrator as {"type": NAME, OPTION: VALUE}; an option it does not
+// have, or a value it does not take, is an error naming the place.
+TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
+  RenderOptions o;
+  apply_technique_options(technique_named("path", "test"), R"({"lanes": 8})", "s.json: render.integrator", o);
+  EXPECT_EQ(o.lanes, 8u);
+  auto message = [&](const char* technique, const char* json) {
+    try {
+      apply_technique_options(technique_named(technique, "test"), json, "s.json: render.integrator", o);
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message("path", R"({"lanes": 3})"), "s.json: render.integrator.lanes: expected 1, 8 or 16 (paths per work item; the same pixels), got 3");
+  EXPECT_EQ(message("light", R"({"lanes": 8})"), "s.json: render.integrator.lanes: the light integrator has no option \"lanes\" (it has none)");
+  EXPECT_EQ(message("path", R"({"radius": 1})"), "s.json: render.integrator.radius: the path integrator has no option \"radius\" (it has lanes)");
+
+  // Through the scene file and the command line (whose --lanes overrides the scene's).
+  std::string scene = read_text_file(std::string(PATHCL_TEST_SCENES) + "/tiny.json"), err;
+  scene.replace(scene.find("../../scenes/"), 13, std::string(PATHCL_SOURCE_DIR) + "/scenes/");
+  scene.replace(scene.find(R"("render": {)"), 11, R"("render": {"integrator": {"type": "path", "lanes": 8}, )");
+  std::string path = write_temp_file("lanes.json", scene), dir = temp_dir();
+  ASSERT_EQ(run_pathcl("render " + path + " -q -o " + dir + "/l.exr --stats " + dir + "/l.json", &err), 0) << err;
+  EXPECT_NE(read_text_file(dir + "/l.json").find("\"lanes\": 8"), std::string::npos);
+  ASSERT_EQ(run_pathcl("render " + path + " -q --lanes 1 -o " + dir + "/l.exr --stats " + dir + "/l.json", &err), 0) << err;
+  EXPECT_NE(read_text_file(dir + "/l.json").find("\"lanes\": 1"), std::string::npos);
+  scene.replace(scene.find(R"("type": "path", "lanes": 8)"), 26, R"("type": "bdpt", "lanes": 8)");
+  EXPECT_EQ(run_pathcl("render " + write_temp_file("bad.json", scene) + " -q -o " + dir + "/b.exr", &err), 2);
+  EXPECT_NE(err.find("bad.json: render.integrator.lanes: the bdpt integrator has no option \"lanes\""), std::string::npos) << err;
+}
