@@ -52,11 +52,6 @@ typedef struct {
   LaneI prev_delta;  /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
 } PathLanes;
 
-/* The cut-out seed of ray ray_index (PC_RAY_* of sampler.cl) of each lane's path (kernels/cutout.cl). */
-inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, LaneU sample, LaneU ray_index) {
-  return hash4(pixel, sample, (LaneU)(h->seed ^ 0x3c6ef372u), ray_index);
-}
-
 /* New paths: the camera rays of sample `sample` of each lane's pixel, taken where m is set. */
 inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
   __constant const SceneHeader* h = sc->h;

@@ -26,7 +26,11 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   if (t.build_options) options += t.build_options(build);
   program_.emplace(build_kernel_program(cl, t.kernel_file, options));
   const bool aovs = layout_.layers.size() > t.layers.size();
-  if (aovs) aov_program_.emplace(build_kernel_program(cl, "aov.cl", settings.build_options));
+  // The AOV pass runs over the device's lanes whatever the technique does (the same bits at every width).
+  const uint32_t aov_lanes = settings.lanes != 0 ? settings.lanes : path_lanes(cl.info);
+  if (aovs)
+    aov_program_.emplace(build_kernel_program(
+        cl, "aov.cl", settings.build_options + (aov_lanes > 1 ? " -DPC_LANES=" + std::to_string(aov_lanes) : "")));
 
   // Everything the render keeps on the device must fit in its memory.
   size_t scene_size = scene_bytes(scene, bvh_width(cl.info));
@@ -83,7 +87,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     phases_.push_back(std::move(p));
   }
 
-  if (aovs) {  // kernels/aov.cl: (PC_SCENE_PARAMS, aov header, shape tables, film, unit range), a pixel an item
+  if (aovs) {  // kernels/aov.cl: (PC_SCENE_PARAMS, aov header, shape tables, film, unit range), a pixel a lane
     Phase aov;
     aov.name = "aov";
     aov.kernel = std::make_unique<ClKernel>(aov_program_->kernel("aov_pass"));
@@ -96,7 +100,8 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     aov.kernel->arg(arg++, instance_shapes_.mem);
     aov.kernel->arg(arg++, film_.mem);
     aov.first_unit_arg = arg;
-    aov.work_group = kernel_work_group(cl, aov.kernel->k, settings.work_group, 1, "aov");
+    aov.item_pixels = aov_lanes;
+    aov.work_group = kernel_work_group(cl, aov.kernel->k, settings.work_group, aov_lanes, "aov");
     phases_.push_back(std::move(aov));
   }
   clear_film();
