@@ -98,8 +98,15 @@ OidnApi load_oidn() {
   get(api.commitFilter, "oidnCommitFilter");
   get(api.executeFilter, "oidnExecuteFilter");
   get(api.releaseFilter, "oidnReleaseFilter");
-  if (!missing.empty()) {
-    api.error = std::string(how_to_get_it) + " (" + loaded + " is not: it lacks " + missing + ")";
+  if (!missing.empty()) api.error = std::string(how_to_get_it) + " (" + loaded + " is not: it lacks " + missing + ")";
+#if defined(__SANITIZE_ADDRESS__)
+  // OIDN's device starts oneTBB, which opens libtbbbind with RTLD_DEEPBIND: ASan's runtime refuses that by
+  // ending the process (google/sanitizers issue 611), so a sanitizer build finds the library and stops there.
+  else
+    api.error = std::string(how_to_get_it) + " (" + loaded + " loads, but this build of pathcl has AddressSanitizer, "
+                "whose runtime cannot run it: its oneTBB opens libtbbbind with RTLD_DEEPBIND; build/ denoises)";
+#endif
+  if (!api.error.empty()) {
     dlclose(api.library);
     api.library = nullptr;
   }
