@@ -34,6 +34,7 @@
 #include "material.cl"
 #include "lanes.cl"
 #include "trace_lanes.cl"
+#include "scatter.cl"
 
 /* Float words of the averaged AOVs in a pixel's record below (albedo 3, normal 3, depth 1, position 3,
  * uv 2); the ids after them. */
@@ -135,17 +136,15 @@ inline void aov_sample_lanes(const SceneData* sc, ShapeTables shapes, LaneU pixe
     live &= !found;
     if (depth >= h->max_depth || !pc_any_(live)) break;
     /* Delta surfaces: on along the direction the path integrator samples there. */
-    Lane3 t, b;
-    make_frame(s.ns, &t, &b);
+    FrameLanes frame;
+    frame_about(s.ns, &frame);
     Lane3 wo = lane3_neg(ray.d);
-    Lane3 wo_local = lane3(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
+    Lane3 wo_local = to_local(&frame, wo);
     LaneF ub0, ub1, ub2, ub3;
     sample4_lanes(h, pixel, sample, h->seed, (LaneU)(PC_DIM_BSDF(depth)), &ub0, &ub1, &ub2, &ub3);
     BsdfSampleLanes bs;
-    live &= bsdf_sample_lanes(&mat, wo_local, ub0, ub1, ub2, live, &bs);
-    Lane3 wi = lane3_add(lane3_add(lane3_scale(t, bs.wi.x), lane3_scale(b, bs.wi.y)), lane3_scale(s.ns, bs.wi.z));
-    LaneI transmitted = bs.wi.z * wo_local.z < 0.0f;
-    live &= (pc_dot(wi, s.ng) * pc_dot(wo, s.ng) > 0.0f) != transmitted;
+    Lane3 wi;
+    live = scatter_lanes(&mat, &frame, s.ng, wo_local, pc_dot(wo, s.ng), ub0, ub1, ub2, live, &bs, &wi);
     if (!pc_any_(live)) break;
     /* Refraction's radiance scaling (bs.eta2) left out: glass's transmittance alone. */
     throughput = lane3_mul(throughput, lane3_scale(bs.weight, bs.eta2));

@@ -20,15 +20,14 @@
  * sample, so that the squares estimate the pixel's variance; t = 1 splats land anywhere. */
 #define PC_BDPT 1
 #include "light_path.cl"
+#include "direct_light.cl"
 
 /* Cut-out ray numbers of the connections (camera vertex depth d, light vertex k), past the light path's. */
 #define PC_BDPT_CUTOUT_BASE 0x60000000u
 
-inline float3 bsdf_to_local(float3 w, float3 t, float3 b, float3 n) { return (float3)(pc_dot(w, t), pc_dot(w, b), pc_dot(w, n)); }
-
-/* The contribution of connecting camera vertex s (material m, frame t b s.ns, wo_local towards the
+/* The contribution of connecting camera vertex s (material m, shading frame f, wo_local towards the
  * previous camera vertex; dvcm, dvc its partial sums) to light vertex y, unweighted sums in *others. */
-inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, float3 t, float3 b, float3 wo_local,
+inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
                                float wo_ng, float dvcm, float dvc, const LightVertex* y, float* others) {
   float3 d = y->p.xyz - s->p;
   float dist2 = pc_dot(d, d);
@@ -38,13 +37,13 @@ inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m
   /* Reflection only at both ends (no non-delta material transmits), on each one's side of its surface. */
   float3 y_ng = y->ng.xyz, y_ns = y->ns.xyz, wl = y->wl.xyz;
   if (!(pc_dot(d, s->ng) * wo_ng > 0.0f) || !(pc_dot(-d, y_ng) * pc_dot(wl, y_ng) > 0.0f)) return (float3)(0.0f);
-  float3 wi_local = bsdf_to_local(d, t, b, s->ns);
+  float3 wi_local = to_local(f, d);
   float3 f_camera = bsdf_eval(m, wo_local, wi_local);
   Material my = sc->materials[y->material];
   my.color.xyz = y->color.xyz;
-  float3 yt, yb;
-  make_frame(y_ns, &yt, &yb);
-  float3 wc_local = bsdf_to_local(-d, yt, yb, y_ns), wl_local = bsdf_to_local(wl, yt, yb, y_ns);
+  FrameLanes yf;
+  frame_about(y_ns, &yf);
+  float3 wc_local = to_local(&yf, -d), wl_local = to_local(&yf, wl);
   float3 f_light = bsdf_eval(my, wc_local, wl_local);
   /* Each end's density of making the other (per area there), and the reverse densities. */
   float camera_dir_a = bsdf_pdf(m, wo_local, wi_local) * fabs(pc_dot(d, y_ng)) / dist2;
@@ -126,52 +125,45 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     if (depth >= h->max_depth) break;
 
     Material m = material_at(sc, sh.material, &s, &hit);
-    float3 t, b;
-    make_frame(s.ns, &t, &b);
-    float3 wo_local = bsdf_to_local(wo, t, b, s.ns);
+    MaterialLanes ml = material_lanes_of(m);
+    FrameLanes frame;
+    frame_about(s.ns, &frame);
+    float3 wo_local = to_local(&frame, wo);
     float4 u_light = sample4(h, key, PC_DIM_LIGHT(depth));
     float4 u_bsdf = sample4(h, key, PC_DIM_BSDF(depth));
 
     if (!bsdf_is_delta(m)) {
       /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy. */
-      LightSample ls;
-      if (h->light_count > 0 && sample_light(sc, s.p, u_light.xyz, &ls)) {
-        float3 wi_local = bsdf_to_local(ls.wi, t, b, s.ns);
-        float3 f = bsdf_eval(m, wo_local, wi_local);
-        if (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
-          Ray shadow;
-          float direct = ls.pdf, cos_at_light = 1.0f;
-          if (ls.infinite) {
-            shadow = spawn_ray(&s, ls.wi);
-          } else {
-            shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n);
-            float3 to = ls.p - s.p;
-            if (ls.delta) direct *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
-            else cos_at_light = fabs(pc_dot(ls.n, ls.wi));
-          }
-          float pos, dir;
-          light_emission_pdf(sc, lt, ls.light, ls.p, ls.n, -ls.wi, &pos, &dir);
-          float emit = emission_choice_pdf(emission_cdf, ls.light) * pos * dir;
-          float bsdf_dir = ls.delta ? 0.0f : bsdf_pdf(m, wo_local, wi_local);
-          float bsdf_rev = bsdf_pdf(m, wi_local, wo_local);
-          float others = bsdf_dir / direct +
-                         emit * fabs(pc_dot(ls.wi, s.ng)) / (direct * cos_at_light) * (dvcm + dvc * bsdf_rev);
-          float w = strategy_weight(lt, 1u, t_count, others);
+      DirectLanes direct;
+      if (direct_light_lanes(sc, &s, &frame, &ml, wo_local, wo_ng, u_light.x, u_light.y, u_light.z, 1, &direct)) {
+        const LightSampleLanes* ls = &direct.ls;
+        float direct_pdf = ls->pdf, cos_at_light = 1.0f;
+        if (!ls->infinite) {
+          float3 to = ls->p - s.p;
+          if (ls->delta) direct_pdf *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
+          else cos_at_light = fabs(pc_dot(ls->n, ls->wi));
+        }
+        float pos, dir;
+        light_emission_pdf(sc, lt, ls->light, ls->p, ls->n, -ls->wi, &pos, &dir);
+        float emit = emission_choice_pdf(emission_cdf, ls->light) * pos * dir;
+        float bsdf_dir = ls->delta ? 0.0f : bsdf_pdf(m, wo_local, direct.wi_local);
+        float bsdf_rev = bsdf_pdf(m, direct.wi_local, wo_local);
+        float others = bsdf_dir / direct_pdf +
+                       emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) * (dvcm + dvc * bsdf_rev);
+        float w = strategy_weight(lt, 1u, t_count, others);
 #ifdef PC_HAS_CUTOUTS
-          shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
+        direct.shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
 #endif
-          Hit blocker;
-          if (w != 0.0f) {
-            ++*rays;
-            if (!trace_scene(sc, sc, &shadow, true, &blocker))
-              radiance += throughput * f * ls.Le * (fabs(wi_local.z) * w / ls.pdf);
-          }
+        Hit blocker;
+        if (w != 0.0f) {
+          ++*rays;
+          if (!trace_scene(sc, sc, &direct.shadow, true, &blocker)) radiance += direct_contribution_lanes(throughput, &direct, w);
         }
       }
       /* s >= 2: a connection to each light vertex the depth limit allows. */
       for (uint k = 0; k < lv_count && lv[k].length + depth + 1u <= h->max_depth; ++k) {
         float others;
-        float3 c = connect_vertices(sc, &s, m, t, b, wo_local, wo_ng, dvcm, dvc, lv + k, &others);
+        float3 c = connect_vertices(sc, &s, m, &frame, wo_local, wo_ng, dvcm, dvc, lv + k, &others);
         if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
         float w = strategy_weight(lt, lv[k].length + 1u, t_count, others);
         if (w == 0.0f) continue;
@@ -186,27 +178,15 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
       }
     }
 
-    BsdfSample bs;
-    if (!bsdf_sample(m, wo_local, u_bsdf.xyz, &bs)) break;
-    float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
-    bool transmitted = bs.wi.z * wo_local.z < 0.0f;
-    if ((pc_dot(wi, s.ng) * wo_ng > 0.0f) == transmitted) break;
-    float cos_out = fabs(pc_dot(wi, s.ng));
-    if (bs.delta) {
-      dvc *= cos_out;
-      dvcm = 0.0f;
-    } else {
-      dvc = cos_out / bs.pdf * (dvc * bsdf_pdf(m, bs.wi, wo_local) + dvcm);
-      dvcm = 1.0f / bs.pdf;
-    }
+    BsdfSampleLanes bs;
+    float3 wi;
+    if (!scatter_lanes(&ml, &frame, s.ng, wo_local, wo_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
+    vcm_scatter_lanes(&ml, &bs, wo_local, wi, s.ng, 1, &dvcm, &dvc);
     throughput *= bs.weight;
     eta_scale *= bs.eta2;
     prev_p = s.p;
-    if (depth + 1 > h->rr_depth) { /* the path integrator's roulette */
-      float q = fmin(1.0f, max_component(throughput) * eta_scale);
-      if (u_light.w >= q) break;
-      throughput /= q;
-    }
+    /* the path integrator's roulette */
+    if (!roulette_lanes(max_component(throughput) * eta_scale, u_light.w, depth + 1u > h->rr_depth, 1, &throughput)) break;
     ray = spawn_ray(&s, wi);
 #ifdef PC_HAS_CUTOUTS
     ray.cutout_seed = cutout_seed(key, PC_RAY_NEXT(depth));

@@ -21,6 +21,7 @@
 #include "counters.cl"
 #include "lanes.cl"
 #include "trace_lanes.cl"
+#include "direct_light.cl"
 
 /* Light along the rays of the lanes in m that escaped: the environment, weighted against light sampling
  * by MIS. */
@@ -133,74 +134,43 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
   if (!pc_any_(live)) return live;
 
   MaterialLanes mat = material_at_lanes(sc, sh.material, &s, &sh, hit, live);
-  /* Local shading frame about the front-side shading normal. */
-  Lane3 t, b;
-  make_frame(s.ns, &t, &b);
-  Lane3 wo_local = lane3(pc_dot(wo, t), pc_dot(wo, b), pc_dot(wo, s.ns));
+  FrameLanes frame;
+  frame_about(s.ns, &frame);
+  Lane3 wo_local = to_local(&frame, wo);
   LaneF wo_ng = pc_dot(wo, s.ng);
   LaneF ul0, ul1, ul2, ul3, ub0, ub1, ub2, ub3;
   sample4_lanes(h, pixel, sample, h->seed, PC_DIM_LIGHT(depth), &ul0, &ul1, &ul2, &ul3);
   sample4_lanes(h, pixel, sample, h->seed, PC_DIM_BSDF(depth), &ub0, &ub1, &ub2, &ub3);
 
   /* Next-event estimation, weighted against BSDF sampling by the power heuristic. */
-  LaneI nee = live & !bsdf_is_delta_lanes(mat.type);
-  if (h->light_count > 0u && pc_any_(nee)) {
-    LightSampleLanes ls;
-    nee &= sample_light_lanes(sc, s.p, ul0, ul1, ul2, nee, &ls);
-    if (pc_any_(nee)) {
-      Lane3 wi_local = lane3(pc_dot(ls.wi, t), pc_dot(ls.wi, b), pc_dot(ls.wi, s.ns));
-      Lane3 f = bsdf_eval_lanes(&mat, wo_local, wi_local, nee);
-      /* Only reflection here (no transmissive material takes light samples): the light must be on
-         wo's side of the geometric surface, so shading normals cannot leak light through it. */
-      nee &= (pc_dot(ls.wi, s.ng) * wo_ng > 0.0f) & lane3_any_positive(f);
-      if (pc_any_(nee)) {
-        RayLanes to_light;
-        spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, ls.wi, &to_light);
-        LaneI finite = nee & !ls.infinite;
-        if (pc_any_(finite)) {
-          RayLanes to_point;
-          spawn_ray_to_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, ls.p, ls.p_err, ls.n, &to_point);
-          to_light.o = lane3_select(to_light.o, to_point.o, finite);
-          to_light.d = lane3_select(to_light.d, to_point.d, finite);
-          to_light.tmax = select(to_light.tmax, to_point.tmax, finite);
-        }
-        to_light.cutout_seed = (LaneU)(0u);
+  DirectLanes direct;
+  LaneI nee = direct_light_lanes(sc, &s, &frame, &mat, wo_local, wo_ng, ul0, ul1, ul2, live & !bsdf_is_delta_lanes(mat.type),
+                                 &direct);
+  if (pc_any_(nee)) {
 #ifdef PC_HAS_CUTOUTS
-        to_light.cutout_seed = cutout_seed_lanes(h, pixel, sample, PC_RAY_SHADOW(depth));
+    direct.shadow.cutout_seed = cutout_seed_lanes(h, pixel, sample, PC_RAY_SHADOW(depth));
 #endif
-        *shadow = to_light;
-        LaneF w = select(power_heuristic(ls.pdf, bsdf_pdf_lanes(&mat, wo_local, wi_local, nee)), (LaneF)(1.0f), ls.delta);
-        Lane3 contribution = lane3_scale(lane3_mul(lane3_mul(st->throughput, f), ls.Le), fabs(wi_local.z) * w / ls.pdf);
-        st->nee = lane3_select(st->nee, contribution, nee);
-        *has_shadow = nee;
-      }
-    }
+    *shadow = direct.shadow;
+    LaneF w = select(power_heuristic(direct.ls.pdf, bsdf_pdf_lanes(&mat, wo_local, direct.wi_local, nee)), (LaneF)(1.0f),
+                     direct.ls.delta);
+    st->nee = lane3_select(st->nee, direct_contribution_lanes(st->throughput, &direct, w), nee);
+    *has_shadow = nee;
   }
 
   BsdfSampleLanes bs;
-  live &= bsdf_sample_lanes(&mat, wo_local, ub0, ub1, ub2, live, &bs);
-  Lane3 wi = lane3_add(lane3_add(lane3_scale(t, bs.wi.x), lane3_scale(b, bs.wi.y)), lane3_scale(s.ns, bs.wi.z));
-  /* Reflection must stay on wo's side of the geometric surface and transmission must cross it:
-     with shading normals the two can disagree, and then the path stops rather than leak light. */
-  LaneI transmitted = bs.wi.z * wo_local.z < 0.0f;
-  live &= (pc_dot(wi, s.ng) * wo_ng > 0.0f) != transmitted;
+  Lane3 wi;
+  live = scatter_lanes(&mat, &frame, s.ng, wo_local, wo_ng, ub0, ub1, ub2, live, &bs, &wi);
   if (!pc_any_(live)) return live;
   st->throughput = lane3_select(st->throughput, lane3_mul(st->throughput, bs.weight), live);
   st->eta_scale = select(st->eta_scale, st->eta_scale * bs.eta2, live);
   st->prev_bsdf_pdf = select(st->prev_bsdf_pdf, bs.pdf, live);
   st->prev_delta = select(st->prev_delta, bs.delta, live);
   st->prev_p = lane3_select(st->prev_p, s.p, live);
-  /* Russian roulette: survive with probability min(1, max throughput), reweighted to stay unbiased.
-   * The throughput is taken without the radiance scaling of refraction (pbrt-v4's etaScale): inside
-   * glass it is (n_i / n_t)^2 = 0.44 times lower only until the path leaves again, and killing paths
+  /* Russian roulette on the throughput without the radiance scaling of refraction (pbrt-v4's etaScale):
+   * inside glass it is (n_i / n_t)^2 = 0.44 times lower only until the path leaves again, and killing paths
    * for it there made glass scenes noisier (peer benchmark, glass-metal). */
-  LaneI roulette = live & (depth + 1u > h->rr_depth);
-  if (pc_any_(roulette)) {
-    LaneF q = fmin(1.0f, lane3_max_component(st->throughput) * st->eta_scale);
-    live &= !(roulette & (ul3 >= q));
-    roulette &= live;
-    st->throughput = lane3_select(st->throughput, lane3_div(st->throughput, q), roulette);
-  }
+  live = roulette_lanes(lane3_max_component(st->throughput) * st->eta_scale, ul3, depth + 1u > h->rr_depth, live,
+                        &st->throughput);
   RayLanes next;
   spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &next);
   next.cutout_seed = (LaneU)(0u);

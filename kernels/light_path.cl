@@ -37,6 +37,7 @@
 #include "emission.cl"
 #include "camera_importance.cl"
 #include "splat_film.cl"
+#include "scatter.cl"
 
 /* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
  * every group a camera path of the same key takes (PC_DIM_* of sampler.cl: BDPT's camera subpath, the path
@@ -206,10 +207,10 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
     Surface s = scene_surface(sc, &ray, &hit);
     PrimShading sh = sc->shading[s.prim];
     Material m = material_at(sc, sh.material, &s, &hit);
-    float3 t, b;
-    make_frame(s.ns, &t, &b);
+    FrameLanes frame;
+    frame_about(s.ns, &frame);
     float3 w_light = -ray.d; /* back along the light path */
-    float3 wl_local = (float3)(pc_dot(w_light, t), pc_dot(w_light, b), pc_dot(w_light, s.ns));
+    float3 wl_local = to_local(&frame, w_light);
     float wl_ng = pc_dot(w_light, s.ng);
     float4 u_connect = sample4(h, key, PC_LT_CONNECT(h, v));
 #ifdef PC_BDPT
@@ -231,7 +232,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
     /* Connection to the camera. */
     CameraWiSample cs;
     if (!bsdf_is_delta(m) && camera_sample_wi(h, s.p, u_connect.xy, &cs)) {
-      float3 wc_local = (float3)(pc_dot(cs.wi, t), pc_dot(cs.wi, b), pc_dot(cs.wi, s.ns));
+      float3 wc_local = to_local(&frame, cs.wi);
       float3 f = bsdf_eval(m, wc_local, wl_local);
       /* Reflection only (no non-delta material transmits): the camera on the light's side of the surface. */
       if (pc_dot(cs.wi, s.ng) * wl_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
@@ -279,31 +280,17 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
 
     /* The next vertex. */
     float4 u_bsdf = sample4(h, key, PC_LT_BSDF(h, v));
-    BsdfSample bs;
-    if (!bsdf_sample(m, wl_local, u_bsdf.xyz, &bs)) break;
-    float3 wi = bs.wi.x * t + bs.wi.y * b + bs.wi.z * s.ns;
-    bool transmitted = bs.wi.z * wl_local.z < 0.0f;
-    if ((pc_dot(wi, s.ng) * wl_ng > 0.0f) == transmitted) break;
+    MaterialLanes ml = material_lanes_of(m);
+    BsdfSampleLanes bs;
+    float3 wi;
+    if (!scatter_lanes(&ml, &frame, s.ng, wl_local, wl_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
 #ifdef PC_BDPT
-    /* Scattering (Georgiev's eq. 34-35): a delta lobe keeps dVC (its reverse density equals the forward
-     * one) and leaves no strategy connecting here (dVCM = 0). */
-    float cos_out = fabs(pc_dot(wi, s.ng));
-    if (bs.delta) {
-      dvc *= cos_out;
-      dvcm = 0.0f;
-    } else {
-      dvc = cos_out / bs.pdf * (dvc * bsdf_pdf(m, bs.wi, wl_local) + dvcm);
-      dvcm = 1.0f / bs.pdf;
-    }
+    vcm_scatter_lanes(&ml, &bs, wl_local, wi, s.ng, 1, &dvcm, &dvc);
 #endif
     /* Importance is not scaled by refraction: undo the radiance scaling (bs.eta2) the sample applied. */
     beta *= bs.weight * (bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng));
-    if (v + 1u > h->rr_depth) {
-      /* Russian roulette on the throughput relative to the emitted one (light paths start at power scale). */
-      float q = fmin(1.0f, max_component(beta) / beta0);
-      if (u_connect.z >= q) break;
-      beta /= q;
-    }
+    /* Russian roulette on the throughput relative to the emitted one (light paths start at power scale). */
+    if (!roulette_lanes(max_component(beta) / beta0, u_connect.z, v + 1u > h->rr_depth, 1, &beta)) break;
     ray = spawn_ray(&s, wi);
 #ifdef PC_HAS_CUTOUTS
     ray.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE + 2u * v + 2u);

@@ -44,7 +44,8 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   film_ = ClBuffer(cl, CL_MEM_READ_WRITE, film_size);
   stats_ = ClBuffer(cl, CL_MEM_READ_WRITE, sizeof(UnitStats));
 
-  if (t.emission) {
+  const bool emission = uses_emission(t);
+  if (emission) {
     const LightTransportSetup& lt = *settings.light;
     light_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof lt.header, &lt.header);
     emission_cdf_ = upload(cl, lt.emission_cdf);
@@ -64,8 +65,8 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     cl_uint arg = scene_->bind(*p.kernel);
     for (const std::string& name : tp.args) {
       const ClBuffer* buffer = name == "film" ? &film_ : name == "stats" ? &stats_ : nullptr;
-      if (t.emission && name == "lt") buffer = &light_header_;
-      if (t.emission && name == "emission_cdf") buffer = &emission_cdf_;
+      if (name == "lt") buffer = &light_header_;
+      if (name == "emission_cdf") buffer = &emission_cdf_;
       for (size_t i = 0; i < t.buffers.size(); ++i)
         if (t.buffers[i].name == name) buffer = &technique_buffers_[i];
       if (name == "unit") {
@@ -79,6 +80,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     }
     p.strided = t.units == UnitKind::pixels;
     p.item_pixels = lanes_ > 1 ? lanes_ * PC_LANE_PIXELS : 1;  // kernels/integrator.cl, PC_ITEM_PIXELS
+    p.items = tp.items;
     p.work_group = kernel_work_group(cl, p.kernel->k, settings.work_group, lanes_, tp.name);
     cl_ulong private_bytes = 0;
     CL_CHECK(clGetKernelWorkGroupInfo(p.kernel->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
@@ -126,22 +128,18 @@ void DeviceWorker::clear_film() {
 
 void DeviceWorker::clear_commutative_layers() {
   const cl_uint zero = 0;
-  for (size_t i = 0; i < layout_.layers.size(); ++i)
-    if (layout_.layers[i].kind == PC_LAYER_COMMUTATIVE)
-      CL_CHECK(clEnqueueFillBuffer(cl_->queue, film_.mem, &zero, sizeof zero, layout_.offset(i) * sizeof zero,
-                                   size_t(layout_.layers[i].words) * layout_.pixels * sizeof zero, 0, nullptr, nullptr));
+  for_each_unit_part(layout_, PC_LAYER_COMMUTATIVE, 0, 0, [&](const FilmLayout::UnitPart& p) {
+    CL_CHECK(clEnqueueFillBuffer(cl_->queue, film_.mem, &zero, sizeof zero, p.film_offset * sizeof zero,
+                                 p.words * sizeof zero, 0, nullptr, nullptr));
+  });
 }
 
 void DeviceWorker::read_commutative_layers(std::vector<uint32_t>& out) {
   out.resize(layout_.words_per_pixel(PC_LAYER_COMMUTATIVE) * layout_.pixels);
-  size_t at = 0;
-  for (size_t i = 0; i < layout_.layers.size(); ++i) {
-    if (layout_.layers[i].kind != PC_LAYER_COMMUTATIVE) continue;
-    size_t words = size_t(layout_.layers[i].words) * layout_.pixels;
-    CL_CHECK(clEnqueueReadBuffer(cl_->queue, film_.mem, CL_FALSE, layout_.offset(i) * sizeof(uint32_t),
-                                 words * sizeof(uint32_t), out.data() + at, 0, nullptr, nullptr));
-    at += words;
-  }
+  for_each_unit_part(layout_, PC_LAYER_COMMUTATIVE, 0, 0, [&](const FilmLayout::UnitPart& p) {
+    CL_CHECK(clEnqueueReadBuffer(cl_->queue, film_.mem, CL_FALSE, p.film_offset * sizeof(uint32_t),
+                                 p.words * sizeof(uint32_t), out.data() + p.payload_offset, 0, nullptr, nullptr));
+  });
 }
 
 void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
@@ -156,7 +154,8 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
     if (p.strided) k.arg(a++, cl_uint(pixel_stride));
     k.arg(a++, cl_uint(sample_begin));
     k.arg(a++, cl_uint(sample_count));
-    double ms = run_kernel(*cl_, k.k, (pixel_count + p.item_pixels - 1) / p.item_pixels, p.work_group);
+    const size_t items = p.items ? p.items(pixel_count) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
+    double ms = items > 0 ? run_kernel(*cl_, k.k, items, p.work_group) : 0.0;
     if (out) {
       out->kernel_ms += ms;
       out->phases.push_back({p.name, ms});
@@ -201,24 +200,16 @@ UnitOutput DeviceWorker::run(const WorkUnit& u, const std::vector<uint32_t>* inp
   clear_commutative_layers();
   // Ordered layers: the unit's pixels, uploaded where the device's copy is not at the unit's first sample,
   // and read back after the launches, layer after layer.
-  auto for_each_ordered_range = [&](auto&& transfer) {
-    size_t at = 0;
-    for (size_t i = 0; i < layout_.layers.size(); ++i) {
-      if (layout_.layers[i].kind != PC_LAYER_ORDERED) continue;
-      const uint32_t words = layout_.layers[i].words;
-      const size_t count = size_t(words) * u.pixel_count;
-      transfer((layout_.offset(i) + size_t(words) * u.pixel_begin) * sizeof(uint32_t), count * sizeof(uint32_t), at);
-      at += count;
-    }
-  };
   if (input)
-    for_each_ordered_range([&](size_t offset, size_t bytes, size_t at) {
-      CL_CHECK(clEnqueueWriteBuffer(cl_->queue, film_.mem, CL_FALSE, offset, bytes, input->data() + at, 0, nullptr, nullptr));
+    for_each_unit_part(layout_, PC_LAYER_ORDERED, u.pixel_begin, u.pixel_count, [&](const FilmLayout::UnitPart& p) {
+      CL_CHECK(clEnqueueWriteBuffer(cl_->queue, film_.mem, CL_FALSE, p.film_offset * sizeof(uint32_t),
+                                    p.words * sizeof(uint32_t), input->data() + p.payload_offset, 0, nullptr, nullptr));
     });
   launch(u.pixel_begin, u.pixel_count, 1, u.sample_begin, u.sample_count, &out);
   out.ordered.resize(layout_.words_per_pixel(PC_LAYER_ORDERED) * u.pixel_count);
-  for_each_ordered_range([&](size_t offset, size_t bytes, size_t at) {
-    CL_CHECK(clEnqueueReadBuffer(cl_->queue, film_.mem, CL_FALSE, offset, bytes, out.ordered.data() + at, 0, nullptr, nullptr));
+  for_each_unit_part(layout_, PC_LAYER_ORDERED, u.pixel_begin, u.pixel_count, [&](const FilmLayout::UnitPart& p) {
+    CL_CHECK(clEnqueueReadBuffer(cl_->queue, film_.mem, CL_FALSE, p.film_offset * sizeof(uint32_t),
+                                 p.words * sizeof(uint32_t), out.ordered.data() + p.payload_offset, 0, nullptr, nullptr));
   });
   read_commutative_layers(out.commutative);
   UnitStats s{};

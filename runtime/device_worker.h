@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,7 @@ class DeviceWorker : public UnitWorker {
     cl_uint first_unit_arg = 0;
     size_t work_group = 0;
     uint32_t item_pixels = 1;
+    std::function<size_t(uint32_t count)> items;  // TechniquePhase::items
     bool strided = true;  // takes pixel_stride (pixel units and the AOV pass; light paths are not strided)
   };
   // Runs every phase over pixels (or paths) pixel_begin + i * stride, i < count, samples [s0, s0 + sn).

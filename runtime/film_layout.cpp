@@ -25,6 +25,16 @@ size_t FilmLayout::words_per_pixel(uint32_t kind) const {
   return words;
 }
 
+FilmLayout::UnitPart FilmLayout::unit_part(size_t i, uint32_t pixel_begin, uint32_t pixel_count) const {
+  const uint32_t kind = layers[i].kind;
+  const size_t unit_pixels = kind == PC_LAYER_ORDERED ? pixel_count : pixels;
+  size_t payload = 0;
+  for (size_t k = 0; k < i; ++k)
+    if (layers[k].kind == kind) payload += size_t(layers[k].words) * unit_pixels;
+  const size_t first = kind == PC_LAYER_ORDERED ? size_t(layers[i].words) * pixel_begin : 0;
+  return {offset(i) + first, payload, size_t(layers[i].words) * unit_pixels};
+}
+
 int FilmLayout::find(const std::string& name) const {
   for (size_t i = 0; i < layers.size(); ++i)
     if (layers[i].name == name) return int(i);

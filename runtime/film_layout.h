@@ -26,7 +26,23 @@ struct FilmLayout {
   int find(const std::string& name) const;      // the layer's index, -1 if absent
   bool operator==(const FilmLayout& o) const;
   std::string names() const;  // "radiance,albedo,normal": what checkpoints record and messages show
+
+  // Layer i's part of a work unit of pixel_count pixels from pixel_begin: `words` of the film from
+  // film_offset, carried in the unit's payload (UnitOutput) from payload_offset. An ordered layer's part is
+  // its words of the unit's pixels, in UnitOutput::ordered after the earlier ordered layers' parts; a
+  // commutative layer's is its whole plane, in UnitOutput::commutative after the earlier commutative planes.
+  struct UnitPart {
+    size_t film_offset, payload_offset, words;
+  };
+  UnitPart unit_part(size_t i, uint32_t pixel_begin, uint32_t pixel_count) const;
 };
+
+// f(part) for the unit part of each layer of `kind` (PC_LAYER_ORDERED or PC_LAYER_COMMUTATIVE), in order.
+template <class F>
+void for_each_unit_part(const FilmLayout& layout, uint32_t kind, uint32_t pixel_begin, uint32_t pixel_count, F&& f) {
+  for (size_t i = 0; i < layout.layers.size(); ++i)
+    if (layout.layers[i].kind == kind) f(layout.unit_part(i, pixel_begin, pixel_count));
+}
 
 // AOVs (`--aov`, render.aovs), by PC_AOV_* index.
 struct AovInfo {

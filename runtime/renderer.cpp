@@ -194,7 +194,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   // Techniques with emission: the light paths of a sample are numbered like the pixels (one per pixel),
   // and the schedule's tiles are runs of path indices.
   LightTransportSetup light_setup;
-  if (technique.emission) light_setup = light_transport_setup(scene, options.spp);
+  if (uses_emission(technique)) light_setup = light_transport_setup(scene, options.spp);
   light_setup.header.only_strategy = options.debug_bdpt_strategy_s >= 0
                                          ? uint32_t(options.debug_bdpt_strategy_s) | uint32_t(options.debug_bdpt_strategy_t) << 16
                                          : PC_INVALID;
@@ -267,23 +267,6 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   // The host's film only now: a film too large for every device has been refused without the seconds
   // that allocating and clearing gigabytes on the host take.
   Film film = options.resume ? *options.resume : make_film(header.width, header.height, technique.name, layout);
-  // Where each layer's words lie in a unit's payload (UnitOutput::ordered, ::commutative).
-  struct LayerSpan {
-    size_t film_offset, payload_offset;  // payload_offset in words per pixel (ordered) or words (commutative)
-    uint32_t words, kind;
-  };
-  std::vector<LayerSpan> spans;
-  size_t ordered_words = 0, commutative_at = 0;  // per pixel, in all
-  for (size_t i = 0; i < layout.layers.size(); ++i) {
-    const FilmLayer& l = layout.layers[i];
-    if (l.kind == PC_LAYER_ORDERED) {
-      spans.push_back({layout.offset(i), ordered_words, l.words, l.kind});
-      ordered_words += l.words;
-    } else {
-      spans.push_back({layout.offset(i), commutative_at, l.words, l.kind});
-      commutative_at += size_t(l.words) * pixels;
-    }
-  }
   result.kernel_from_cache = true;
   for (size_t d = 0; d < n; ++d) {
     if (!ready[d]) continue;
@@ -347,7 +330,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     f.spp = schedule.lowest_level();
     uint64_t top_bit = 0;  // sums at or above 2^63
     technique.develop(f, light_setup.header, &top_bit);
-    if (technique.emission) result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
+    if (uses_emission(technique)) result.splat_overflows = std::max(result.splat_overflows, top_bit + sum_overflows);
     develop_aovs(f);
     return f;
   };
@@ -359,15 +342,16 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   // A committed unit into the film: its ordered layers' pixels copied over the film's, its commutative
   // layers added as 64-bit integers (exact, and the same total in any order of units and devices).
   auto commit = [&](const WorkUnit& unit, const UnitOutput& out) {
-    for (const LayerSpan& l : spans) {
-      if (l.kind == PC_LAYER_ORDERED) {
-        const uint32_t* from = out.ordered.data() + l.payload_offset * unit.pixel_count;
-        std::copy(from, from + size_t(l.words) * unit.pixel_count, film.words.begin() + l.film_offset + size_t(l.words) * unit.pixel_begin);
+    for (size_t layer = 0; layer < layout.layers.size(); ++layer) {
+      const FilmLayout::UnitPart part = layout.unit_part(layer, unit.pixel_begin, unit.pixel_count);
+      if (layout.layers[layer].kind == PC_LAYER_ORDERED) {
+        const uint32_t* from = out.ordered.data() + part.payload_offset;
+        std::copy(from, from + part.words, film.words.begin() + part.film_offset);
         continue;
       }
-      for (size_t i = 0; i < size_t(l.words) * pixels; i += 2) {
-        uint32_t* to = film.words.data() + l.film_offset + i;
-        const uint32_t* add = out.commutative.data() + l.payload_offset + i;
+      for (size_t i = 0; i < part.words; i += 2) {
+        uint32_t* to = film.words.data() + part.film_offset + i;
+        const uint32_t* add = out.commutative.data() + part.payload_offset + i;
         uint64_t a = uint64_t(to[1]) << 32 | to[0], b = uint64_t(add[1]) << 32 | add[0], sum = a + b;
         sum_overflows += sum < a;
         to[0] = uint32_t(sum);
@@ -430,11 +414,10 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
       // The ordered layers' words of the unit's pixels (commutative layers start from cleared sums).
       std::vector<uint32_t> input;
       if (u->upload)
-        for (const LayerSpan& l : spans)
-          if (l.kind == PC_LAYER_ORDERED) {
-            auto from = film.words.begin() + l.film_offset + size_t(l.words) * u->pixel_begin;
-            input.insert(input.end(), from, from + size_t(l.words) * u->pixel_count);
-          }
+        for_each_unit_part(layout, PC_LAYER_ORDERED, u->pixel_begin, u->pixel_count, [&](const FilmLayout::UnitPart& p) {
+          auto from = film.words.begin() + p.film_offset;
+          input.insert(input.end(), from, from + p.words);
+        });
       busy[d] = true;
       threads[d]->submit(*u, std::move(input));
     }

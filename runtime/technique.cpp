@@ -42,6 +42,13 @@ const Technique& technique_named(const std::string& name, const std::string& whe
   throw UsageError(where + ": unknown integrator \"" + name + "\" (expected " + technique_list() + ")");
 }
 
+bool uses_emission(const Technique& t) {
+  for (const TechniquePhase& p : t.phases)
+    for (const std::string& arg : p.args)
+      if (arg == "lt" || arg == "emission_cdf") return true;
+  return false;
+}
+
 const Technique* technique_with_id(uint32_t id) {
   for (const Technique& t : techniques())
     if (t.id == id) return &t;

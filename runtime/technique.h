@@ -40,12 +40,15 @@ struct TechniqueBuild {
 //   a name of one of the technique's buffers (Technique::buffers)
 //   "unit"          the unit's range: uint begin, uint count, [uint stride (pixel units only),]
 //                   uint sample_begin, uint sample_count
-// Every phase runs over the unit's range, ceil(count / items) work items (items: 1, or the lane kernels'
-// pixels per work item). Phases run in order; each is timed and named in --stats.
+// A phase runs ceil(count / P) work items for a unit of `count` pixels or paths (P: 1, or the lane kernels'
+// pixels per work item), or as many as its `items` says: a phase over something else than the unit's
+// pixels (a photon grid's cells, one work item for a serial scan, two per pixel) gets the unit's range
+// all the same and finds its own work from it. Phases run in order; each is timed and named in --stats.
 struct TechniquePhase {
   std::string name;  // "render"
   std::string entry;
   std::vector<std::string> args;
+  std::function<size_t(uint32_t count)> items;  // work items for a unit of `count`; empty: ceil(count / P)
 };
 
 // A device buffer of the technique's own, made at set-up, cleared to zero once, and kept for the whole
@@ -73,7 +76,6 @@ struct Technique {
   std::vector<FilmLayer> layers;  // its own film layers
   UnitKind units = UnitKind::pixels;
   bool lanes = false;        // runs over 8 or 16 SIMD lanes on CPU devices (--lanes)
-  bool emission = false;     // needs the emission distribution and splat scales (runtime/light_transport.h)
   uint32_t max_depth_limit = 1024;  // largest max_depth it takes (bdpt keeps subpaths in private memory)
   double cpu_unit_seconds = 0.25;   // unit duration to aim for on CPU devices
   std::vector<TechniqueOption> options;
@@ -91,6 +93,9 @@ const std::vector<Technique>& techniques();
 void register_technique(Technique technique);
 // The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light or bdpt)".
 const Technique& technique_named(const std::string& name, const std::string& where);
+// Whether a phase takes "lt" or "emission_cdf": the render then sets up the emission distribution and the
+// splat scales (runtime/light_transport.h).
+bool uses_emission(const Technique& t);
 // By id (checkpoints); nullptr if none has it.
 const Technique* technique_with_id(uint32_t id);
 // "path, light or bdpt"

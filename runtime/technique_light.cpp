@@ -13,7 +13,6 @@ Technique light_technique() {
   t.phases = {{"render", "light_pass", {"lt", "emission_cdf", "film", "stats", "unit"}}};
   t.layers = {{"splats", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS}};
   t.units = UnitKind::paths;
-  t.emission = true;
   // A unit also clears, reads back and adds the whole splat film (96 bytes a pixel, ~20 ms at 512 x 512 on
   // a CPU device): longer units keep that under 2 % (bdpt 7.2 s -> 6.8 s on the Cornell box).
   t.cpu_unit_seconds = 1.0;

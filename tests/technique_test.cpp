@@ -13,18 +13,19 @@
 
 namespace {
 
-// Two phases and a buffer of the technique's own between them: `weigh` leaves 0.5 + 0.25 (p % 2) for pixel p
-// in `weights`; `add` adds it per sample to the film's first word and 1 to the second. The pixel's mean is
-// their quotient, whatever the split into units.
+// Two phases and a buffer of the technique's own between them: `weigh`, two work items per pixel (a phase's
+// own item count), leaves 0.5 and 0.25 (p % 2) for pixel p in `weights`, one each; `add` adds their sum per
+// sample to the film's first word and 1 to the second. The pixel's mean is their quotient, whatever the
+// split into units; without weigh's second items it would be 0.5 for every pixel.
 const char* kConstantKernel = R"(
 #include "shared/types.h"
 #include "scene.cl"
 __kernel void weigh(PC_SCENE_PARAMS, __global float* weights, uint pixel_begin, uint pixel_count, uint pixel_stride,
                     uint sample_begin, uint sample_count) {
   uint i = get_global_id(0);
-  if (i >= pixel_count) return;
-  uint p = pixel_begin + i * pixel_stride;
-  weights[p] = 0.5f + 0.25f * (float)(p % 2u);
+  if (i >= 2u * pixel_count) return;
+  uint p = pixel_begin + i / 2u * pixel_stride;
+  weights[2u * p + i % 2u] = i % 2u == 0u ? 0.5f : 0.25f * (float)(p % 2u);
 }
 __kernel void add(PC_SCENE_PARAMS, __global float* film, __global UnitStats* stats, __global const float* weights,
                   uint pixel_begin, uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
@@ -32,7 +33,7 @@ __kernel void add(PC_SCENE_PARAMS, __global float* film, __global UnitStats* sta
   if (i >= pixel_count) return;
   uint p = pixel_begin + i * pixel_stride;
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
-    film[2u * p] += weights[p];
+    film[2u * p] += weights[2u * p] + weights[2u * p + 1u];
     film[2u * p + 1u] += 1.0f;
   }
   if (i == 0u) atomic_add(&stats->rays_lo, 1u);
@@ -47,8 +48,9 @@ const Technique& constant_technique() {
     t.id = 1000;
     t.summary = "test only: a constant per pixel";
     t.kernel_file = "test_constant.cl";
-    t.phases = {{"weigh", "weigh", {"weights", "unit"}}, {"add", "add", {"film", "stats", "weights", "unit"}}};
-    t.buffers = {{"weights", [](uint32_t pixels) { return pixels * sizeof(float); }}};
+    t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count) { return 2 * size_t(count); }},
+                {"add", "add", {"film", "stats", "weights", "unit"}}};
+    t.buffers = {{"weights", [](uint32_t pixels) { return 2 * pixels * sizeof(float); }}};
     t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
     t.develop = [](Film& f, const LightTransportHeader&, uint64_t*) {
       size_t pixels = size_t(f.width) * f.height;
