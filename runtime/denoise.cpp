@@ -182,6 +182,19 @@ struct Filter {
   }
 };
 
+// OIDN's prefiltering of one auxiliary image (its documentation, "Denoising with prefiltering"): a copy
+// denoised in place by an RT filter given only that image, as `name` ("albedo" or "normal"), and the
+// output.
+std::vector<float> prefiltered(const Device& device, const char* name, const std::vector<float>& pixels,
+                               uint32_t width, uint32_t height, int quality) {
+  std::vector<float> clean = pixels;
+  Filter f(device);
+  f.image(name, clean, width, height);
+  f.image("output", clean, width, height);
+  f.run(device, quality, ("prefiltering the " + std::string(name)).c_str());
+  return clean;
+}
+
 int quality_value(const std::string& quality) {
   if (quality == "high") return OIDN_QUALITY_HIGH;
   if (quality == "balanced") return OIDN_QUALITY_BALANCED;
@@ -235,22 +248,13 @@ DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>&
   result.used_albedo = albedo != nullptr;
   result.used_normal = normal != nullptr;
   result.rgb.assign(floats, 0.0f);
-  // OIDN's prefiltering (its documentation, "Denoising with prefiltering"): each auxiliary image is first
-  // denoised in place by an RT filter given only that image and the output; the beauty's filter then
+  // OIDN's prefiltering: each auxiliary image is denoised first (prefiltered), and the beauty's filter
   // takes them as noise-free (cleanAux). OIDN only has clean-feature weights for albedo and normal together.
   bool prefilter = albedo && normal && options.clean_aux;
   std::vector<float> clean_albedo, clean_normal;
   if (prefilter) {
-    clean_albedo = *albedo;
-    clean_normal = *normal;
-    Filter a(device);
-    a.image("albedo", clean_albedo, width, height);
-    a.image("output", clean_albedo, width, height);
-    a.run(device, quality, "prefiltering the albedo");
-    Filter n(device);
-    n.image("normal", clean_normal, width, height);
-    n.image("output", clean_normal, width, height);
-    n.run(device, quality, "prefiltering the normal");
+    clean_albedo = prefiltered(device, "albedo", *albedo, width, height, quality);
+    clean_normal = prefiltered(device, "normal", *normal, width, height, quality);
     albedo = &clean_albedo;
     normal = &clean_normal;
   }
