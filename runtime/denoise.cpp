@@ -219,6 +219,15 @@ std::vector<float> layer_channels(const Image& image, const std::string& name, c
   return out;
 }
 
+// Puts the layer into the image, in place of one of the same name.
+void set_layer(Image& image, ImageLayer layer) {
+  auto old = std::find_if(image.layers.begin(), image.layers.end(), [&](const ImageLayer& l) { return l.name == layer.name; });
+  if (old != image.layers.end())
+    *old = std::move(layer);
+  else
+    image.layers.push_back(std::move(layer));
+}
+
 }  // namespace
 
 bool denoiser_available(std::string* why) {
@@ -276,13 +285,14 @@ void denoise_image(Image& image, const DenoiseOptions& options) {
   if (options.use_normal) normal = layer_channels(image, "normal", {"X", "Y", "Z"});
   DenoiseResult r = denoise(image.width, image.height, image.rgb, albedo.empty() ? nullptr : &albedo,
                             normal.empty() ? nullptr : &normal, options);
-  ImageLayer raw{"raw", {"R", "G", "B"}, std::move(image.rgb), false};
+  set_layer(image, {"raw", {"R", "G", "B"}, std::move(image.rgb), false});
   image.rgb = std::move(r.rgb);
-  auto old = std::find_if(image.layers.begin(), image.layers.end(), [](const ImageLayer& l) { return l.name == "raw"; });
-  if (old != image.layers.end())
-    *old = std::move(raw);
-  else
-    image.layers.push_back(std::move(raw));
+  // The variance is the raw beauty's: beside it, and not at the top level, where `pathcl compare` would
+  // z-test the denoised beauty against it. The denoiser gives no variance of its own.
+  if (!image.variance.empty()) {
+    set_layer(image, {"raw.variance", {"R", "G", "B"}, std::move(image.variance), false});
+    image.variance.clear();
+  }
   image.attributes["denoiser"] = "Intel Open Image Denoise " + r.library_version;
   image.attributes["denoiser_quality"] = options.quality;
   image.attributes["denoiser_aux"] = r.used_normal ? "albedo,normal" : r.used_albedo ? "albedo" : "none";

@@ -41,8 +41,9 @@ DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>&
                       const std::vector<float>* normal, const DenoiseOptions& options);
 
 // Denoises an image in place, as `pathcl denoise` does: rgb becomes the denoised beauty; the beauty it
-// had goes into the layer "raw" (R, G, B; replacing one there); the layers "albedo" (R, G, B) and
-// "normal" (X, Y, Z) are used as options allow; the attributes "denoiser" ("Intel Open Image Denoise
-// 2.5.1"), "denoiser_quality" and "denoiser_aux" ("albedo,normal", "albedo" or "none") are set. Other
-// layers, the variance and the other attributes are kept.
+// had goes into the layer "raw" (R, G, B; replacing one there), and its variance (variance.R/G/B), which
+// describes the raw beauty and not the denoised one, into the layer "raw.variance" (R, G, B): the image
+// is left without a top-level variance. The layers "albedo" (R, G, B) and "normal" (X, Y, Z) are used as
+// options allow; the attributes "denoiser" ("Intel Open Image Denoise 2.5.1"), "denoiser_quality" and
+// "denoiser_aux" ("albedo,normal", "albedo" or "none") are set. Other layers and attributes are kept.
 void denoise_image(Image& image, const DenoiseOptions& options);

@@ -166,8 +166,7 @@ TEST_F(Denoise, DenoiseImageKeepsTheRawImageAndTheLayers) {
   ASSERT_NE(raw, nullptr);
   EXPECT_EQ(raw->channels, (std::vector<std::string>{"R", "G", "B"}));
   EXPECT_EQ(raw->values, original.rgb);
-  EXPECT_EQ(image.variance, original.variance);
-  EXPECT_EQ(image.layers.size(), original.layers.size() + 1);
+  EXPECT_EQ(image.layers.size(), original.layers.size() + 2);  // raw and raw.variance
   EXPECT_EQ(image.attributes.at("denoiser_aux"), "albedo,normal");
   EXPECT_EQ(image.attributes.at("denoiser_quality"), "high");
   EXPECT_EQ(image.attributes.at("denoiser").rfind("Intel Open Image Denoise 2.", 0), 0u);
@@ -201,7 +200,9 @@ TEST_F(Denoise, CommandWritesTheDenoisedImageRawLayerAndAttributes) {
     EXPECT_EQ(find_layer(result, name)->values, find_layer(input, name)->values) << name;
   }
   EXPECT_TRUE(find_layer(result, "object_id")->integer);
-  EXPECT_EQ(result.variance, input.variance);
+  EXPECT_TRUE(result.variance.empty());
+  ASSERT_NE(find_layer(result, "raw.variance"), nullptr);
+  EXPECT_EQ(find_layer(result, "raw.variance")->values, input.variance);
   EXPECT_EQ(result.spp, 4);
   EXPECT_EQ(result.attributes.at("renderer"), "pathcl test");
   EXPECT_EQ(result.attributes.at("seed"), "7");
@@ -220,6 +221,31 @@ TEST_F(Denoise, CommandWritesTheDenoisedImageRawLayerAndAttributes) {
   result = read_exr(out);
   EXPECT_EQ(result.attributes.at("denoiser_aux"), "none");
   EXPECT_EQ(result.attributes.at("denoiser_quality"), "fast");
+}
+
+// The variance describes the raw beauty: it goes with it, into the layer raw.variance, and the denoised
+// image has none, so that `pathcl compare` does not z-test the denoised beauty against the raw one's noise.
+TEST_F(Denoise, VarianceGoesWithTheRawBeauty) {
+  Image image = input_image(), original = image;
+  denoise_image(image, DenoiseOptions{});
+  EXPECT_TRUE(image.variance.empty());
+  const ImageLayer* variance = find_layer(image, "raw.variance");
+  ASSERT_NE(variance, nullptr);
+  EXPECT_EQ(variance->channels, (std::vector<std::string>{"R", "G", "B"}));
+  EXPECT_EQ(variance->values, original.variance);
+  EXPECT_FALSE(variance->integer);
+
+  // In the files: channels raw.variance.R/G/B, no variance.R/G/B; compare finds no variance to z-test.
+  std::string dir = temp_dir() + "/variance", in = dir + "/in.exr", out = dir + "/denoised.exr", err, text;
+  fs::create_directories(dir);
+  write_exr(in, original);
+  ASSERT_EQ(run_pathcl("denoise " + in + " -o " + out + " -q", &err), 0) << err;
+  Image result = read_exr(out);
+  EXPECT_TRUE(result.variance.empty());
+  ASSERT_NE(find_layer(result, "raw.variance"), nullptr);
+  EXPECT_EQ(find_layer(result, "raw.variance")->values, original.variance);
+  ASSERT_EQ(run_pathcl("compare " + in + " " + out, &err, &text), 0) << err;
+  EXPECT_NE(text.find("z_test none"), std::string::npos) << text;
 }
 
 // These need no library: bad input is found before denoising, and the search obeys PATHCL_OIDN_LIBRARY.
@@ -268,16 +294,20 @@ TEST(DenoiseCommand, MissingLibraryExitsWith1AndSaysHowToGetIt) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// `pathcl render --denoise`: the raw beauty kept as the layer raw is the bits of a render without it, the
-// albedo and normal AOVs are rendered for the denoiser, and the header names it.
+// `pathcl render --denoise`: the raw beauty kept as the layer raw is the bits of a render without it, and
+// with --variance its variance goes beside it (raw.variance), not to the top level; the albedo and normal
+// AOVs are rendered for the denoiser, and the header names it.
 TEST_F(Denoise, RenderDenoiseKeepsTheRawBeautyAndNamesTheDenoiser) {
   std::string scene = std::string(PATHCL_TEST_SCENES) + "/tiny.json", dir = temp_dir(), err;
-  ASSERT_EQ(run_pathcl("render " + scene + " --spp 4 -q --denoise -o " + dir + "/denoised.exr", &err), 0) << err;
-  ASSERT_EQ(run_pathcl("render " + scene + " --spp 4 -q -o " + dir + "/plain.exr", &err), 0) << err;
+  ASSERT_EQ(run_pathcl("render " + scene + " --spp 4 -q --variance --denoise -o " + dir + "/denoised.exr", &err), 0) << err;
+  ASSERT_EQ(run_pathcl("render " + scene + " --spp 4 -q --variance -o " + dir + "/plain.exr", &err), 0) << err;
   Image denoised = read_exr(dir + "/denoised.exr"), plain = read_exr(dir + "/plain.exr");
   const ImageLayer* raw = find_layer(denoised, "raw");
   ASSERT_NE(raw, nullptr);
   EXPECT_EQ(raw->values, plain.rgb);
+  EXPECT_TRUE(denoised.variance.empty());
+  ASSERT_NE(find_layer(denoised, "raw.variance"), nullptr);
+  EXPECT_EQ(find_layer(denoised, "raw.variance")->values, plain.variance);
   EXPECT_NE(denoised.rgb, plain.rgb);
   EXPECT_NE(find_layer(denoised, "albedo"), nullptr);
   EXPECT_NE(find_layer(denoised, "normal"), nullptr);
