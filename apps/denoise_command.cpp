@@ -49,13 +49,15 @@ int run_denoise_command() {
   DenoiseOptions options;
   options.use_albedo = options.use_normal = !a.no_aux;
   options.quality = a.quality;
+  const bool denoised_before = find_layer(image, "raw") != nullptr;
   auto start = std::chrono::steady_clock::now();
-  denoise_image(image, options);
+  denoise_image(image, options, a.input);
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_image(a.output, image);
   if (!a.quiet)
-    std::fprintf(stderr, "%s: denoised %ux%u in %.2f s with %s (quality %s, aux %s) -> %s\n", a.input.c_str(),
-                 image.width, image.height, seconds, image.attributes["denoiser"].c_str(), a.quality.c_str(),
-                 image.attributes["denoiser_aux"].c_str(), a.output.c_str());
+    std::fprintf(stderr, "%s: denoised %ux%u%s in %.2f s with %s (quality %s, aux %s) -> %s\n", a.input.c_str(),
+                 image.width, image.height, denoised_before ? " (its raw layer: it was denoised before)" : "", seconds,
+                 image.attributes["denoiser"].c_str(), a.quality.c_str(), image.attributes["denoiser_aux"].c_str(),
+                 a.output.c_str());
   return 0;
 }

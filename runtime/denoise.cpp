@@ -279,18 +279,30 @@ DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>&
   return result;
 }
 
-void denoise_image(Image& image, const DenoiseOptions& options) {
+void denoise_image(Image& image, const DenoiseOptions& options, const std::string& source) {
+  // An image denoised before: its raw layer is the render, and it is what is denoised again (the RGB is
+  // already filtered; OIDN is trained on Monte Carlo noise, and the raw layer must stay the render's).
+  const ImageLayer* raw = find_layer(image, "raw");
+  if (raw && (raw->integer || raw->channels != std::vector<std::string>{"R", "G", "B"})) {
+    std::string channels;
+    for (const std::string& c : raw->channels) channels += (channels.empty() ? "raw." : ", raw.") + c;
+    throw UsageError(source + ": the layer \"raw\" has the " + (raw->integer ? "integer " : "") + "channels " +
+                     channels + ", expected the float channels raw.R, raw.G, raw.B (the beauty before denoising)");
+  }
+  const bool denoised_before = raw != nullptr;
   std::vector<float> albedo, normal;
   if (options.use_albedo) albedo = layer_channels(image, "albedo", {"R", "G", "B"});
   if (options.use_normal) normal = layer_channels(image, "normal", {"X", "Y", "Z"});
-  DenoiseResult r = denoise(image.width, image.height, image.rgb, albedo.empty() ? nullptr : &albedo,
-                            normal.empty() ? nullptr : &normal, options);
-  set_layer(image, {"raw", {"R", "G", "B"}, std::move(image.rgb), false});
+  DenoiseResult r = denoise(image.width, image.height, denoised_before ? raw->values : image.rgb,
+                            albedo.empty() ? nullptr : &albedo, normal.empty() ? nullptr : &normal, options);
+  if (!denoised_before) set_layer(image, {"raw", {"R", "G", "B"}, std::move(image.rgb), false});
   image.rgb = std::move(r.rgb);
   // The variance is the raw beauty's: beside it, and not at the top level, where `pathcl compare` would
-  // z-test the denoised beauty against it. The denoiser gives no variance of its own.
+  // z-test the denoised beauty against it. The denoiser gives no variance of its own. (An image denoised
+  // before with a top-level variance was written by an older pathcl: that variance is the raw layer's too.)
   if (!image.variance.empty()) {
-    set_layer(image, {"raw.variance", {"R", "G", "B"}, std::move(image.variance), false});
+    if (!denoised_before || !find_layer(image, "raw.variance"))
+      set_layer(image, {"raw.variance", {"R", "G", "B"}, std::move(image.variance), false});
     image.variance.clear();
   }
   image.attributes["denoiser"] = "Intel Open Image Denoise " + r.library_version;

@@ -40,10 +40,15 @@ bool denoiser_available(std::string* why = nullptr);
 DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>& rgb, const std::vector<float>* albedo,
                       const std::vector<float>* normal, const DenoiseOptions& options);
 
-// Denoises an image in place, as `pathcl denoise` does: rgb becomes the denoised beauty; the beauty it
-// had goes into the layer "raw" (R, G, B; replacing one there), and its variance (variance.R/G/B), which
-// describes the raw beauty and not the denoised one, into the layer "raw.variance" (R, G, B): the image
-// is left without a top-level variance. The layers "albedo" (R, G, B) and "normal" (X, Y, Z) are used as
-// options allow; the attributes "denoiser" ("Intel Open Image Denoise 2.5.1"), "denoiser_quality" and
-// "denoiser_aux" ("albedo,normal", "albedo" or "none") are set. Other layers and attributes are kept.
-void denoise_image(Image& image, const DenoiseOptions& options);
+// Denoises an image in place, as `pathcl denoise` and `pathcl render --denoise` do; rgb becomes the
+// denoised beauty. The input beauty is the image's R, G, B, which move into a new layer "raw" (R, G, B);
+// but an image with a layer "raw" was denoised before, and then that layer, the render, is denoised again
+// (with these options) and kept as it is: a denoised image is never denoised twice, and its raw layer
+// never replaced. The variance (variance.R/G/B) describes the raw beauty and not the denoised one: it
+// goes into the layer "raw.variance" (R, G, B), and the image is left without a top-level variance. The
+// layers "albedo" (R, G, B) and "normal" (X, Y, Z) are used as options allow; the attributes "denoiser"
+// ("Intel Open Image Denoise 2.5.1"), "denoiser_quality" and "denoiser_aux" ("albedo,normal", "albedo" or
+// "none") are set. Other layers and attributes are kept.
+// UsageError naming `source` (the file) for a layer "raw" that is not float R, G, B; the image is then
+// unchanged, as it is when OIDN fails.
+void denoise_image(Image& image, const DenoiseOptions& options, const std::string& source = "the image");

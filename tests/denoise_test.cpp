@@ -3,6 +3,7 @@
 // command writes the denoised beauty, the raw layer and the attributes. The tests that run OIDN skip
 // (and say why) only where the library is absent; the command's bad inputs and a missing library are
 // tested everywhere.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -172,14 +173,54 @@ TEST_F(Denoise, DenoiseImageKeepsTheRawImageAndTheLayers) {
   EXPECT_EQ(image.attributes.at("denoiser").rfind("Intel Open Image Denoise 2.", 0), 0u);
   EXPECT_EQ(image.attributes.at("renderer"), "pathcl test");
 
-  // Denoised again: "raw" is replaced by this input, not added twice.
+}
+
+// A denoised image denoised again: the raw layer, the render, is the input, and it stays the render's; the
+// result is that of denoising the render once with the new options, and with the same options the same
+// image again.
+TEST_F(Denoise, DenoisingADenoisedImageDenoisesItsRawLayerAndKeepsIt) {
+  Image original = input_image(), image = original;
+  denoise_image(image, DenoiseOptions{});
   Image twice = image;
   DenoiseOptions o;
   o.use_normal = false;
   denoise_image(twice, o);
   EXPECT_EQ(twice.layers.size(), image.layers.size());
-  EXPECT_EQ(find_layer(twice, "raw")->values, image.rgb);
+  ASSERT_NE(find_layer(twice, "raw"), nullptr);
+  EXPECT_EQ(find_layer(twice, "raw")->values, original.rgb);
+  ASSERT_NE(find_layer(twice, "raw.variance"), nullptr);
+  EXPECT_EQ(find_layer(twice, "raw.variance")->values, original.variance);
   EXPECT_EQ(twice.attributes.at("denoiser_aux"), "albedo");
+  Image once = original;
+  denoise_image(once, o);
+  EXPECT_EQ(twice.rgb, once.rgb);
+  Image again = image;
+  denoise_image(again, DenoiseOptions{});
+  EXPECT_EQ(again.rgb, image.rgb);
+  EXPECT_EQ(find_layer(again, "raw")->values, original.rgb);
+
+  // A file denoised by an older pathcl kept the raw beauty's variance at the top level: it moves to raw.variance.
+  Image old = image;
+  ASSERT_NE(find_layer(old, "raw.variance"), nullptr);
+  old.variance = find_layer(old, "raw.variance")->values;
+  old.layers.erase(std::find_if(old.layers.begin(), old.layers.end(), [](const ImageLayer& l) { return l.name == "raw.variance"; }));
+  denoise_image(old, DenoiseOptions{});
+  EXPECT_TRUE(old.variance.empty());
+  ASSERT_NE(find_layer(old, "raw.variance"), nullptr);
+  EXPECT_EQ(find_layer(old, "raw.variance")->values, original.variance);
+  EXPECT_EQ(old.rgb, image.rgb);
+
+  // The command: the raw layer is the input, the summary says so, and the result is the first one's bits.
+  std::string dir = temp_dir() + "/twice", in = dir + "/in.exr", once_path = dir + "/once.exr", twice_path = dir + "/twice.exr", err;
+  fs::create_directories(dir);
+  write_exr(in, original);
+  ASSERT_EQ(run_pathcl("denoise " + in + " -o " + once_path, &err), 0) << err;
+  ASSERT_EQ(run_pathcl("denoise " + once_path + " -o " + twice_path, &err), 0) << err;
+  EXPECT_NE(err.find("its raw layer"), std::string::npos) << err;
+  Image first = read_exr(once_path), second = read_exr(twice_path);
+  ASSERT_NE(find_layer(second, "raw"), nullptr);
+  EXPECT_EQ(find_layer(second, "raw")->values, original.rgb);
+  EXPECT_EQ(second.rgb, first.rgb);
 }
 
 TEST_F(Denoise, CommandWritesTheDenoisedImageRawLayerAndAttributes) {
@@ -268,6 +309,23 @@ TEST(DenoiseCommand, BadInputExitsWith2) {
   EXPECT_EQ(run_pathcl("denoise " + good + " -o " + dir, &err), 2);  // a directory
   EXPECT_EQ(run_pathcl("denoise " + good + " -o " + dir + "/out.txt", &err), 2);
   EXPECT_EQ(run_pathcl("denoise " + good, &err), 2);  // -o is required
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A layer "raw" that is not the R, G, B of a beauty cannot be denoised again: exit 2, naming the file
+// and what was expected; nothing written.
+TEST(DenoiseCommand, RawLayerThatIsNotRgbExitsWith2) {
+  std::string dir = temp_dir() + "/bad-raw";
+  fs::create_directories(dir);
+  Image image;
+  image.width = image.height = 2;
+  image.rgb.assign(12, 0.5f);
+  image.layers.push_back({"raw", {"R", "G"}, std::vector<float>(8, 0.5f), false});
+  std::string in = dir + "/in.exr", out = dir + "/out.exr", err;
+  write_exr(in, image);
+  EXPECT_EQ(run_pathcl("denoise " + in + " -o " + out + " --no-aux", &err), 2) << err;
+  EXPECT_NE(err.find(in + ": the layer \"raw\" has the channels raw.R, raw.G"), std::string::npos) << err;
+  EXPECT_NE(err.find("expected the float channels raw.R, raw.G, raw.B"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
 }
 
