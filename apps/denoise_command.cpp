@@ -16,7 +16,7 @@ namespace {
 struct DenoiseArgs {
   std::string input, output;
   bool no_aux = false, quiet = false;
-  std::string quality = "high";
+  std::string aux = "albedo,normal", quality = "high";
   CLI::App* command = nullptr;
 };
 
@@ -33,7 +33,10 @@ void add_denoise_command(CLI::App& app) {
   a.command->add_option("input", a.input, "EXR to denoise (its layers albedo.R/G/B and normal.X/Y/Z guide the denoiser)")
       ->required();
   a.command->add_option("-o,--output", a.output, "output EXR: the denoised R, G, B, the input as the layer raw")->required();
-  a.command->add_flag("--no-aux", a.no_aux, "ignore the albedo and normal layers");
+  CLI::Option* aux = a.command->add_option("--aux", a.aux,
+                                           "the layers that guide the denoiser: albedo,normal (the default), albedo or "
+                                           "none; a missing one is an error");
+  a.command->add_flag("--no-aux", a.no_aux, "denoise the colour alone (--aux none)")->excludes(aux);
   a.command->add_option("--quality", a.quality, "high (the default), balanced or fast");
   a.command->add_flag("-q,--quiet", a.quiet, "no summary line on stderr");
 }
@@ -44,10 +47,14 @@ int run_denoise_command() {
   const DenoiseArgs& a = args();
   if (a.quality != "high" && a.quality != "balanced" && a.quality != "fast")
     throw UsageError("--quality " + a.quality + ": expected high, balanced or fast");
+  std::string aux = a.no_aux ? "none" : a.aux;
+  if (aux != "albedo,normal" && aux != "normal,albedo" && aux != "albedo" && aux != "none")
+    throw UsageError("--aux " + aux + ": expected albedo,normal, albedo or none (a normal guides only beside an albedo)");
   check_output_files({{"-o", a.output, true}});
   Image image = read_exr(a.input);
   DenoiseOptions options;
-  options.use_albedo = options.use_normal = !a.no_aux;
+  options.use_albedo = aux != "none";
+  options.use_normal = aux.find("normal") != std::string::npos;
   options.quality = a.quality;
   const bool denoised_before = find_layer(image, "raw") != nullptr;
   auto start = std::chrono::steady_clock::now();

@@ -1,8 +1,10 @@
-// `pathcl denoise IN.exr -o OUT.exr [--no-aux] [--quality high|balanced|fast]`: denoises an EXR image
-// with Intel Open Image Denoise (runtime/denoise.h), using its layers "albedo" (R, G, B) and "normal"
-// (X, Y, Z) where present. OUT holds the denoised R, G, B, the input beauty as the layer "raw", the
-// input's other layers, variance and attributes, and the attributes "denoiser", "denoiser_quality" and
-// "denoiser_aux".
+// `pathcl denoise IN.exr -o OUT.exr [--aux albedo,normal|albedo|none] [--no-aux] [--quality high|balanced|fast]`:
+// denoises an EXR image with Intel Open Image Denoise (runtime/denoise.h, denoise_image), guided by its layers
+// "albedo" (R, G, B) and "normal" (X, Y, Z) unless --aux or --no-aux (= --aux none) asks for fewer; a guide
+// asked for and missing is an error (exit 2). OUT holds the denoised R, G, B, the input beauty as the layer
+// "raw" (an input denoised before is denoised again from its raw layer, which is kept), the variance as the
+// layer "raw.variance", the input's other layers and attributes, and the attributes "denoiser",
+// "denoiser_quality" and "denoiser_aux".
 #pragma once
 
 namespace CLI {

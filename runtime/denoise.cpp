@@ -202,14 +202,25 @@ int quality_value(const std::string& quality) {
   throw UsageError("denoiser quality \"" + quality + "\": expected high, balanced or fast");
 }
 
-// The channels of a layer in this order, or empty if the layer or one of them is missing.
-std::vector<float> layer_channels(const Image& image, const std::string& name, const std::vector<std::string>& channels) {
+// The channels of a guide layer in this order; where the layer or one of its channels is missing, empty,
+// and what is missing is added to *missing.
+std::vector<float> guide_layer(const Image& image, const std::string& name, const std::vector<std::string>& channels,
+                               std::string* missing) {
+  std::string all;
+  for (const std::string& c : channels) all += (all.empty() ? "" : ", ") + name + "." + c;
+  auto add = [&](const std::string& what) { *missing += (missing->empty() ? "" : " and ") + what; };
   const ImageLayer* layer = find_layer(image, name);
-  if (!layer) return {};
+  if (!layer) {
+    add("no layer " + name + " (" + all + ")");
+    return {};
+  }
   std::vector<size_t> index;
   for (const std::string& c : channels) {
     auto it = std::find(layer->channels.begin(), layer->channels.end(), c);
-    if (it == layer->channels.end()) return {};
+    if (it == layer->channels.end()) {
+      add("no " + name + "." + c + " in the layer " + name + " (" + all + ")");
+      return {};
+    }
     index.push_back(size_t(it - layer->channels.begin()));
   }
   size_t pixels = size_t(image.width) * image.height, n = layer->channels.size();
@@ -290,9 +301,18 @@ void denoise_image(Image& image, const DenoiseOptions& options, const std::strin
                      channels + ", expected the float channels raw.R, raw.G, raw.B (the beauty before denoising)");
   }
   const bool denoised_before = raw != nullptr;
+  if (options.use_normal && !options.use_albedo)
+    throw UsageError("denoising " + source + ": a normal guides Open Image Denoise only beside an albedo");
+  // Every guide asked for must be there: a quiet fall-back to fewer guides gives a worse image than the
+  // command line asked for, with nothing but a header attribute to say so.
   std::vector<float> albedo, normal;
-  if (options.use_albedo) albedo = layer_channels(image, "albedo", {"R", "G", "B"});
-  if (options.use_normal) normal = layer_channels(image, "normal", {"X", "Y", "Z"});
+  std::string missing;
+  if (options.use_albedo) albedo = guide_layer(image, "albedo", {"R", "G", "B"}, &missing);
+  if (options.use_normal) normal = guide_layer(image, "normal", {"X", "Y", "Z"}, &missing);
+  if (!missing.empty())
+    throw UsageError(source + ": " + missing + " to guide the denoiser: render the guides with --aov albedo,normal " +
+                     "(render --denoise does), or denoise with fewer: " +
+                     (albedo.empty() ? "" : "--aux albedo (the albedo alone) or ") + "--no-aux (the colour alone)");
   DenoiseResult r = denoise(image.width, image.height, denoised_before ? raw->values : image.rgb,
                             albedo.empty() ? nullptr : &albedo, normal.empty() ? nullptr : &normal, options);
   if (!denoised_before) set_layer(image, {"raw", {"R", "G", "B"}, std::move(image.rgb), false});

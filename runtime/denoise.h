@@ -13,7 +13,10 @@
 #include "runtime/image_io.h"
 
 struct DenoiseOptions {
-  bool use_albedo = true, use_normal = true;  // use the layers "albedo" and "normal" where present (denoise_image)
+  // The guides denoise_image uses: the layers "albedo" (R, G, B) and "normal" (X, Y, Z). One asked for and
+  // missing is a UsageError, never a quiet fall-back to fewer guides. OIDN takes a normal only beside an
+  // albedo, so use_normal without use_albedo is a UsageError too.
+  bool use_albedo = true, use_normal = true;
   // With both albedo and normal: denoise them first (OIDN's prefiltering) and tell the filter that they
   // are clean (cleanAux). Without it, OIDN takes them as noisy. It costs: at quality high OIDN runs its
   // large networks for the albedo, the normal and the beauty, about 7x the time of the beauty alone.
@@ -46,9 +49,10 @@ DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>&
 // (with these options) and kept as it is: a denoised image is never denoised twice, and its raw layer
 // never replaced. The variance (variance.R/G/B) describes the raw beauty and not the denoised one: it
 // goes into the layer "raw.variance" (R, G, B), and the image is left without a top-level variance. The
-// layers "albedo" (R, G, B) and "normal" (X, Y, Z) are used as options allow; the attributes "denoiser"
-// ("Intel Open Image Denoise 2.5.1"), "denoiser_quality" and "denoiser_aux" ("albedo,normal", "albedo" or
-// "none") are set. Other layers and attributes are kept.
-// UsageError naming `source` (the file) for a layer "raw" that is not float R, G, B; the image is then
-// unchanged, as it is when OIDN fails.
+// layers "albedo" (R, G, B) and "normal" (X, Y, Z) guide the denoiser as options say; the attributes
+// "denoiser" ("Intel Open Image Denoise 2.5.1"), "denoiser_quality" and "denoiser_aux" ("albedo,normal",
+// "albedo" or "none") are set. Other layers and attributes are kept.
+// UsageError naming `source` (the file) for a layer "raw" that is not float R, G, B, or a guide that
+// options ask for and the image lacks (the message names the layer or channel, and the options that ask
+// for fewer guides); the image is then unchanged, as it is when OIDN fails.
 void denoise_image(Image& image, const DenoiseOptions& options, const std::string& source = "the image");

@@ -264,6 +264,30 @@ TEST_F(Denoise, CommandWritesTheDenoisedImageRawLayerAndAttributes) {
   EXPECT_EQ(result.attributes.at("denoiser_quality"), "fast");
 }
 
+// Fewer guides when asked for: --aux albedo uses the albedo alone, --no-aux none; denoise_image refuses a
+// guide it is asked for and the image lacks, and leaves the image as it was.
+TEST_F(Denoise, FewerGuidesOnlyWhenAskedFor) {
+  Image image = input_image();
+  image.layers.erase(image.layers.begin() + 1);  // the normal
+  ASSERT_EQ(find_layer(image, "normal"), nullptr);
+  Image unchanged = image;
+  EXPECT_THROW(denoise_image(image, DenoiseOptions{}), UsageError);
+  EXPECT_EQ(image.rgb, unchanged.rgb);
+  EXPECT_EQ(image.layers.size(), unchanged.layers.size());
+  EXPECT_EQ(image.attributes, unchanged.attributes);
+  DenoiseOptions normal_alone;
+  normal_alone.use_albedo = false;
+  EXPECT_THROW(denoise_image(image, normal_alone), UsageError);
+
+  std::string dir = temp_dir() + "/fewer", in = dir + "/in.exr", out = dir + "/out.exr", err;
+  fs::create_directories(dir);
+  write_exr(in, image);
+  ASSERT_EQ(run_pathcl("denoise " + in + " -o " + out + " --aux albedo -q", &err), 0) << err;
+  EXPECT_EQ(read_exr(out).attributes.at("denoiser_aux"), "albedo");
+  ASSERT_EQ(run_pathcl("denoise " + in + " -o " + out + " --aux none -q", &err), 0) << err;
+  EXPECT_EQ(read_exr(out).attributes.at("denoiser_aux"), "none");
+}
+
 // The variance describes the raw beauty: it goes with it, into the layer raw.variance, and the denoised
 // image has none, so that `pathcl compare` does not z-test the denoised beauty against the raw one's noise.
 TEST_F(Denoise, VarianceGoesWithTheRawBeauty) {
@@ -329,6 +353,45 @@ TEST(DenoiseCommand, RawLayerThatIsNotRgbExitsWith2) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A guide that the command asks for (albedo and normal unless --aux or --no-aux says fewer) and the file
+// lacks is an error, not a quiet fall-back to fewer guides: exit 2, naming the file, the layers or channels
+// missing and the options that ask for fewer; nothing written.
+TEST(DenoiseCommand, MissingGuidesExitWith2) {
+  std::string dir = temp_dir() + "/no-guides", out = dir + "/out.exr", err;
+  fs::create_directories(dir);
+  Image image;
+  image.width = image.height = 2;
+  image.rgb.assign(12, 0.5f);
+  std::string none = dir + "/none.exr";
+  write_exr(none, image);
+  EXPECT_EQ(run_pathcl("denoise " + none + " -o " + out, &err), 2) << err;
+  EXPECT_NE(err.find(none + ": no layer albedo (albedo.R, albedo.G, albedo.B) and no layer normal (normal.X, normal.Y, "
+                            "normal.Z) to guide the denoiser"), std::string::npos) << err;
+  EXPECT_NE(err.find("--aov albedo,normal"), std::string::npos) << err;
+  EXPECT_NE(err.find("--no-aux (the colour alone)"), std::string::npos) << err;
+  EXPECT_EQ(err.find("--aux albedo"), std::string::npos) << err;  // there is no albedo to use alone
+  EXPECT_EQ(run_pathcl("denoise " + none + " -o " + out + " --aux albedo", &err), 2) << err;
+  EXPECT_NE(err.find(none + ": no layer albedo (albedo.R, albedo.G, albedo.B) to guide"), std::string::npos) << err;
+
+  image.layers.push_back({"albedo", {"R", "G", "B"}, std::vector<float>(12, 0.5f), false});
+  std::string albedo = dir + "/albedo.exr";
+  write_exr(albedo, image);
+  EXPECT_EQ(run_pathcl("denoise " + albedo + " -o " + out, &err), 2) << err;
+  EXPECT_NE(err.find(albedo + ": no layer normal (normal.X, normal.Y, normal.Z) to guide"), std::string::npos) << err;
+  EXPECT_NE(err.find("--aux albedo (the albedo alone) or --no-aux"), std::string::npos) << err;
+
+  image.layers.push_back({"normal", {"X", "Y"}, std::vector<float>(8, 0.0f), false});
+  std::string partial = dir + "/partial.exr";
+  write_exr(partial, image);
+  EXPECT_EQ(run_pathcl("denoise " + partial + " -o " + out, &err), 2) << err;
+  EXPECT_NE(err.find(partial + ": no normal.Z in the layer normal (normal.X, normal.Y, normal.Z)"), std::string::npos) << err;
+
+  EXPECT_EQ(run_pathcl("denoise " + albedo + " -o " + out + " --aux normal", &err), 2) << err;
+  EXPECT_NE(err.find("--aux normal: expected albedo,normal, albedo or none"), std::string::npos) << err;
+  EXPECT_EQ(run_pathcl("denoise " + albedo + " -o " + out + " --aux albedo --no-aux", &err), 2) << err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(DenoiseCommand, MissingLibraryExitsWith1AndSaysHowToGetIt) {
   std::string dir = temp_dir() + "/no-library";
   fs::create_directories(dir);
@@ -339,7 +402,7 @@ TEST(DenoiseCommand, MissingLibraryExitsWith1AndSaysHowToGetIt) {
   write_exr(in, image);
   std::string saved = std::getenv("PATHCL_OIDN_LIBRARY") ? std::getenv("PATHCL_OIDN_LIBRARY") : "";
   setenv("PATHCL_OIDN_LIBRARY", "/nonexistent/libOpenImageDenoise.so.2", 1);
-  int code = run_pathcl("denoise " + in + " -o " + out, &err);
+  int code = run_pathcl("denoise " + in + " -o " + out + " --no-aux", &err);
   if (saved.empty())
     unsetenv("PATHCL_OIDN_LIBRARY");
   else
