@@ -3,8 +3,9 @@
 // "albedo" (R, G, B) and "normal" (X, Y, Z) unless --aux or --no-aux (= --aux none) asks for fewer; a guide
 // asked for and missing is an error (exit 2). OUT holds the denoised R, G, B, the input beauty as the layer
 // "raw" (an input denoised before is denoised again from its raw layer, which is kept), the variance as the
-// layer "raw.variance", the input's other layers and attributes, and the attributes "denoiser",
-// "denoiser_quality" and "denoiser_aux".
+// layer "raw.variance", the input's other layers and attributes ("determinism" as "raw.determinism"), and
+// the attributes "determinism" (kDenoisedDeterminism), "denoiser", "denoiser_device", "denoiser_quality" and
+// "denoiser_aux".
 #pragma once
 
 namespace CLI {

@@ -21,7 +21,8 @@ struct OIDNDeviceImpl;
 struct OIDNFilterImpl;
 using OIDNDevice = OIDNDeviceImpl*;
 using OIDNFilter = OIDNFilterImpl*;
-constexpr int OIDN_DEVICE_TYPE_CPU = 1;
+constexpr int OIDN_DEVICE_TYPE_CPU = 1, OIDN_DEVICE_TYPE_SYCL = 2, OIDN_DEVICE_TYPE_CUDA = 3, OIDN_DEVICE_TYPE_HIP = 4,
+              OIDN_DEVICE_TYPE_METAL = 5;
 constexpr int OIDN_FORMAT_FLOAT3 = 3;
 constexpr int OIDN_ERROR_NONE = 0;
 constexpr int OIDN_QUALITY_FAST = 4, OIDN_QUALITY_BALANCED = 5, OIDN_QUALITY_HIGH = 6;
@@ -34,6 +35,9 @@ struct OidnApi {
   int (*getDeviceError)(OIDNDevice, const char** message) = nullptr;
   int (*getDeviceInt)(OIDNDevice, const char* name) = nullptr;
   void (*releaseDevice)(OIDNDevice) = nullptr;
+  int (*getNumPhysicalDevices)() = nullptr;
+  int (*getPhysicalDeviceInt)(int id, const char* name) = nullptr;
+  const char* (*getPhysicalDeviceString)(int id, const char* name) = nullptr;
   OIDNFilter (*newFilter)(OIDNDevice, const char* type) = nullptr;
   void (*setSharedFilterImage)(OIDNFilter, const char* name, void* data, int format, size_t width, size_t height,
                                size_t byte_offset, size_t pixel_byte_stride, size_t row_byte_stride) = nullptr;
@@ -91,6 +95,9 @@ OidnApi load_oidn() {
   get(api.getDeviceError, "oidnGetDeviceError");
   get(api.getDeviceInt, "oidnGetDeviceInt");
   get(api.releaseDevice, "oidnReleaseDevice");
+  get(api.getNumPhysicalDevices, "oidnGetNumPhysicalDevices");
+  get(api.getPhysicalDeviceInt, "oidnGetPhysicalDeviceInt");
+  get(api.getPhysicalDeviceString, "oidnGetPhysicalDeviceString");
   get(api.newFilter, "oidnNewFilter");
   get(api.setSharedFilterImage, "oidnSetSharedFilterImage");
   get(api.setFilterBool, "oidnSetFilterBool");
@@ -154,6 +161,25 @@ struct Device {
   std::string version() const {
     int v = api.getDeviceInt(device, "version");  // major * 10000 + minor * 100 + patch
     return std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100);
+  }
+  // The device's type and the name of the physical device of that type, as OIDN's documented parameters
+  // ("type"; the physical device's "type" and "name") give them: "CPU: Intel(R) Xeon(R) Processor". OIDN 2.5
+  // has no parameter for the instruction set its CPU kernels use (only its verbose console output shows it).
+  std::string description() const {
+    int type = api.getDeviceInt(device, "type");
+    std::string text = type == OIDN_DEVICE_TYPE_CPU     ? "CPU"
+                       : type == OIDN_DEVICE_TYPE_SYCL  ? "SYCL"
+                       : type == OIDN_DEVICE_TYPE_CUDA  ? "CUDA"
+                       : type == OIDN_DEVICE_TYPE_HIP   ? "HIP"
+                       : type == OIDN_DEVICE_TYPE_METAL ? "Metal"
+                                                        : "device type " + std::to_string(type);
+    for (int i = 0, n = api.getNumPhysicalDevices(); i < n; ++i)
+      if (api.getPhysicalDeviceInt(i, "type") == type) {
+        const char* name = api.getPhysicalDeviceString(i, "name");
+        if (name && *name) text += std::string(": ") + name;
+        break;
+      }
+    return text;
   }
 };
 
@@ -265,6 +291,7 @@ DenoiseResult denoise(uint32_t width, uint32_t height, const std::vector<float>&
   Device device(oidn());
   DenoiseResult result;
   result.library_version = device.version();
+  result.device = device.description();
   result.used_albedo = albedo != nullptr;
   result.used_normal = normal != nullptr;
   result.rgb.assign(floats, 0.0f);
@@ -325,7 +352,16 @@ void denoise_image(Image& image, const DenoiseOptions& options, const std::strin
       set_layer(image, {"raw.variance", {"R", "G", "B"}, std::move(image.variance), false});
     image.variance.clear();
   }
-  image.attributes["denoiser"] = "Intel Open Image Denoise " + r.library_version;
-  image.attributes["denoiser_quality"] = options.quality;
-  image.attributes["denoiser_aux"] = r.used_normal ? "albedo,normal" : r.used_albedo ? "albedo" : "none";
+  // The render's determinism ("bitwise": the same bits on any conformant OpenCL device) is the raw
+  // layer's; the denoised beauty's is the denoiser's (kDenoisedDeterminism).
+  auto& attributes = image.attributes;
+  auto determinism = attributes.find("determinism");
+  bool render_determinism = determinism != attributes.end() && determinism->second != kDenoisedDeterminism;
+  if (!denoised_before) attributes.erase("raw.determinism");
+  if (render_determinism && !attributes.count("raw.determinism")) attributes["raw.determinism"] = determinism->second;
+  attributes["determinism"] = kDenoisedDeterminism;
+  attributes["denoiser"] = "Intel Open Image Denoise " + r.library_version;
+  attributes["denoiser_device"] = r.device;
+  attributes["denoiser_quality"] = options.quality;
+  attributes["denoiser_aux"] = r.used_normal ? "albedo,normal" : r.used_albedo ? "albedo" : "none";
 }

@@ -86,7 +86,7 @@ Image input_image() {
   image.height = H;
   image.rgb = noisy(clean_image());
   image.spp = 4;
-  image.attributes = {{"renderer", "pathcl test"}, {"seed", "7"}};
+  image.attributes = {{"renderer", "pathcl test"}, {"seed", "7"}, {"determinism", "bitwise"}};
   image.variance.assign(image.rgb.size(), 0.02f);
   image.layers.push_back({"albedo", {"R", "G", "B"}, albedo_image(), false});
   image.layers.push_back({"normal", {"X", "Y", "Z"}, normal_image(), false});
@@ -107,6 +107,7 @@ TEST_F(Denoise, ReducesTheErrorOfANoisyImage) {
   EXPECT_FALSE(r.used_albedo);
   EXPECT_FALSE(r.used_normal);
   EXPECT_EQ(r.library_version.rfind("2.", 0), 0u) << r.library_version;
+  EXPECT_EQ(r.device.rfind("CPU", 0), 0u) << r.device;
   EXPECT_GT(r.seconds, 0.0);
   for (const char* quality : {"balanced", "fast"}) {
     DenoiseOptions o;
@@ -172,7 +173,28 @@ TEST_F(Denoise, DenoiseImageKeepsTheRawImageAndTheLayers) {
   EXPECT_EQ(image.attributes.at("denoiser_quality"), "high");
   EXPECT_EQ(image.attributes.at("denoiser").rfind("Intel Open Image Denoise 2.", 0), 0u);
   EXPECT_EQ(image.attributes.at("renderer"), "pathcl test");
+}
 
+// The render's determinism ("bitwise") describes the raw layer: it moves to raw.determinism, and the
+// denoised beauty's is the denoiser's, the same bits only with the same library build on the same device
+// and CPU, which the header names.
+TEST_F(Denoise, DenoisedHeaderSaysWhatTheBitsDependOn) {
+  Image image = input_image();
+  denoise_image(image, DenoiseOptions{});
+  EXPECT_EQ(image.attributes.at("determinism"), "denoiser-dependent");
+  EXPECT_EQ(image.attributes.at("raw.determinism"), "bitwise");
+  EXPECT_EQ(image.attributes.at("denoiser_device").rfind("CPU", 0), 0u) << image.attributes.at("denoiser_device");
+  EXPECT_EQ(image.attributes.at("denoiser").rfind("Intel Open Image Denoise 2.", 0), 0u);
+  EXPECT_EQ(image.attributes.at("denoiser_quality"), "high");
+  Image again = image;  // denoised again: the render's value stays
+  denoise_image(again, DenoiseOptions{});
+  EXPECT_EQ(again.attributes.at("determinism"), "denoiser-dependent");
+  EXPECT_EQ(again.attributes.at("raw.determinism"), "bitwise");
+  Image foreign = input_image();  // a file without the attribute gets none for its raw layer
+  foreign.attributes.erase("determinism");
+  denoise_image(foreign, DenoiseOptions{});
+  EXPECT_EQ(foreign.attributes.at("determinism"), "denoiser-dependent");
+  EXPECT_EQ(foreign.attributes.count("raw.determinism"), 0u);
 }
 
 // A denoised image denoised again: the raw layer, the render, is the input, and it stays the render's; the
@@ -204,7 +226,11 @@ TEST_F(Denoise, DenoisingADenoisedImageDenoisesItsRawLayerAndKeepsIt) {
   ASSERT_NE(find_layer(old, "raw.variance"), nullptr);
   old.variance = find_layer(old, "raw.variance")->values;
   old.layers.erase(std::find_if(old.layers.begin(), old.layers.end(), [](const ImageLayer& l) { return l.name == "raw.variance"; }));
+  old.attributes["determinism"] = "bitwise";  // and its determinism, the render's, at the top level
+  old.attributes.erase("raw.determinism");
   denoise_image(old, DenoiseOptions{});
+  EXPECT_EQ(old.attributes.at("determinism"), "denoiser-dependent");
+  EXPECT_EQ(old.attributes.at("raw.determinism"), "bitwise");
   EXPECT_TRUE(old.variance.empty());
   ASSERT_NE(find_layer(old, "raw.variance"), nullptr);
   EXPECT_EQ(find_layer(old, "raw.variance")->values, original.variance);
@@ -434,4 +460,8 @@ TEST_F(Denoise, RenderDenoiseKeepsTheRawBeautyAndNamesTheDenoiser) {
   EXPECT_NE(find_layer(denoised, "normal"), nullptr);
   EXPECT_EQ(denoised.attributes["denoiser_aux"], "albedo,normal");
   EXPECT_EQ(denoised.attributes["denoiser"].rfind("Intel Open Image Denoise 2.", 0), 0u) << denoised.attributes["denoiser"];
+  EXPECT_EQ(denoised.attributes["denoiser_device"].rfind("CPU", 0), 0u) << denoised.attributes["denoiser_device"];
+  EXPECT_EQ(plain.attributes["determinism"], "bitwise");
+  EXPECT_EQ(denoised.attributes["raw.determinism"], "bitwise");
+  EXPECT_EQ(denoised.attributes["determinism"], "denoiser-dependent");
 }
