@@ -62,9 +62,10 @@ int run_denoise_command() {
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_image(a.output, image);
   if (!a.quiet)
-    std::fprintf(stderr, "%s: denoised %ux%u%s in %.2f s with %s on %s (quality %s, aux %s) -> %s\n", a.input.c_str(),
-                 image.width, image.height, denoised_before ? " (its raw layer: it was denoised before)" : "", seconds,
-                 image.attributes["denoiser"].c_str(), image.attributes["denoiser_device"].c_str(), a.quality.c_str(),
-                 image.attributes["denoiser_aux"].c_str(), a.output.c_str());
+    // scripts/bench/denoise reads this line up to "aux ...)".
+    std::fprintf(stderr, "%s: denoised %ux%u in %.2f s with %s (quality %s, aux %s) on %s%s -> %s\n", a.input.c_str(),
+                 image.width, image.height, seconds, image.attributes["denoiser"].c_str(), a.quality.c_str(),
+                 image.attributes["denoiser_aux"].c_str(), image.attributes["denoiser_device"].c_str(),
+                 denoised_before ? ", from its raw layer (it was denoised before)" : "", a.output.c_str());
   return 0;
 }
