@@ -16,51 +16,12 @@ inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
 /* Written once over lanes (V3 lane3f/lane3f8/lane3f16 of exact_math.cl, F, I their float and int types,
  * for issue 15's lane-generic kernel), branches as per-lane selects; the float3 functions below are the
  * one-lane instances, so every lane gets their bits (tests/exact_math_test.cpp, LaneHelpersGiveTheFloat3Bits). */
-#define PC_MATH_LANES(V3, F, I)                                                                           \
-  /* An orthonormal basis around unit n (Duff et al. 2017). */                                            \
-  inline PC_OVL void make_frame(V3 n, V3* t, V3* b) {                                                     \
-    F s = select((F)(-1.0f), (F)(1.0f), n.z >= 0.0f);                                                     \
-    F a = -1.0f / (s + n.z);                                                                              \
-    F c = n.x * n.y * a;                                                                                  \
-    *t = lane3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);                                                \
-    *b = lane3(c, s + n.y * n.y * a, -n.y);                                                               \
-  }                                                                                                       \
-  /* Moves p off the surface with normal n, by the error bound err, to the side of direction w, and      \
-   * rounds away from the surface (pbrt-v4 OffsetRayOrigin), so a spawned ray cannot re-hit the surface   \
-   * it left. */                                                                                          \
-  inline PC_OVL F pc_offset_component_(F p, F offset) {                                                   \
-    F po = p + offset;                                                                                    \
-    return select(select(po, nextafter(po, (F)(-INFINITY)), offset < 0.0f), nextafter(po, (F)(INFINITY)), \
-                  offset > 0.0f);                                                                         \
-  }                                                                                                       \
-  inline PC_OVL V3 offset_ray_origin(V3 p, V3 err, V3 n, V3 w) {                                          \
-    F d = pc_dot(lane3(fabs(n.x), fabs(n.y), fabs(n.z)), err);                                            \
-    I back = pc_dot(w, n) < 0.0f;                                                                         \
-    F ox = d * n.x, oy = d * n.y, oz = d * n.z;                                                           \
-    ox = select(ox, -ox, back);                                                                           \
-    oy = select(oy, -oy, back);                                                                           \
-    oz = select(oz, -oz, back);                                                                           \
-    return lane3(pc_offset_component_(p.x, ox), pc_offset_component_(p.y, oy), pc_offset_component_(p.z, oz)); \
-  }                                                                                                       \
-  inline PC_OVL F luminance_lanes(V3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }          \
-  inline PC_OVL F power_heuristic(F pdf_a, F pdf_b) {                                                     \
-    F a = pdf_a * pdf_a, b = pdf_b * pdf_b;                                                               \
-    I squares = (a + b > 0.0f) & isfinite(a + b);                                                         \
-    F weight = a / (a + b);                                                                               \
-    /* Where the squares overflowed (a light sampled from 1e18 away has a pdf of 1e36: inf / inf was      \
-     * NaN) or underflowed: the same weight from the ratio of the pdfs (rare: its two divisions only      \
-     * where a lane needs them). */                                                                       \
-    if (pc_any_(!squares)) {                                                                              \
-      F r = pdf_b / pdf_a;                                                                                \
-      F from_ratio = select(1.0f / (1.0f + r * r), (F)(0.0f), !(pdf_a > 0.0f));                           \
-      weight = select(from_ratio, weight, squares);                                                       \
-    }                                                                                                     \
-    return weight;                                                                                        \
-  }
-PC_MATH_LANES(lane3f, float, int)
-PC_MATH_LANES(lane3f8, float8, int8)
-PC_MATH_LANES(lane3f16, float16, int16)
-#undef PC_MATH_LANES
+#define PC_LANE_W 1
+#include "templates/math.cl"
+#define PC_LANE_W 8
+#include "templates/math.cl"
+#define PC_LANE_W 16
+#include "templates/math.cl"
 
 /* A float3 as one lane and back (the same type: kept where a call reads better as a conversion). */
 inline float3 lane3_of(float3 v) { return v; }

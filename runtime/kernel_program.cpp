@@ -41,10 +41,14 @@ const char* find_source(const std::string& name) {
   return nullptr;
 }
 
+// A file under templates/ is expanded at every #include (code written once over types that its includer
+// defines before each include: the lane widths); any other file once.
+bool is_template(const std::string& name) { return name.rfind("templates/", 0) == 0; }
+
 void expand(const std::string& name, std::set<std::string>& seen, std::string& out) {
   const char* text = find_source(name);
   if (!text) throw RuntimeFailure("kernel source \"" + name + "\" is not embedded in this build");
-  seen.insert(name);
+  if (!is_template(name)) seen.insert(name);
   out += "#line 1 \"" + name + "\"\n";
   std::istringstream in(text);
   std::string line;

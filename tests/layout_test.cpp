@@ -38,4 +38,14 @@ TEST(Layout, KernelSourcesCarryLineMarkers) {
   EXPECT_NE(source.find("#line 1 \"shared/types.h\""), std::string::npos);
   // Each file is included once even though several files include math.cl.
   EXPECT_EQ(source.find("#line 1 \"math.cl\""), source.rfind("#line 1 \"math.cl\""));
+  // A template is expanded at every include, its lines marked each time: the diffuse lobe at 1, 8 and 16
+  // lanes, each an overload of its own.
+  auto count = [&](const std::string& text) {
+    size_t n = 0;
+    for (size_t at = source.find(text); at != std::string::npos; at = source.find(text, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("#line 1 \"templates/bsdf_diffuse.cl\""), 3u);
+  EXPECT_EQ(count("inline PC_OVL V3 diffuse_eval_lanes(V3 c, V3 wi)"), 3u);
+  EXPECT_EQ(count("#define PC_DIFFUSE_LANES"), 0u);
 }
