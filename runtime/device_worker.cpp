@@ -106,6 +106,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     aov.work_group = kernel_work_group(cl, aov.kernel->k, settings.work_group, aov_lanes, "aov");
     phases_.push_back(std::move(aov));
   }
+  first_launches();
   clear_film();
 }
 
@@ -142,20 +143,31 @@ void DeviceWorker::read_commutative_layers(std::vector<uint32_t>& out) {
   });
 }
 
+void DeviceWorker::set_unit_args(Phase& p, uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride,
+                                 uint32_t sample_begin, uint32_t sample_count) {
+  cl_uint a = p.first_unit_arg;
+  p.kernel->arg(a++, cl_uint(pixel_begin));
+  p.kernel->arg(a++, cl_uint(pixel_count));
+  if (p.strided) p.kernel->arg(a++, cl_uint(pixel_stride));
+  p.kernel->arg(a++, cl_uint(sample_begin));
+  p.kernel->arg(a++, cl_uint(sample_count));
+}
+
+void DeviceWorker::first_launches() {
+  for (Phase& p : phases_) {
+    set_unit_args(p, 0, 0, 1, 0, 0);
+    run_kernel(*cl_, p.kernel->k, std::max<size_t>(p.work_group, 1), p.work_group);
+  }
+}
+
 void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
                           uint32_t sample_count, UnitOutput* out) {
   const UnitStats zero{};
   CL_CHECK(clEnqueueWriteBuffer(cl_->queue, stats_.mem, CL_FALSE, 0, sizeof zero, &zero, 0, nullptr, nullptr));
   for (Phase& p : phases_) {
-    ClKernel& k = *p.kernel;
-    cl_uint a = p.first_unit_arg;
-    k.arg(a++, cl_uint(pixel_begin));
-    k.arg(a++, cl_uint(pixel_count));
-    if (p.strided) k.arg(a++, cl_uint(pixel_stride));
-    k.arg(a++, cl_uint(sample_begin));
-    k.arg(a++, cl_uint(sample_count));
+    set_unit_args(p, pixel_begin, pixel_count, pixel_stride, sample_begin, sample_count);
     const size_t items = p.items ? p.items(pixel_count) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
-    double ms = items > 0 ? run_kernel(*cl_, k.k, items, p.work_group) : 0.0;
+    double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items, p.work_group) : 0.0;
     if (out) {
       out->kernel_ms += ms;
       out->phases.push_back({p.name, ms});

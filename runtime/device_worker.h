@@ -39,6 +39,12 @@ class DeviceWorker : public UnitWorker {
     bool strided = true;  // takes pixel_stride (pixel units and the AOV pass; light paths are not strided)
   };
   // Runs every phase over pixels (or paths) pixel_begin + i * stride, i < count, samples [s0, s0 + sn).
+  void set_unit_args(Phase& p, uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride,
+                     uint32_t sample_begin, uint32_t sample_count);
+  // Each phase launched once over no pixels (its kernel does nothing for a count of 0): PoCL generates a
+  // kernel's code for its work-group size at its first launch, seconds even for a program from the cache,
+  // which then count as set-up instead of the first unit's time (and the schedule's first rate estimate).
+  void first_launches();
   void launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
               uint32_t sample_count, UnitOutput* out);
   void clear_film();

@@ -44,6 +44,7 @@ struct TechniqueBuild {
 // pixels per work item), or as many as its `items` says: a phase over something else than the unit's
 // pixels (a photon grid's cells, one work item for a serial scan, two per pixel) gets the unit's range
 // all the same and finds its own work from it. Phases run in order; each is timed and named in --stats.
+// A phase's kernel must do nothing for a unit of count 0: the worker launches each so once at set-up.
 struct TechniquePhase {
   std::string name;  // "render"
   std::string entry;
