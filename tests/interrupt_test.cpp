@@ -35,8 +35,9 @@ pid_t start_pathcl(const std::string& args) {
   return pid;
 }
 
+// Up to two minutes: the first render of a kernel builds it (seconds on a loaded machine with cold caches).
 bool wait_for_file(const std::string& path) {
-  for (int i = 0; i < 2000 && !fs::exists(path); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  for (int i = 0; i < 24000 && !fs::exists(path); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   return fs::exists(path);
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 #include <cmath>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -95,7 +96,8 @@ inline PixelComparison compare_pixels(const Film& a, const Film& b, const std::f
 
 // The image is a pure function of scene, settings and seed: the same bits as a render with options o for
 // a work-group size of 16, units of 3 spp over 37 paths, 32-bit word pairs instead of 64-bit atomics, and
-// a render resumed from the half-way film of another (o.spp a power of two).
+// a render resumed from the half-way film of another (o.spp a power of two), and renders that a stop rule
+// (target error, time) ended.
 inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options& o) {
   Film reference = render_with(scene, o).film;
   ASSERT_GT(image_mean(reference), 0.0);
@@ -133,6 +135,27 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   Options resumed = o;
   resumed.resume = &start;
   same(render_with(scene, resumed).film, "resumed half-way");
+  // Stop rules end a render of these commutative units at a horizon, leaving the film that the render
+  // without the rule has there (not that of a render asked for fewer spp: the splat scale depends on the
+  // spp asked for), whatever the split into units.
+  RenderOptions planned = partial;
+  planned.spp = 8 * o.spp;
+  planned.power_of_two_horizons = true;
+  std::map<uint32_t, std::vector<uint32_t>> horizons;
+  RenderCallbacks at_horizons;
+  at_horizons.horizon = [&](const Film& f, double, double) { horizons[f.spp] = f.words; };
+  render(test_device(), scene, planned, at_horizons);
+  for (const char* rule : {"target_error", "time"}) {
+    RenderOptions p = planned;
+    p.tile_pixels = 37;
+    if (std::string(rule) == "time") p.time_budget = 1e-9;  // over at the first horizon
+    else p.target_error = 1e30;                             // met at the first check (8 spp)
+    RenderResult stopped = render(test_device(), scene, p);
+    EXPECT_EQ(stopped.stop_reason, rule);
+    ASSERT_LT(stopped.film.spp, p.spp) << rule;
+    ASSERT_EQ(horizons.count(stopped.film.spp), 1u) << rule << " stopped at " << stopped.film.spp << " spp";
+    EXPECT_EQ(stopped.film.words, horizons[stopped.film.spp]) << rule << " at " << stopped.film.spp << " spp";
+  }
 }
 
 }  // namespace light_transport_test
