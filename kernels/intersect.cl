@@ -336,12 +336,20 @@ inline void hit_init(Hit* hit, const Ray* ray) {
   hit->instance = PC_INVALID;
 }
 
-/* Pops the next subtree of a traversal stack that can still hold a hit nearer than t into *ref; false
- * when none is left. */
-__attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const float* stack_entry, int* sp, float t, uint* ref) {
+/* Pops the next subtree of a traversal stack that can still hold a hit nearer than the nearest hit so far
+ * into *ref; false when none is left. t_far: that hit's t widened by slab_widening(), as the node tests
+ * widen it. Against t itself a box whose entry distance rounds a few ulps beyond the t of a triangle on
+ * its face was dropped once that t was found in another box: two triangles of a shared edge, hit at the
+ * same t in two leaves whose entries both round above it (the floor and a wall of the Cornell box), then
+ * gave the triangle of whichever leaf came first, not the lower primitive index, so the hit depended on
+ * the traversal order (a packet's is not its single ray's: kernels/packet.cl). Every subtree the node
+ * test would enter at the current t is entered, and the hit is the minimum of the one total order
+ * (intersect_prim) whenever each triangle's t is within that widening of its boxes' entries. */
+__attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const float* stack_entry, int* sp, float t_far,
+                                                       uint* ref) {
   while (*sp > 0) {
     --*sp;
-    if (stack_entry[*sp] <= t) {
+    if (stack_entry[*sp] <= t_far) {
       *ref = stack[*sp];
       return true;
     }
@@ -402,7 +410,7 @@ __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut,
         continue;
       }
     }
-    if (!pop_subtree(stack, stack_entry, &sp, hit->t, &ref)) return hit->slot != PC_INVALID;
+    if (!pop_subtree(stack, stack_entry, &sp, hit->t * slab_widening(), &ref)) return hit->slot != PC_INVALID;
   }
 }
 
@@ -596,7 +604,7 @@ __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut,
         continue;
       }
     }
-    if (!pop_subtree(stack, stack_entry, &sp, nearest, &ref)) return hit->slot != PC_INVALID;
+    if (!pop_subtree(stack, stack_entry, &sp, nearest_far, &ref)) return hit->slot != PC_INVALID;
   }
 }
 #endif /* PC_BVH_WIDE */
@@ -718,7 +726,7 @@ inline bool trace_instances(const SceneData* sc, const SceneData* cut, const Ray
         continue;
       }
     }
-    if (!pop_subtree(stack, stack_entry, &sp, hit->t, &node)) return hit->slot != PC_INVALID;
+    if (!pop_subtree(stack, stack_entry, &sp, hit->t * slab_widening(), &node)) return hit->slot != PC_INVALID;
   }
 }
 #endif

@@ -2,9 +2,10 @@
  * together, each node's boxes and each leaf's triangles tested against all W rays at once in vector
  * registers. Each lane does the operations of the single-ray code (kernels/intersect.cl: the slab test,
  * the watertight test of intersect_block, the (t, primitive) order of intersect_prim), and a lane keeps
- * every subtree that its own ray enters, so its hit is the nearest of the same total order as the single
- * ray's, bit for bit; traversal order, and the leaves a lane tests only because another lane entered
- * them, cannot change a minimum. Spheres and cut-outs are tested lane by lane with the single-ray code. */
+ * every subtree that its own ray enters (up to its nearest hit widened as the node test widens it:
+ * pop_subtree), so its hit is the nearest of the same total order as the single ray's, bit for bit;
+ * traversal order, and the leaves a lane tests only because another lane entered them, cannot change a
+ * minimum. Spheres and cut-outs are tested lane by lane with the single-ray code. */
 #ifndef PATHCL_PACKET_CL
 #define PATHCL_PACKET_CL
 
@@ -215,7 +216,8 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
   /* The packet through the tree from node root (closest hit; with any_hit a lane stops at its first hit, \
    * and the returned mask is of the lanes that have one). The stack holds each pushed subtree's entry   \
    * distance per lane (NaN where the lane's ray missed its box): when popped, a lane enters it where the  \
-   * single ray would, where that distance is no farther than its nearest hit so far. */                  \
+   * single ray would, where that distance is no farther than its nearest hit so far times                \
+   * slab_widening() (pop_subtree). */                                                                    \
   inline PC_OVL I trace_packet(const SceneData* cut, __global const WideNode* nodes,                      \
                                __global const LeafBlock* blocks, __global const Primitive* prims, uint root, \
                                const RayPacket##N* r, I active, bool any_hit, HitPacket##N* h) {          \
@@ -291,8 +293,9 @@ inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
       for (;;) {                                                                                          \
         if (sp == 0) return any_hit ? found : h->slot != (U)(PC_INVALID);                                 \
         --sp;                                                                                             \
-        /* The lanes that entered it no farther than their nearest hit (the single ray's test). */       \
-        lanes = active & (stack_entry[sp] <= h->t);                                                       \
+        /* The lanes that entered it no farther than their nearest hit, widened (the single ray's test,   \
+         * pop_subtree: against t itself the order of the leaves decided ties at a shared edge). */       \
+        lanes = active & (stack_entry[sp] <= h->t * slab_widening());                                     \
         if (!pc_any_(lanes)) continue;                                                                    \
         uint bits = pc_lane_bits(lanes);                                                                  \
         if ((one_octant && 4u * popcount(bits) > N) || (stack[sp] & PC_BVH4_LEAF)) break;                 \
