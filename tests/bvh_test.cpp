@@ -1,4 +1,5 @@
 // The BVH: structural invariants on the host, and traversal on the device against brute force.
+#include <bit>
 #include <cstring>
 #include <random>
 #include <set>
@@ -432,6 +433,89 @@ TEST(Bvh, EveryLayoutMatchesBruteForceExactlyTiesIncluded) {
       size_t mismatches = 0;
       for (size_t k = 0; k < rays.size(); ++k) mismatches += (any[k].prim == PC_INVALID) != (brute[k].prim == PC_INVALID);
       EXPECT_EQ(mismatches, 0u) << width << "-wide, " << lanes << " lanes, any hit";
+    }
+  }
+}
+
+// A ray of the Cornell box render (scenes/cornell-box.json at 256 x 256, seed 1, independent sampler, 1024
+// spp: a camera ray of pixel 52942) that meets the floor (primitive 1) and the right wall (primitive 9) on
+// their common edge at the same t: the lower index, the floor, is its hit. Both leaves' entry distance
+// rounds one ulp beyond that t. In its packet of the render (16 lanes, 256-sample passes), whose companions
+// are the other rays here (camera rays of its row, bounce rays), the packet traversal entered the wall's
+// leaf first, then dropped the floor's and returned the wall, as it did for a packet of 16 copies of the
+// ray; the single ray enters the floor's leaf first. The device coordinates are the render's (around the
+// camera), as bits.
+std::vector<RayRecord> cornell_edge_packet() {
+  const uint32_t r[16][6] = {{0x00000000, 0x00000000, 0x00000000, 0x3e592355, 0xbe5a1e43, 0xbf7429ce},
+                             {0x00000000, 0x00000000, 0x00000000, 0x3e59d223, 0xbe596ff4, 0xbf7429cb},
+                             {0x3f7fc682, 0xbf7ffff8, 0xc08f9530, 0xbf3d75f4, 0x3f0aef13, 0xbecb5a14},
+                             {0x3f7f2598, 0xbf7ffff8, 0xc08ec539, 0x3f051edd, 0x3f50dd9e, 0xbe817601},
+                             {0x3f7e08a6, 0xbf7ffff8, 0xc08f2463, 0x3db5ddce, 0x3f6d9ae8, 0xbeb912b5},
+                             {0x3c29bec7, 0xbf7a09be, 0xc0696f1e, 0x3f407a6e, 0x3f019f2d, 0xbed834dd},
+                             {0x00000000, 0x00000000, 0x00000000, 0x3e5b223a, 0xbe5b223a, 0xbf73feb8},  // the ray
+                             {0x00000000, 0x00000000, 0x00000000, 0x3e5a67e5, 0xbe5a9e57, 0xbf74108b},
+                             {0xbf7ffff8, 0x3eaf4233, 0xc089c4f7, 0x3e4094ac, 0xbf151979, 0xbf4a7412},
+                             {0x3ee204a8, 0xbf7ffff8, 0xc0675903, 0xbf0e2beb, 0x3f4ae523, 0xbe80f279},
+                             {0xbde1b2d8, 0xbf4d1412, 0xc0815613, 0x3e54eefc, 0xbf58a528, 0xbefb2256},
+                             {0xbdbe1173, 0xbf5f3206, 0xc07f07d1, 0x3efdd7a0, 0xbecd516c, 0xbf453366},
+                             {0x3f6ce860, 0xbf7ffff8, 0xc08fa563, 0xbebedb82, 0x3ea163b1, 0x3f5f6c39},
+                             {0x00000000, 0x00000000, 0x00000000, 0x3e5a9811, 0xbe5afcba, 0xbf740890},
+                             {0x3f5dd9fe, 0xbf69b79c, 0xc08ffffb, 0xbe60f778, 0x3f1ee466, 0x3f40ae75},
+                             {0xbd686f87, 0xbd5f0ef0, 0xc0777b62, 0x3f0b3d85, 0xbf3f7cc7, 0xbec2bce0}};
+  std::vector<RayRecord> rays(16);
+  for (int i = 0; i < 16; ++i)
+    rays[i] = {{std::bit_cast<float>(r[i][0]), std::bit_cast<float>(r[i][1]), std::bit_cast<float>(r[i][2])}, 0,
+               {std::bit_cast<float>(r[i][3]), std::bit_cast<float>(r[i][4]), std::bit_cast<float>(r[i][5])}, INFINITY};
+  return rays;
+}
+
+// The same hit record, bit for bit (u and v only for a hit).
+bool same_hit(const HitRecord& a, const HitRecord& b) {
+  auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
+  return bits(a.t) == bits(b.t) && a.prim == b.prim &&
+         (a.prim == PC_INVALID || (bits(a.u) == bits(b.u) && bits(a.v) == bits(b.v)));
+}
+
+// A ray's packet hit is its single ray's, bit for bit, whichever rays share its packet: the ray above in
+// its render packet, at every place of that packet (the companions rotated) and in a packet of its copies,
+// at 8 and 16 lanes in the 8- and 16-wide layouts, and one ray at a time in every layout: all of them the
+// brute-force hit (kernels/intersect.cl, pop_subtree).
+TEST(Bvh, PacketHitOfACornellBoxEdgeRayIsItsSingleRayHitWhateverItsCompanions) {
+  ClContext& cl = test_device();
+  DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
+  scene.origin = glm::dvec3(0);  // the rays are in the render's device coordinates already
+  const std::vector<RayRecord> packet = cornell_edge_packet();
+  std::vector<RayRecord> rays;  // rotation k puts the edge ray (6) at place (6 + k) % 16
+  for (int k = 0; k < 16; ++k)
+    for (int i = 0; i < 16; ++i) rays.push_back(packet[(i + 16 - k) % 16]);
+  std::vector<RayRecord> alone(16, packet[6]);
+  rays.insert(rays.end(), alone.begin(), alone.end());
+
+  KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(scene.features));
+  ClBuffer prims = upload(cl, scene.prims), rb = upload(cl, rays);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(HitRecord));
+  ClKernel k(program.kernel("brute_force_trace"));
+  k.arg(0, prims.mem);
+  k.arg(1, cl_uint(scene.prims.size()));
+  k.arg(2, rb.mem);
+  k.arg(3, out.mem);
+  run_kernel(cl, k.k, rays.size());
+  std::vector<HitRecord> brute = read_buffer<HitRecord>(cl, out, rays.size());
+  ASSERT_EQ(brute[6].prim, 1u) << "the floor, at the same t as the wall";
+  ASSERT_EQ(std::bit_cast<uint32_t>(brute[6].t), 0x409588c6u);
+  // The leaves' entry distance (the floor's y and the wall's x plane, 1 / d.x from the origin): one ulp beyond.
+  ASSERT_EQ(std::bit_cast<uint32_t>(1.0f / packet[6].dir[0]), 0x409588c7u);
+  for (uint32_t width : {4u, 8u, 16u}) {
+    BvhWidthScope scope(width);
+    for (uint32_t lanes : {1u, 8u, 16u}) {
+      if (width == 4 && lanes > 1) continue;  // packets need the 8- or 16-wide tree
+      TraceTiming timing;
+      std::vector<HitRecord> hits = trace_ray_records(cl, scene, rays, 1, timing, 0, lanes);
+      for (size_t i = 0; i < rays.size(); ++i)
+        EXPECT_TRUE(same_hit(hits[i], brute[i]))
+            << width << "-wide, " << lanes << " lanes, ray " << i << " (place " << i % 16 << " of packet " << i / 16
+            << "): brute force t=" << brute[i].t << " prim=" << brute[i].prim << ", traced t=" << hits[i].t
+            << " prim=" << hits[i].prim;
     }
   }
 }
