@@ -5,7 +5,13 @@
  *   V3                     lanes of 3-vectors by component: lane3f (float3), lane3f8 or lane3f16 (1, 8, 16)
  *   convert_F, convert_I   convert_float, convert_int of the width
  *   as_F, as_I, as_U       as_float, as_int, as_uint of the width
+ *   PC_LANE_NAME(x)        the name x followed by the width (RayPacket8)
  * templates/lane_width_end.h closes it. */
+#ifndef PC_LANE_NAME
+#define PC_LANE_NAME(x) PC_LANE_NAME_(x, PC_LANE_W)
+#define PC_LANE_NAME_(x, w) PC_LANE_NAME__(x, w)
+#define PC_LANE_NAME__(x, w) x##w
+#endif
 #if PC_LANE_W == 1
 #define F float
 #define I int
