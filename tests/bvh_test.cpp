@@ -201,6 +201,20 @@ void check_wide_tree(const DeviceScene& scene, const Tree& tree, uint32_t wide_d
   EXPECT_LT(tree.node_count(), scene.bvh.node_count / (Width / 2));
 }
 
+// The nearest hit of each ray by testing every primitive of the scene (tests.cl's brute_force_trace).
+std::vector<HitRecord> brute_force_hits(ClContext& cl, const DeviceScene& scene, const std::vector<RayRecord>& rays) {
+  KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(scene.features));
+  ClBuffer prims = upload(cl, scene.prims), rb = upload(cl, rays);
+  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(HitRecord));
+  ClKernel k(program.kernel("brute_force_trace"));
+  k.arg(0, prims.mem);
+  k.arg(1, cl_uint(scene.prims.size()));
+  k.arg(2, rb.mem);
+  k.arg(3, out.mem);
+  run_kernel(cl, k.k, rays.size());
+  return read_buffer<HitRecord>(cl, out, rays.size());
+}
+
 }  // namespace
 
 TEST(Bvh, EveryPrimitiveInExactlyOneLeafAndChildrenInsideParents) {
@@ -368,16 +382,7 @@ TEST(Bvh, EveryLayoutMatchesBruteForceExactlyTiesIncluded) {
   DeviceScene scene = load_device_scene(write_temp_file("bvh-ties.json", scene_with_ties_json()), DeviceOrigin::world);
   std::vector<RayRecord> rays = rays_with_ties(100000, 3);
 
-  KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(scene.features));
-  ClBuffer prims = upload(cl, scene.prims), rb = upload(cl, rays);
-  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(HitRecord));
-  ClKernel k(program.kernel("brute_force_trace"));
-  k.arg(0, prims.mem);
-  k.arg(1, cl_uint(scene.prims.size()));
-  k.arg(2, rb.mem);
-  k.arg(3, out.mem);
-  run_kernel(cl, k.k, rays.size());
-  std::vector<HitRecord> brute = read_buffer<HitRecord>(cl, out, rays.size());
+  std::vector<HitRecord> brute = brute_force_hits(cl, scene, rays);
   size_t hits = 0, grid_hits = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
     hits += brute[i].prim != PC_INVALID;
@@ -491,16 +496,7 @@ TEST(Bvh, PacketHitOfACornellBoxEdgeRayIsItsSingleRayHitWhateverItsCompanions) {
   std::vector<RayRecord> alone(16, packet[6]);
   rays.insert(rays.end(), alone.begin(), alone.end());
 
-  KernelProgram program = build_kernel_program(cl, "tests.cl", kernel_options(scene.features));
-  ClBuffer prims = upload(cl, scene.prims), rb = upload(cl, rays);
-  ClBuffer out(cl, CL_MEM_WRITE_ONLY, rays.size() * sizeof(HitRecord));
-  ClKernel k(program.kernel("brute_force_trace"));
-  k.arg(0, prims.mem);
-  k.arg(1, cl_uint(scene.prims.size()));
-  k.arg(2, rb.mem);
-  k.arg(3, out.mem);
-  run_kernel(cl, k.k, rays.size());
-  std::vector<HitRecord> brute = read_buffer<HitRecord>(cl, out, rays.size());
+  std::vector<HitRecord> brute = brute_force_hits(cl, scene, rays);
   ASSERT_EQ(brute[6].prim, 1u) << "the floor, at the same t as the wall";
   ASSERT_EQ(std::bit_cast<uint32_t>(brute[6].t), 0x409588c6u);
   // The leaves' entry distance (the floor's y and the wall's x plane, 1 / d.x from the origin): one ulp beyond.

@@ -24,6 +24,14 @@ namespace {
 
 constexpr uint32_t W = 160, H = 120;
 
+// A 2 x 2 grey beauty without layers: input for the command's error paths.
+Image grey_2x2() {
+  Image image;
+  image.width = image.height = 2;
+  image.rgb.assign(12, 0.5f);
+  return image;
+}
+
 // A smooth image: horizontal and vertical gradients with a brighter disk (an edge to keep), in [0.1, 1.5].
 std::vector<float> clean_image() {
   std::vector<float> rgb(size_t(W) * H * 3);
@@ -349,9 +357,7 @@ TEST(DenoiseCommand, BadInputExitsWith2) {
   std::string text = write_temp_file("bad-input/text.exr", "not an EXR file\n");
   EXPECT_EQ(run_pathcl("denoise " + text + " -o " + out, &err), 2);
   EXPECT_NE(err.find(text), std::string::npos) << err;
-  Image image;
-  image.width = image.height = 2;
-  image.rgb.assign(12, 0.5f);
+  Image image = grey_2x2();
   std::string good = dir + "/good.exr";
   write_exr(good, image);
   EXPECT_EQ(run_pathcl("denoise " + good + " -o " + out + " --quality best", &err), 2);
@@ -367,9 +373,7 @@ TEST(DenoiseCommand, BadInputExitsWith2) {
 TEST(DenoiseCommand, RawLayerThatIsNotRgbExitsWith2) {
   std::string dir = temp_dir() + "/bad-raw";
   fs::create_directories(dir);
-  Image image;
-  image.width = image.height = 2;
-  image.rgb.assign(12, 0.5f);
+  Image image = grey_2x2();
   image.layers.push_back({"raw", {"R", "G"}, std::vector<float>(8, 0.5f), false});
   std::string in = dir + "/in.exr", out = dir + "/out.exr", err;
   write_exr(in, image);
@@ -385,9 +389,7 @@ TEST(DenoiseCommand, RawLayerThatIsNotRgbExitsWith2) {
 TEST(DenoiseCommand, MissingGuidesExitWith2) {
   std::string dir = temp_dir() + "/no-guides", out = dir + "/out.exr", err;
   fs::create_directories(dir);
-  Image image;
-  image.width = image.height = 2;
-  image.rgb.assign(12, 0.5f);
+  Image image = grey_2x2();
   std::string none = dir + "/none.exr";
   write_exr(none, image);
   EXPECT_EQ(run_pathcl("denoise " + none + " -o " + out, &err), 2) << err;
@@ -421,9 +423,7 @@ TEST(DenoiseCommand, MissingGuidesExitWith2) {
 TEST(DenoiseCommand, MissingLibraryExitsWith1AndSaysHowToGetIt) {
   std::string dir = temp_dir() + "/no-library";
   fs::create_directories(dir);
-  Image image;
-  image.width = image.height = 2;
-  image.rgb.assign(12, 0.5f);
+  Image image = grey_2x2();
   std::string in = dir + "/in.exr", out = dir + "/out.exr", err;
   write_exr(in, image);
   std::string saved = std::getenv("PATHCL_OIDN_LIBRARY") ? std::getenv("PATHCL_OIDN_LIBRARY") : "";
