@@ -28,7 +28,7 @@
 /* The contribution of connecting camera vertex s (material m, shading frame f, wo_local towards the
  * previous camera vertex; dvcm, dvc its partial sums) to light vertex y, unweighted sums in *others. */
 inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
-                               float wo_ng, float dvcm, float dvc, const LightVertex* y, float* others) {
+                               float wo_ng, float dvcm, float dvc, float vm, __global const LightVertex* y, float* others) {
   float3 d = y->p.xyz - s->p;
   float dist2 = pc_dot(d, d);
   if (!(dist2 > 0.0f)) return (float3)(0.0f);
@@ -50,17 +50,27 @@ inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m
   float camera_rev = bsdf_pdf(m, wi_local, wo_local);
   float light_dir_a = bsdf_pdf(my, wl_local, wc_local) * fabs(pc_dot(d, s->ng)) / dist2;
   float light_rev = bsdf_pdf(my, wc_local, wl_local);
-  *others = camera_dir_a * (y->ng.w + y->ns.w * light_rev) + light_dir_a * (dvcm + dvc * camera_rev);
+  *others = camera_dir_a * (vm + y->ng.w + y->ns.w * light_rev) + light_dir_a * (vm + dvcm + dvc * camera_rev);
   /* The camera end's cosine (shading normal), the light end's adjoint factor (light_path.cl). */
   float g = fabs(wi_local.z) * fabs(pc_dot(wl, y_ns)) * fabs(pc_dot(d, y_ng)) / (fabs(pc_dot(wl, y_ng)) * dist2);
   return f_camera * f_light * y->beta.xyz * g;
 }
 
 /* The camera subpath of key (pixel px, py) and its strategies s = 0, 1 and >= 2 with the light subpath's
- * vertices lv[0 .. lv_count) (in order of length). Returns the pixel's radiance estimate. */
+ * vertices lv[0 .. lv_count) (in order of length), weighted with the merging factors *mis. Returns the
+ * pixel's radiance estimate. VCM (vcm.cl): where `own` is false, the unit holds another unit's light
+ * subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each non-delta vertex, with
+ * the grid's light vertices, into *merged); without connections (bpm, sppm) an emitter counts only where
+ * the path to it is specular (merging makes the others), and SPPM stops at its first non-delta vertex,
+ * after next-event estimation and merging there, unweighted. */
 inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, SampleKey key, uint px, uint py,
-                                   const LightVertex* lv, uint lv_count, uint* rays) {
+                                   const MisFactors* mis, bool own, __global const LightVertex* lv, uint lv_count,
+                                   uint* rays
+#ifdef PC_VCM
+                                   , const MergeGrid* grid, MergeSums* merged, SplatCounts* counts
+#endif
+) {
   __constant const SceneHeader* h = sc->h;
   Ray ray;
   camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
@@ -75,7 +85,8 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
   float eta_scale = 1.0f;
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera
    * connection (t = 1), counted as PC_BDPT_LIGHT_TRACING_COUNT of its paths. */
-  float dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = 0.0f;
+  float dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = 0.0f, dvm = 0.0f;
+  bool specular = true; /* every scattering so far by a delta lobe */
   float3 prev_p = ray.o;
   for (uint depth = 0;; ++depth) {
     Hit hit;
@@ -83,11 +94,11 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     uint t_count = depth + 2u; /* camera vertices of a path ending at this hit: the lens point and depth + 1 */
     if (!trace_scene(sc, sc, &ray, false, &hit)) {
 #ifdef PC_HAS_ENVIRONMENT
-      if (h->env_light != PC_INVALID) { /* s = 0 by the environment */
+      if (own && h->env_light != PC_INVALID && (mis->connect || specular)) { /* s = 0 by the environment */
         Light env = sc->lights[h->env_light];
         float3 le = env_radiance(env, sc->textures, sc->texels, ray.d);
         float others = 0.0f;
-        if (depth > 0u) {
+        if (depth > 0u && mis->connect) {
           float pos, dir;
           light_emission_pdf(sc, lt, h->env_light, prev_p, ray.d, -ray.d, &pos, &dir);
           float emit = emission_choice_pdf(emission_cdf, h->env_light) * pos * dir;
@@ -107,11 +118,12 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
       float dist2 = pc_dot(seg, seg), cos_in = fabs(wo_ng);
       dvcm *= dist2 / cos_in;
       dvc /= cos_in;
+      dvm /= cos_in;
 #ifdef PC_HAS_AREA_LIGHTS
-      if (sh.light != PC_INVALID) { /* s = 0 by an area light; seen directly, no other strategy has it */
+      if (own && sh.light != PC_INVALID && (mis->connect || specular)) { /* s = 0 by an area light */
         float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
         float others = 0.0f;
-        if (depth > 0u) {
+        if (depth > 0u && mis->connect) {
           float pos, dir;
           light_emission_pdf(sc, lt, sh.light, s.p, s.ng, wo, &pos, &dir);
           float emit = emission_choice_pdf(emission_cdf, sh.light) * pos * dir;
@@ -131,26 +143,31 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     float3 wo_local = to_local(&frame, wo);
     float4 u_light = sample4(h, key, PC_DIM_LIGHT(depth));
     float4 u_bsdf = sample4(h, key, PC_DIM_BSDF(depth));
+    bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
 
-    if (!bsdf_is_delta(m)) {
-      /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy. */
+    if (!bsdf_is_delta(m) && own && (mis->connect || sppm)) {
+      /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
+       * (SPPM: its direct light, unweighted). */
       DirectLanes direct;
       if (direct_light_lanes(sc, &s, &frame, &ml, wo_local, wo_ng, u_light.x, u_light.y, u_light.z, 1, &direct)) {
         const LightSampleLanes* ls = &direct.ls;
-        float direct_pdf = ls->pdf, cos_at_light = 1.0f;
-        if (!ls->infinite) {
-          float3 to = ls->p - s.p;
-          if (ls->delta) direct_pdf *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
-          else cos_at_light = fabs(pc_dot(ls->n, ls->wi));
+        float w = 1.0f;
+        if (!sppm) {
+          float direct_pdf = ls->pdf, cos_at_light = 1.0f;
+          if (!ls->infinite) {
+            float3 to = ls->p - s.p;
+            if (ls->delta) direct_pdf *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
+            else cos_at_light = fabs(pc_dot(ls->n, ls->wi));
+          }
+          float pos, dir;
+          light_emission_pdf(sc, lt, ls->light, ls->p, ls->n, -ls->wi, &pos, &dir);
+          float emit = emission_choice_pdf(emission_cdf, ls->light) * pos * dir;
+          float bsdf_dir = ls->delta ? 0.0f : bsdf_pdf(m, wo_local, direct.wi_local);
+          float bsdf_rev = bsdf_pdf(m, direct.wi_local, wo_local);
+          float others = bsdf_dir / direct_pdf + emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) *
+                                                     (mis->vm + dvcm + dvc * bsdf_rev);
+          w = strategy_weight(lt, 1u, t_count, others);
         }
-        float pos, dir;
-        light_emission_pdf(sc, lt, ls->light, ls->p, ls->n, -ls->wi, &pos, &dir);
-        float emit = emission_choice_pdf(emission_cdf, ls->light) * pos * dir;
-        float bsdf_dir = ls->delta ? 0.0f : bsdf_pdf(m, wo_local, direct.wi_local);
-        float bsdf_rev = bsdf_pdf(m, direct.wi_local, wo_local);
-        float others = bsdf_dir / direct_pdf +
-                       emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) * (dvcm + dvc * bsdf_rev);
-        float w = strategy_weight(lt, 1u, t_count, others);
 #ifdef PC_HAS_CUTOUTS
         direct.shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
 #endif
@@ -160,10 +177,12 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
           if (!trace_scene(sc, sc, &direct.shadow, true, &blocker)) radiance += direct_contribution_lanes(throughput, &direct, w);
         }
       }
+    }
+    if (!bsdf_is_delta(m) && own && mis->connect) {
       /* s >= 2: a connection to each light vertex the depth limit allows. */
       for (uint k = 0; k < lv_count && lv[k].length + depth + 1u <= h->max_depth; ++k) {
         float others;
-        float3 c = connect_vertices(sc, &s, m, &frame, wo_local, wo_ng, dvcm, dvc, lv + k, &others);
+        float3 c = connect_vertices(sc, &s, m, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, lv + k, &others);
         if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
         float w = strategy_weight(lt, lv[k].length + 1u, t_count, others);
         if (w == 0.0f) continue;
@@ -177,11 +196,18 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
         if (!trace_scene(sc, sc, &shadow, true, &blocker)) radiance += throughput * c * w;
       }
     }
+#ifdef PC_VCM
+    if (!bsdf_is_delta(m) && (lt->vcm_mode & PC_VCM_MERGE) != 0u) {
+      merge_at(sc, grid, &s, m, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, lt, merged, counts);
+      if (sppm) break; /* SPPM's visible point */
+    }
+#endif
 
     BsdfSampleLanes bs;
     float3 wi;
     if (!scatter_lanes(&ml, &frame, s.ng, wo_local, wo_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
-    vcm_scatter_lanes(&ml, &bs, wo_local, wi, s.ng, 1, &dvcm, &dvc);
+    vcm_scatter_lanes(&ml, &bs, wo_local, wi, s.ng, 1, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
+    specular = specular && bs.delta;
     throughput *= bs.weight;
     eta_scale *= bs.eta2;
     prev_p = s.p;
@@ -195,12 +221,14 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
   return radiance;
 }
 
+#ifndef PC_VCM
 /* One work unit, as light_integrator.cl's light_pass: the BDPT samples of pixels [path_begin, path_begin +
  * path_count) (a light subpath and a camera subpath each) for samples [sample_begin, sample_begin +
- * sample_count), into the splat film (cleared by the host per unit). */
+ * sample_count), into the splat film (cleared by the host per unit); work item i keeps its light subpath's
+ * vertices in light_vertices[i max_depth ..). */
 __kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                        __global uint* film, __global SplatStats* stats, uint path_begin, uint path_count,
-                        uint sample_begin, uint sample_count) {
+                        __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
+                        uint path_begin, uint path_count, uint sample_begin, uint sample_count) {
   SceneData sc = PC_SCENE_DATA;
   uint item = get_global_id(0);
   if (item >= path_count) return;
@@ -209,13 +237,16 @@ __kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   key.pixel = pixel;
   key.seed = h->seed;
   SplatCounts n = {0u, 0u, 0u, 0u, 0u};
-  LightVertex vertices[PC_BDPT_MAX_VERTICES];
+  const MisFactors mis = {0.0f, 0.0f, true, 1u};
+  __global LightVertex* vertices = light_vertices + item * max(h->max_depth, 1u);
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     uint count = 0u;
-    trace_light_path(&sc, lt, emission_cdf, film, key, &n, vertices, &count);
-    float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, vertices, count, &n.rays);
+    trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, vertices, &count);
+    float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, true,
+                                    vertices, count, &n.rays);
     if (splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, s & 1u, L);
   }
   add_splat_counts(stats, &n);
 }
+#endif

@@ -98,19 +98,17 @@ inline void splat_filtered(__global uint* film, __constant const SceneHeader* h,
 }
 
 #ifdef PC_BDPT
-/* A non-delta vertex of a light subpath, kept for BDPT's camera subpath to connect to (7 x 16 bytes):
- * what evaluating its BSDF towards any direction needs, its throughput, and its partial MIS quantities
- * dVCM and dVC (Georgiev, "Implementing Vertex Connection and Merging", 2012; see bdpt.cl). */
+/* The factors of the merging strategies in an iteration's MIS weights (SmallVCM's mMisVmWeightFactor and
+ * mMisVcWeightFactor; vcm.cl): vm = eta = pi r^2 N with merging on (N light paths an iteration), vc = 1 / eta
+ * with connections on too, else 0. BDPT's are 0: its sums then take the same bits (x + 0 is x).
+ * connect: whether this iteration takes the connection strategies (s >= 1 with t >= 1); the light paths
+ * then splat their camera connections. first_length: the shortest light vertex kept (SPPM keeps those
+ * after one scattering event at least: direct light is next-event estimation's). */
 typedef struct {
-  float4 p;     /* xyz: position; w: the largest component of its rounding-error bound */
-  float4 ng;    /* xyz: geometric normal (front side); w: dVCM */
-  float4 ns;    /* xyz: shading normal; w: dVC */
-  float4 wl;    /* xyz: unit direction back along the light path */
-  float4 beta;  /* xyz: throughput arriving at the vertex (emission weight and the scattering before it) */
-  float4 color; /* xyz: the material's colour here (textures and vertex colours applied) */
-  uint material, prim, instance;
-  uint length;  /* scattering events of the light subpath up to and including this vertex */
-} LightVertex;
+  float vm, vc;
+  bool connect;
+  uint first_length;
+} MisFactors;
 
 /* The density with which next-event estimation from x (lights.cl's sample_light) picks light `index` at y
  * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;
@@ -164,12 +162,12 @@ inline float strategy_weight(__constant const LightTransportHeader* lt, uint s, 
 }
 #endif
 
-/* Traces light path (key) and splats its camera connections. BDPT: with MIS weights, and its non-delta
- * vertices in vertices[0 .. *count) (room for max_depth). */
+/* Traces light path (key) and splats its camera connections. BDPT: with MIS weights (and the merging
+ * factors *mis), and its non-delta vertices in vertices[0 .. *count) (room for max_depth). */
 inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
                              __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
 #ifdef PC_BDPT
-                             , LightVertex* vertices, uint* count
+                             , const MisFactors* mis, __global LightVertex* vertices, uint* count
 #endif
 ) {
   __constant const SceneHeader* h = sc->h;
@@ -198,6 +196,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
   bool area = e.prim != PC_INVALID;
   float cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
   float dvc = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf, dvcm = 0.0f;
+  float dvm = dvc * mis->vc;
   float3 prev_p = e.p;
 #endif
   for (uint v = 0;; ++v) { /* v + 1 scattering events at the vertex found now */
@@ -226,12 +225,18 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
     }
     dvcm /= cos_in;
     dvc /= cos_in;
+    dvm /= cos_in;
     prev_p = s.p;
 #endif
 
     /* Connection to the camera. */
     CameraWiSample cs;
-    if (!bsdf_is_delta(m) && camera_sample_wi(h, s.p, u_connect.xy, &cs)) {
+#ifdef PC_BDPT
+    bool connect = mis->connect;
+#else
+    bool connect = true;
+#endif
+    if (connect && !bsdf_is_delta(m) && camera_sample_wi(h, s.p, u_connect.xy, &cs)) {
       float3 wc_local = to_local(&frame, cs.wi);
       float3 f = bsdf_eval(m, wc_local, wl_local);
       /* Reflection only (no non-delta material transmits): the camera on the light's side of the surface. */
@@ -251,7 +256,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
          * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
         float cam_pdf_a = camera_direction_pdf(h, -cs.wi) * fabs(pc_dot(cs.wi, s.ng)) / (cs.dist * cs.dist);
         float rev = bsdf_pdf(m, wc_local, wl_local);
-        per_path *= strategy_weight(lt, v + 2u, 1u, cam_pdf_a * (dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
+        per_path *= strategy_weight(lt, v + 2u, 1u, cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
 #endif
         Hit blocker;
         if (per_path != 0.0f) { /* a NaN goes on, to be counted */
@@ -262,12 +267,12 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
       }
     }
 #ifdef PC_BDPT
-    if (!bsdf_is_delta(m)) {
-      LightVertex* lv = vertices + (*count)++;
+    if (!bsdf_is_delta(m) && v + 1u >= mis->first_length) {
+      __global LightVertex* lv = vertices + (*count)++;
       lv->p = (float4)(s.p, max_component(s.p_err));
       lv->ng = (float4)(s.ng, dvcm);
       lv->ns = (float4)(s.ns, dvc);
-      lv->wl = (float4)(w_light, 0.0f);
+      lv->wl = (float4)(w_light, dvm);
       lv->beta = (float4)(beta, 0.0f);
       lv->color = (float4)(m.color.xyz, 0.0f);
       lv->material = sh.material;
@@ -285,7 +290,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
     float3 wi;
     if (!scatter_lanes(&ml, &frame, s.ng, wl_local, wl_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
 #ifdef PC_BDPT
-    vcm_scatter_lanes(&ml, &bs, wl_local, wi, s.ng, 1, &dvcm, &dvc);
+    vcm_scatter_lanes(&ml, &bs, wl_local, wi, s.ng, 1, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
 #endif
     /* Importance is not scaled by refraction: undo the radiance scaling (bs.eta2) the sample applied. */
     beta *= bs.weight * (bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng));

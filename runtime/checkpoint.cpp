@@ -47,8 +47,12 @@ uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
   const uint32_t settings[] = {options.spp, options.max_depth, options.seed, options.rr_depth, options.sampler};
   h = fnv1a(settings, sizeof settings, h);
   // Other techniques than `path` are in the key too (path keys are as before they existed).
-  const uint32_t id = technique_named(options.integrator, "integrator").id;
-  if (id != PC_INTEGRATOR_PATH) h = fnv1a(&id, sizeof id, h);
+  const Technique& t = technique_named(options.integrator, "integrator");
+  if (t.id != PC_INTEGRATOR_PATH) h = fnv1a(&t.id, sizeof t.id, h);
+  if (t.merging) {
+    const double merging[] = {options.radius, options.alpha, options.merge ? 1.0 : 0.0};
+    h = fnv1a(merging, sizeof merging, h);
+  }
   return h;
 }
 

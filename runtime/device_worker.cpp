@@ -50,9 +50,11 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     light_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof lt.header, &lt.header);
     emission_cdf_ = upload(cl, lt.emission_cdf);
   }
+  TechniqueSizes sizes{layout_.pixels, settings.max_depth, 0, &cl.info};
+  sizes.unit_items = unit_items_ = technique_unit_items(t, sizes);
   for (const TechniqueBuffer& b : t.buffers) {
     const cl_uint zero = 0;
-    size_t bytes = std::max<size_t>(b.bytes(layout_.pixels), sizeof zero);
+    size_t bytes = std::max<size_t>(b.bytes(sizes), sizeof zero);
     bytes = (bytes + sizeof zero - 1) / sizeof zero * sizeof zero;
     ClBuffer& buffer = technique_buffers_.emplace_back(cl, CL_MEM_READ_WRITE, bytes);
     CL_CHECK(clEnqueueFillBuffer(cl.queue, buffer.mem, &zero, sizeof zero, 0, bytes, 0, nullptr, nullptr));
@@ -164,19 +166,26 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
                           uint32_t sample_count, UnitOutput* out) {
   const UnitStats zero{};
   CL_CHECK(clEnqueueWriteBuffer(cl_->queue, stats_.mem, CL_FALSE, 0, sizeof zero, &zero, 0, nullptr, nullptr));
-  for (Phase& p : phases_) {
-    set_unit_args(p, pixel_begin, pixel_count, pixel_stride, sample_begin, sample_count);
-    const size_t items = p.items ? p.items(pixel_count) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
-    double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items, p.work_group) : 0.0;
-    if (out) {
-      out->kernel_ms += ms;
-      out->phases.push_back({p.name, ms});
+  // Per-sample techniques run their phases once per sample, in order (Technique::per_sample).
+  const bool per_sample = technique_->per_sample;
+  for (uint32_t s = sample_begin; s < sample_begin + sample_count; s += per_sample ? 1 : sample_count) {
+    for (size_t i = 0; i < phases_.size(); ++i) {
+      Phase& p = phases_[i];
+      set_unit_args(p, pixel_begin, pixel_count, pixel_stride, s, per_sample ? 1 : sample_count);
+      const size_t items =
+          p.items ? p.items(pixel_count, layout_.pixels) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
+      double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items, p.work_group) : 0.0;
+      if (out) {
+        out->kernel_ms += ms;
+        if (out->phases.size() <= i) out->phases.push_back({p.name, 0.0});
+        out->phases[i].ms += ms;
+      }
     }
   }
 }
 
 uint64_t DeviceWorker::probe(uint32_t count, uint32_t spp) {
-  count = std::min(count, layout_.pixels);
+  count = std::min({count, layout_.pixels, unit_items_});
   // Light paths are not strided: the probe's paths are [0, count).
   uint32_t stride = technique_->units == UnitKind::pixels ? layout_.pixels / count : 1;
   launch(0, count, stride, 0, spp, nullptr);

@@ -120,3 +120,16 @@ void develop_splats(Film& f, const LightTransportHeader& lt, uint64_t* overflows
 std::string splat_build_options(const TechniqueBuild& b) {
   return !b.splat_pairs && device_has_extension(*b.device, "cl_khr_int64_base_atomics") ? " -DPC_SPLAT_ATOMIC64" : "";
 }
+
+namespace {
+size_t light_vertex_slots(const TechniqueSizes& s) { return std::max<uint32_t>(s.max_depth, 1); }
+}  // namespace
+
+size_t light_vertex_bytes(const TechniqueSizes& s) { return size_t(s.unit_items) * light_vertex_slots(s) * sizeof(LightVertex); }
+
+uint32_t light_vertex_unit_paths(const TechniqueSizes& s, size_t extra_bytes) {
+  const size_t vertices = light_vertex_slots(s) * sizeof(LightVertex);
+  const uint64_t alloc = std::max<uint64_t>(s.device->max_alloc, 1 << 20), memory = std::max<uint64_t>(s.device->global_memory, 1 << 22);
+  const uint64_t paths = std::min(alloc / vertices, memory / 4 / (vertices + extra_bytes));
+  return uint32_t(std::min<uint64_t>(paths, s.pixels));
+}

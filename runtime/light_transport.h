@@ -10,9 +10,6 @@
 #include "kernels/shared/light_types.h"
 #include "scene/device_scene.h"
 
-// BDPT keeps a light subpath of up to max_depth vertices in each work item's private memory
-// (kernels/light_path.cl's LightVertex, 112 bytes each): max_depth is bounded by this for it.
-constexpr uint32_t kBdptMaxDepth = 64;
 
 struct LightTransportSetup {
   LightTransportHeader header{};
@@ -38,3 +35,11 @@ void develop_splats(Film& film, const LightTransportHeader& lt, uint64_t* overfl
 // unless the build asks for word pairs.
 struct TechniqueBuild;
 std::string splat_build_options(const TechniqueBuild& build);
+
+// BDPT and the merging integrators keep each light subpath of a unit in max_depth slots of LightVertex
+// (kernels/shared/light_types.h) on the device: the bytes for sizes.unit_items paths, and the most paths a
+// unit may hold on sizes.device when each path also takes extra_bytes (its grid entries): the vertex
+// buffer within the device's largest allocation, all of them within a quarter of its memory.
+struct TechniqueSizes;
+size_t light_vertex_bytes(const TechniqueSizes& sizes);
+uint32_t light_vertex_unit_paths(const TechniqueSizes& sizes, size_t extra_bytes);

@@ -1,6 +1,7 @@
 #include "runtime/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
@@ -198,6 +199,12 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   light_setup.header.only_strategy = options.debug_bdpt_strategy_s >= 0
                                          ? uint32_t(options.debug_bdpt_strategy_s) | uint32_t(options.debug_bdpt_strategy_t) << 16
                                          : PC_INVALID;
+  if (technique.merging) {  // kernels/vcm.cl
+    LightTransportHeader& lt = light_setup.header;
+    lt.vcm_mode = options.merge ? technique.merging : technique.merging & ~PC_VCM_MERGE;
+    lt.radius = float(options.radius > 0 ? options.radius : 1.5 * lt.bounds.w / std::sqrt(double(pixels)));
+    lt.alpha = float(options.alpha);
+  }
   result.light = light_setup.header;
 
   // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices
@@ -303,7 +310,12 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     }
   }
   if (options.pass_spp > 0) schedule.fix_samples_per_unit(options.pass_spp);
-  if (options.max_unit_pixels > 0) schedule.limit_unit_pixels(options.max_unit_pixels);
+  // Units no larger than every device's buffers take (Technique::max_unit_items), nor than asked.
+  uint32_t unit_limit = options.max_unit_pixels > 0 ? options.max_unit_pixels : pixels;
+  for (size_t d = 0; d < n; ++d)
+    if (ready[d])
+      unit_limit = std::min(unit_limit, technique_unit_items(technique, {pixels, options.max_depth, 0, &workers[d].info}));
+  if (unit_limit < pixels) schedule.limit_unit_pixels(unit_limit);
   result.setup_seconds = seconds_since(setup_start);
 
   // The render: hand units to idle devices, copy finished ones into the film, stop at a horizon.

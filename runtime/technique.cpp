@@ -1,5 +1,6 @@
 #include "runtime/technique.h"
 
+#include <algorithm>
 #include <mutex>
 
 #include <nlohmann/json.hpp>
@@ -12,7 +13,8 @@ std::mutex registry_mutex;
 
 std::vector<Technique>& registry() {
   // The registry: one line per technique.
-  static std::vector<Technique> list = {path_technique(), light_technique(), bdpt_technique()};
+  static std::vector<Technique> list = {path_technique(), light_technique(), bdpt_technique(),
+                                         vcm_technique(),  bpm_technique(),   sppm_technique()};
   return list;
 }
 }  // namespace
@@ -49,6 +51,12 @@ bool uses_emission(const Technique& t) {
   return false;
 }
 
+uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes) {
+  sizes.unit_items = 0;
+  const uint32_t n = t.max_unit_items ? t.max_unit_items(sizes) : sizes.pixels;
+  return std::max(1u, std::min(n, sizes.pixels));
+}
+
 const Technique* technique_with_id(uint32_t id) {
   for (const Technique& t : techniques())
     if (t.id == id) return &t;
@@ -80,7 +88,9 @@ void apply_technique_options(const Technique& t, const std::string& json_object,
       throw UsageError(place + "." + key + ": the " + t.name + " integrator has no option \"" + key + "\" (" +
                        (known.empty() ? "it has none" : "it has " + known) + ")");
     }
-    if (!value.is_number() || !option->set(value.get<double>(), options))
+    // A boolean option takes true or false (as 1 and 0).
+    const bool number = value.is_number() || value.is_boolean();
+    if (!number || !option->set(value.is_boolean() ? double(value.get<bool>()) : value.get<double>(), options))
       throw UsageError(place + "." + key + ": expected " + option->expected + ", got " + value.dump());
   }
 }

@@ -49,14 +49,23 @@ struct TechniquePhase {
   std::string name;  // "render"
   std::string entry;
   std::vector<std::string> args;
-  std::function<size_t(uint32_t count)> items;  // work items for a unit of `count`; empty: ceil(count / P)
+  // Work items for a unit of `count` pixels or paths in a film of `pixels`; empty: ceil(count / P).
+  std::function<size_t(uint32_t count, uint32_t pixels)> items;
+};
+
+// What a technique's buffers and its largest unit depend on: the film, the render's depth, the device.
+struct TechniqueSizes {
+  uint32_t pixels = 0;      // the film's
+  uint32_t max_depth = 0;
+  uint32_t unit_items = 0;  // the largest unit's pixels or paths on this device (Technique::max_unit_items)
+  const DeviceInfo* device = nullptr;
 };
 
 // A device buffer of the technique's own, made at set-up, cleared to zero once, and kept for the whole
 // render: what one phase leaves for the next, or for the next unit (a photon map's grid).
 struct TechniqueBuffer {
   std::string name;
-  std::function<size_t(uint32_t pixels)> bytes;
+  std::function<size_t(const TechniqueSizes&)> bytes;
 };
 
 // An option of the technique's own, set in the scene file as render.integrator's key (`{"type": "path",
@@ -77,7 +86,16 @@ struct Technique {
   std::vector<FilmLayer> layers;  // its own film layers
   UnitKind units = UnitKind::pixels;
   bool lanes = false;        // runs over 8 or 16 SIMD lanes on CPU devices (--lanes)
-  uint32_t max_depth_limit = 1024;  // largest max_depth it takes (bdpt keeps subpaths in private memory)
+  uint32_t max_depth_limit = 1024;  // largest max_depth it takes
+  // Its phases run once per sample of a unit, in sample order (sample_count 1 each time), instead of once
+  // over the unit's samples: an iteration's phases (trace light paths, build a grid over their vertices,
+  // gather) finish before the next iteration's begin.
+  bool per_sample = false;
+  uint32_t merging = 0;  // the strategies of a merging technique (PC_VCM_*, LightTransportHeader.vcm_mode)
+  // The largest unit (pixels or paths) a device takes, when the technique's buffers grow with it (light
+  // subpaths kept per path): sizes.unit_items is 0 here. Empty: any. Units never exceed it (the schedule
+  // takes the smallest over the devices), so an iteration too large for a device is split into units.
+  std::function<uint32_t(const TechniqueSizes&)> max_unit_items;
   double cpu_unit_seconds = 0.25;   // unit duration to aim for on CPU devices
   std::vector<TechniqueOption> options;
   // Extra -D flags for a device (besides the scene's features); may be empty.
@@ -97,6 +115,8 @@ const Technique& technique_named(const std::string& name, const std::string& whe
 // Whether a phase takes "lt" or "emission_cdf": the render then sets up the emission distribution and the
 // splat scales (runtime/light_transport.h).
 bool uses_emission(const Technique& t);
+// The largest unit a device takes (Technique::max_unit_items), at least 1, at most the film's pixels.
+uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes);
 // By id (checkpoints); nullptr if none has it.
 const Technique* technique_with_id(uint32_t id);
 // "path, light or bdpt"
@@ -113,3 +133,6 @@ void apply_technique_options(const Technique& t, const std::string& json_object,
 Technique path_technique();
 Technique light_technique();
 Technique bdpt_technique();
+Technique vcm_technique();
+Technique bpm_technique();
+Technique sppm_technique();

@@ -11,10 +11,9 @@ Technique bdpt_technique() {
   t.id = PC_INTEGRATOR_BDPT;
   t.summary = "bidirectional path tracing, every strategy weighted by MIS";
   t.kernel_file = "bdpt.cl";
-  t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "unit"}}};
-  t.max_depth_limit = kBdptMaxDepth;  // each light subpath is kept in private memory
-  t.build_options = [](const TechniqueBuild& b) {
-    return splat_build_options(b) + " -DPC_BDPT_MAX_VERTICES=" + std::to_string(std::max<uint32_t>(b.max_depth, 1));
-  };
+  t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "light_vertices", "unit"}}};
+  // Each work item keeps its light subpath in device memory (max_depth slots): units as large as it allows.
+  t.buffers = {{"light_vertices", light_vertex_bytes}};
+  t.max_unit_items = [](const TechniqueSizes& s) { return light_vertex_unit_paths(s, 0); };
   return t;
 }

@@ -154,11 +154,21 @@ TEST(Bdpt, SplatFilmIsBitwiseDeterministic) {
   expect_bitwise_deterministic(scene, o);
 }
 
-// max_depth bounds the light subpath kept in private memory: beyond kBdptMaxDepth a usage error.
-TEST(Bdpt, RefusesMaxDepthBeyondItsBound) {
-  DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
+// Light subpaths live in device memory (max_depth slots per path of a unit): bdpt takes any max_depth the
+// path integrator takes. The furnace at max_depth 100 is exact (Russian roulette ends the paths), and
+// beyond path's bound both refuse alike.
+TEST(Bdpt, TakesTheMaxDepthsPathTakes) {
+  DeviceScene scene = furnace_scene();
+  const uint32_t depth = 100;
+  MeanStd m = seeded_mean(scene, bdpt(16, depth), 4);
+  double exact = 0.5 * (1 - std::pow(0.5, depth + 1)) / 0.5;
+  EXPECT_NEAR(m.mean, exact, 4 * m.std_error) << "error " << m.std_error;
+  EXPECT_LT(m.std_error, 0.01 * exact);
   RenderOptions opt;
-  opt.integrator = "bdpt";
-  opt.max_depth = kBdptMaxDepth + 1;
-  EXPECT_THROW(render(test_device(), scene, opt), UsageError);
+  opt.spp = 1;
+  opt.max_depth = technique_named("path", "test").max_depth_limit + 1;
+  for (const char* integrator : {"path", "bdpt"}) {
+    opt.integrator = integrator;
+    EXPECT_THROW(render(test_device(), scene, opt), UsageError) << integrator;
+  }
 }

@@ -1,4 +1,4 @@
-// What the tests of the splat-film integrators (`light`, `bdpt`) share: a render with the options they
+// What the tests of the splat-film integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`) share: a render with the options they
 // vary, image means over independent seeds, and the per-pixel z-test of two films.
 #pragma once
 #include <cmath>
@@ -19,6 +19,8 @@ struct Options {
   size_t work_group = 0;
   bool pairs = false;
   int strategy_s = -1, strategy_t = -1;  // bdpt: this strategy alone
+  bool merge = true;                      // vcm: merging (false: bdpt's estimator)
+  double radius = 0;                      // vcm, bpm, sppm: the first iteration's radius (0: the default)
   const Film* resume = nullptr;
 };
 
@@ -36,6 +38,8 @@ inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
   opt.debug_bdpt_strategy_s = o.strategy_s;
   opt.debug_bdpt_strategy_t = o.strategy_t;
   opt.resume = o.resume;
+  opt.merge = o.merge;
+  opt.radius = o.radius;
   RenderResult r = render(test_device(), scene, opt);
   EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
   EXPECT_EQ(r.splat_overflows, 0u);
@@ -119,6 +123,8 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   partial.max_depth = o.max_depth;
   partial.seed = o.seed;
   partial.integrator = o.integrator;
+  partial.merge = o.merge;
+  partial.radius = o.radius;
   Film start;
   {
     // Render o.spp with power-of-two horizons and keep the half-way film from the horizon callback.

@@ -48,9 +48,9 @@ const Technique& constant_technique() {
     t.id = 1000;
     t.summary = "test only: a constant per pixel";
     t.kernel_file = "test_constant.cl";
-    t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count) { return 2 * size_t(count); }},
+    t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count, uint32_t) { return 2 * size_t(count); }},
                 {"add", "add", {"film", "stats", "weights", "unit"}}};
-    t.buffers = {{"weights", [](uint32_t pixels) { return 2 * pixels * sizeof(float); }}};
+    t.buffers = {{"weights", [](const TechniqueSizes& s) { return 2 * s.pixels * sizeof(float); }}};
     t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
     t.develop = [](Film& f, const LightTransportHeader&, uint64_t*) {
       size_t pixels = size_t(f.width) * f.height;
@@ -114,7 +114,7 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
     technique_named("lite", "scene.json: render.integrator");
     ADD_FAILURE();
   } catch (const UsageError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt or test-constant)", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm or test-constant)", 0), 0u) << e.what();
   }
   RenderOptions o;
   o.integrator = "light";
@@ -122,7 +122,7 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
   EXPECT_THROW(check_technique_options(technique_named("light", "test"), o), UsageError);
   o.integrator = "bdpt";
   o.lanes = 0;
-  o.max_depth = 65;
+  o.max_depth = 1025;
   EXPECT_THROW(check_technique_options(technique_named("bdpt", "test"), o), UsageError);
 }
 
@@ -143,6 +143,17 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
   EXPECT_EQ(message("path", R"({"lanes": 3})"), "s.json: render.integrator.lanes: expected 1, 8 or 16 (paths per work item; the same pixels), got 3");
   EXPECT_EQ(message("light", R"({"lanes": 8})"), "s.json: render.integrator.lanes: the light integrator has no option \"lanes\" (it has none)");
   EXPECT_EQ(message("path", R"({"radius": 1})"), "s.json: render.integrator.radius: the path integrator has no option \"radius\" (it has lanes)");
+  // The merging integrators' radius, alpha and (vcm) merge, a boolean.
+  apply_technique_options(technique_named("vcm", "test"), R"({"radius": 0.5, "alpha": 0.5, "merge": false})",
+                          "s.json: render.integrator", o);
+  EXPECT_EQ(o.radius, 0.5);
+  EXPECT_EQ(o.alpha, 0.5);
+  EXPECT_FALSE(o.merge);
+  EXPECT_EQ(message("vcm", R"({"alpha": 1.5})"), "s.json: render.integrator.alpha: expected a number in (0, 1], got 1.5");
+  EXPECT_EQ(message("sppm", R"({"radius": 0})"), "s.json: render.integrator.radius: expected a radius > 0 (scene units), got 0");
+  EXPECT_EQ(message("vcm", R"({"merge": "no"})"), "s.json: render.integrator.merge: expected true or false, got \"no\"");
+  EXPECT_EQ(message("sppm", R"({"merge": false})"),
+            "s.json: render.integrator.merge: the sppm integrator has no option \"merge\" (it has radius, alpha)");
 
   // Through the scene file and the command line (whose --lanes overrides the scene's).
   std::string scene = read_text_file(std::string(PATHCL_TEST_SCENES) + "/tiny.json"), err;

@@ -11,6 +11,14 @@
 #define PC_INTEGRATOR_PATH 0u
 #define PC_INTEGRATOR_LIGHT 1u
 #define PC_INTEGRATOR_BDPT 2u
+#define PC_INTEGRATOR_VCM 3u
+#define PC_INTEGRATOR_BPM 4u
+#define PC_INTEGRATOR_SPPM 5u
+
+/* The strategies of the merging integrators (LightTransportHeader.vcm_mode; kernels/vcm.cl). */
+#define PC_VCM_CONNECT 1u /* vertex connection: BDPT's strategies */
+#define PC_VCM_MERGE 2u   /* vertex merging */
+#define PC_VCM_SPPM 4u    /* progressive photon mapping: merge at the first non-delta camera vertex only */
 
 /* The splat film: per pixel PC_SPLAT_WORDS unsigned 64-bit fixed-point sums (each two uint words, low
  * word first), added with integer atomics in any order to the same bits:
@@ -28,13 +36,20 @@
  * the number of lights in the emission distribution.
  * only_strategy: PC_INVALID for BDPT's every strategy; else (tests) s + (t << 16) of the one strategy it
  * takes, unweighted.
- * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + only_strategy (4) = 32 bytes. */
+ * The merging integrators (kernels/vcm.cl): iteration i (the sample index) merges within radius
+ * radius * (i + 1)^((alpha - 1) / 2), taking the strategies of vcm_mode (PC_VCM_*).
+ * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + only_strategy (4) + radius (4) +
+ * alpha (4) + vcm_mode (4) + pad (4) = 48 bytes. */
 typedef struct {
   pc_float4 bounds;   /* xyz: centre of the scene's bounding sphere (device coordinates), w: its radius */
   float splat_scale;  /* fixed-point units per unit of pixel value (a power of two) */
   float square_scale; /* the same for the squared splats (a power of two) */
   pc_uint light_count;
   pc_uint only_strategy;
+  float radius;       /* the first iteration's merging radius (device units) */
+  float alpha;        /* the radius's reduction exponent */
+  pc_uint vcm_mode;
+  pc_uint pad;
 } LightTransportHeader;
 
 /* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
@@ -50,15 +65,33 @@ typedef struct {
   pc_uint pad[2];
 } SplatStats;
 
-#define PC_LIGHT_LAYOUT_STRUCTS(X) X(LightTransportHeader) X(SplatStats)
+/* A non-delta vertex of a light subpath, kept for the camera subpaths to connect to or merge with
+ * (bdpt.cl, vcm.cl) in a buffer of max_depth slots per light path of a unit: what evaluating its BSDF
+ * towards any direction needs, its throughput, and its partial MIS quantities dVCM, dVC and dVM
+ * (Georgiev, "Implementing Vertex Connection and Merging", 2012). 6 x 16 + 4 x 4 = 112 bytes. */
+typedef struct {
+  pc_float4 p;     /* xyz: position; w: the largest component of its rounding-error bound */
+  pc_float4 ng;    /* xyz: geometric normal (front side); w: dVCM */
+  pc_float4 ns;    /* xyz: shading normal; w: dVC */
+  pc_float4 wl;    /* xyz: unit direction back along the light path; w: dVM */
+  pc_float4 beta;  /* xyz: throughput arriving at the vertex (emission weight and the scattering before it) */
+  pc_float4 color; /* xyz: the material's colour here (textures and vertex colours applied) */
+  pc_uint material, prim, instance;
+  pc_uint length; /* scattering events of the light subpath up to and including this vertex */
+} LightVertex;
+
+#define PC_LIGHT_LAYOUT_STRUCTS(X) X(LightTransportHeader) X(SplatStats) X(LightVertex)
 #define PC_LIGHT_LAYOUT_FIELDS(X)                                                                           \
   X(LightTransportHeader, bounds) X(LightTransportHeader, splat_scale) X(LightTransportHeader, square_scale) \
-  X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
+  X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(LightTransportHeader, radius) \
+  X(LightTransportHeader, alpha) X(LightTransportHeader, vcm_mode) X(LightVertex, wl) X(LightVertex, material) \
+  X(LightVertex, length) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
   X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
 
 #ifndef __OPENCL_VERSION__
-static_assert(sizeof(LightTransportHeader) == 32, "LightTransportHeader is 32 bytes");
+static_assert(sizeof(LightTransportHeader) == 48, "LightTransportHeader is 48 bytes");
 static_assert(sizeof(SplatStats) == 32, "SplatStats is 32 bytes");
+static_assert(sizeof(LightVertex) == 112, "LightVertex is 112 bytes");
 #endif
 
 #endif

@@ -1,0 +1,91 @@
+// Photon merging (kernels/vcm.cl): vertex connection and merging, bidirectional photon mapping and
+// stochastic progressive photon mapping. An iteration is a sample: its light paths are stored on the device,
+// a hash grid built over their vertices, and the camera paths merge with them (and, for vcm, connect to
+// them as bdpt does); a unit is a range of an iteration's light paths, its merges integer sums.
+#include <algorithm>
+#include <cmath>
+
+#include "runtime/device.h"
+#include "runtime/film.h"
+#include "runtime/light_transport.h"
+#include "runtime/renderer.h"
+#include "runtime/technique.h"
+
+namespace {
+
+// kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
+size_t grid_table(uint32_t paths) {
+  size_t t = 1;
+  while (t < paths) t <<= 1;
+  return t;
+}
+
+size_t slots(const TechniqueSizes& s) { return std::max<uint32_t>(s.max_depth, 1); }
+
+Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const char* summary) {
+  Technique t = bdpt_technique();
+  t.name = name;
+  t.id = id;
+  t.summary = summary;
+  t.kernel_file = "vcm.cl";
+  t.merging = mode;
+  t.per_sample = true;
+  // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
+  // its vertex count, the grid's buckets (a power of two >= c, and one end) and entries.
+  t.buffers = {{"light_vertices", light_vertex_bytes},
+               {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
+               {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1) * sizeof(uint32_t); }},
+               {"entries", [](const TechniqueSizes& s) { return s.unit_items * slots(s) * sizeof(uint32_t); }}};
+  t.max_unit_items = [](const TechniqueSizes& s) {
+    return light_vertex_unit_paths(s, slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
+  };
+  const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
+  t.phases = {
+      {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t) { return grid_table(count) + 1; }},
+      {"light", "vcm_light", paths},
+      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}},
+      {"scan", "vcm_scan", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
+      {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}},
+      {"camera", "vcm_camera",
+       {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "entries", "unit"},
+       [](uint32_t, uint32_t pixels) { return size_t(pixels); }},
+  };
+  // A unit traces every camera path of its iteration: whole iterations where the time allows.
+  t.cpu_unit_seconds = 2.0;
+  t.options = {{"radius", "a radius > 0 (scene units)",
+                [](double v, RenderOptions& o) {
+                  if (!(v > 0) || !std::isfinite(v)) return false;
+                  o.radius = v;
+                  return true;
+                }},
+               {"alpha", "a number in (0, 1]",
+                [](double v, RenderOptions& o) {
+                  if (!(v > 0 && v <= 1)) return false;
+                  o.alpha = v;
+                  return true;
+                }}};
+  return t;
+}
+
+}  // namespace
+
+Technique vcm_technique() {
+  Technique t = merging_technique("vcm", PC_INTEGRATOR_VCM, PC_VCM_CONNECT | PC_VCM_MERGE,
+                                  "vertex connection and merging: bdpt's strategies and photon merging, weighted by MIS");
+  t.options.push_back({"merge", "true or false", [](double v, RenderOptions& o) {
+                         if (v != 0 && v != 1) return false;
+                         o.merge = v != 0;
+                         return true;
+                       }});
+  return t;
+}
+
+Technique bpm_technique() {
+  return merging_technique("bpm", PC_INTEGRATOR_BPM, PC_VCM_MERGE,
+                           "bidirectional photon mapping: merging at every camera vertex, weighted by MIS");
+}
+
+Technique sppm_technique() {
+  return merging_technique("sppm", PC_INTEGRATOR_SPPM, PC_VCM_MERGE | PC_VCM_SPPM,
+                           "stochastic progressive photon mapping with a global radius schedule");
+}

@@ -1,0 +1,158 @@
+// Photon merging (`vcm`, `bpm`, `sppm`; kernels/vcm.cl): exact on the cap sphere (uniform irradiance, where
+// merging is unbiased at any radius), exact on a specular-diffuse-specular scene that path tracing and BDPT
+// render black, vcm without merging is bdpt bit for bit, agreement with path tracing per pixel, and the
+// splat film's determinism over any split of an iteration into units. Tolerances are in standard errors.
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "light_transport_support.h"
+#include "runtime/light_transport.h"
+
+using namespace light_transport_test;
+
+namespace {
+
+const char* const kMerging[] = {"vcm", "bpm", "sppm"};
+
+Options merging(const char* integrator, uint32_t spp, uint32_t max_depth) {
+  Options o;
+  o.integrator = integrator;
+  o.spp = spp;
+  o.max_depth = max_depth;
+  return o;
+}
+
+// A spot light under a mirror ceiling points up at it; the mirror throws the spot onto a diffuse floor,
+// which the camera sees only in the mirror: every path is camera -> mirror -> floor -> mirror -> light
+// ("SDS"), max_depth 3 leaves out the longer ones. Next-event estimation cannot reach a delta light
+// through a mirror, a floor vertex of a light path cannot connect to one of a camera path on the same
+// plane, and the camera sees no floor directly: path and bdpt render it black; only merging has it.
+std::string sds_scene() {
+  return R"({"camera": {"position": [0, 0.2, 1.0], "look_at": [0, 2, 0], "fov_y_degrees": 30, "width": 32, "height": 24},
+    "materials": {"floor": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}, "mirror": {"type": "mirror", "reflectance": [1, 1, 1]}},
+    "shapes": [
+      {"type": "triangles", "positions": [[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], "indices": [[0, 2, 1], [0, 3, 2]], "material": "floor"},
+      {"type": "triangles", "positions": [[-4, 2, -4], [4, 2, -4], [4, 2, 4], [-4, 2, 4]], "indices": [[0, 1, 2], [0, 2, 3]], "material": "mirror"}],
+    "lights": [{"type": "spot", "position": [0, 1, 0], "direction": [0, 1, 0], "intensity": [10, 10, 10],
+                "outer_angle_degrees": 60, "inner_angle_degrees": 50}]})";
+}
+
+// The same image unfolded about the mirror's plane y = 2: the floor seen from the mirrored camera (its up
+// mirrored too: the image is mirrored left to right, and the scene is symmetric in x), lit directly by the
+// mirrored spot. At max_depth 1 each sample is the closed form rho / pi I cos(theta) / d^2 at the pixel's
+// floor point (the camera sees only the spot's inner cone, where I is constant): the exact image, up to
+// the pixel filter's sampling.
+std::string sds_unfolded_scene() {
+  return R"({"camera": {"position": [0, 3.8, 1.0], "look_at": [0, 2, 0], "up": [0, -1, 0], "fov_y_degrees": 30, "width": 32, "height": 24},
+    "materials": {"floor": {"type": "diffuse", "reflectance": [0.5, 0.5, 0.5]}},
+    "shapes": [{"type": "triangles", "positions": [[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], "indices": [[0, 2, 1], [0, 3, 2]], "material": "floor"}],
+    "lights": [{"type": "spot", "position": [0, 3, 0], "direction": [0, -1, 0], "intensity": [10, 10, 10],
+                "outer_angle_degrees": 60, "inner_angle_degrees": 50}]})";
+}
+
+}  // namespace
+
+// The Szirmay-Kalos cap sphere (scripts/make-cap-sphere) lit by its emitting cap has uniform irradiance
+// on its wall, and a ball about a point of a sphere cuts out exactly pi r^2 of it (Archimedes): the
+// density estimate of merging is unbiased at any radius there. Every wall pixel is f Le rho (1 - rho^n)
+// / (1 - rho) after n reflections, for each merging integrator (the default radius, and a 20 times larger
+// one whose ball reaches well across the tessellation's triangles).
+TEST(Vcm, CapSphereExactForEveryMergingIntegrator) {
+  std::string dir = temp_dir() + "/vcm-cap";
+  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir + " --level 5 --size 16 >/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const std::vector<double> exact =
+      nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
+  DeviceScene scene = load_device_scene(dir + "/scene.json");
+  for (const char* integrator : kMerging)
+    for (uint32_t depth : {1u, 4u})
+      for (double radius : {0.0, 0.2}) {
+        Options o = merging(integrator, 64, depth);
+        o.radius = radius;
+        MeanStd m = seeded_mean(scene, o, 4);
+        // The icosphere's tessellation bias is about 0.1 % (docs/accuracy.md): added to the tolerance.
+        EXPECT_NEAR(m.mean, exact[depth], 4 * m.std_error + 2e-3 * exact[depth])
+            << integrator << ", max_depth " << depth << ", radius " << radius << ": error " << m.std_error;
+        EXPECT_LT(m.std_error, 0.02 * exact[depth]) << integrator << " too noisy for the test to mean anything";
+      }
+}
+
+// The SDS scene: path and bdpt give exactly 0; vcm, bpm and sppm the exact image mean (4 standard errors
+// of both, seeds apart), and their error falls as the radius shrinks with the iterations.
+TEST(Vcm, SpecularDiffuseSpecularLightOnlyMergingSees) {
+  DeviceScene scene = scene_from("vcm-sds.json", sds_scene());
+  DeviceScene unfolded = scene_from("vcm-sds-unfolded.json", sds_unfolded_scene());
+  Options exact_options = merging("path", 256, 1);
+  const MeanStd exact = seeded_mean(unfolded, exact_options, 4);
+  ASSERT_GT(exact.mean, 0.05);
+  for (const char* blind : {"path", "bdpt"}) {
+    Film f = render_with(scene, merging(blind, 16, 3)).film;
+    EXPECT_EQ(image_mean(f), 0.0) << blind;
+  }
+  for (const char* integrator : kMerging) {
+    MeanStd m = seeded_mean(scene, merging(integrator, 64, 3), 4);
+    EXPECT_NEAR(m.mean, exact.mean, 4 * std::hypot(m.std_error, exact.std_error)) << integrator << ": error " << m.std_error;
+    EXPECT_LT(m.std_error, 0.01 * exact.mean) << integrator << " too noisy for the test to mean anything";
+  }
+}
+
+// Without merging, vcm's estimator is bdpt's (the merging factors are 0, x + 0 is x): the same bits on the
+// Cornell box and glass-metal (glass, metals, a mirror).
+TEST(Vcm, WithoutMergingItIsBdptBitForBit) {
+  const std::string scenes = std::string(PATHCL_SOURCE_DIR) + "/scenes/";
+  for (const char* name : {"cornell-box", "glass-metal"}) {
+    SCOPED_TRACE(name);
+    DeviceScene scene = load_device_scene(scenes + name + ".json");
+    scene.header.width = 20;
+    scene.header.height = 16;
+    Options o = merging("vcm", 4, 5);
+    o.merge = false;
+    Film v = render_with(scene, o).film;
+    Film b = render_with(scene, merging("bdpt", 4, 5)).film;
+    ASSERT_GT(image_mean(b), 0.0);
+    EXPECT_EQ(v.words, b.words);
+  }
+}
+
+// Merging and path tracing estimate the same pixels: the Cornell box and glass-metal (glass, metals, a
+// mirror: caustics), per channel |z| <= 4 against a longer path render. Merging's bias (light from a
+// surface within the radius of an edge merged across it) shrinks with the radius: vcm at half the default
+// radius (its MIS gives connections the diffuse surfaces); bpm and sppm, which have nothing but merging,
+// at the default one over 256 iterations (the last radius half the first), where a pixel gathers enough
+// photons for its variance estimate to hold.
+TEST(Vcm, AgreesWithPathTracingPerPixel) {
+  const std::string scenes = std::string(PATHCL_SOURCE_DIR) + "/scenes/";
+  for (const char* name : {"cornell-box", "glass-metal"}) {
+    DeviceScene scene = load_device_scene(scenes + name + ".json");
+    scene.header.width = 48;
+    scene.header.height = 48;
+    Film reference = render_with(scene, merging("path", 512, 5)).film;
+    const double default_radius = 1.5 * light_transport_setup(scene, 1).header.bounds.w / 48;
+    for (const char* integrator : kMerging) {
+      SCOPED_TRACE(std::string(name) + ", " + integrator);
+      const bool vcm = std::string(integrator) == "vcm";
+      Options o = merging(integrator, vcm ? 128 : 256, 5);
+      o.radius = vcm ? default_radius / 2 : 0;
+      Film f = render_with(scene, o).film;
+      PixelComparison cmp = compare_pixels(reference, f, nullptr);
+      EXPECT_LE(cmp.failed, cmp.compared / 200) << cmp.failed << " of " << cmp.compared;
+      EXPECT_LE(cmp.sum_z(), 4.0) << "image sums " << cmp.sum_a << " and " << cmp.sum_b;
+    }
+  }
+}
+
+// The image is a pure function of scene, settings and seed, whichever units an iteration is split into
+// (units of 37 light paths: each traces every camera path, merging with its own light vertices).
+TEST(Vcm, SplatFilmIsBitwiseDeterministic) {
+  DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/glass-metal.json");
+  scene.header.width = 20;
+  scene.header.height = 16;
+  for (const char* integrator : {"vcm", "sppm"}) {
+    SCOPED_TRACE(integrator);
+    expect_bitwise_deterministic(scene, merging(integrator, 8, 5));
+  }
+}
