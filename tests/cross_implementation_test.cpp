@@ -72,13 +72,14 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
   replace("height", height);
   replace("spp", spp);
   for (size_t at = 0; (at = text.find("\"meshes/", at)) != std::string::npos;) text.insert(at + 1, kScenes + "/");
-  return scene_file(bundled, text);
+  // Named by its size too: cases of one scene at several sizes each keep their own file.
+  return scene_file(bundled + "-" + std::to_string(width) + "x" + std::to_string(height) + "-" + std::to_string(spp), text);
 }
 
 const std::string kEveryAov = "albedo,normal,depth,position,uv,material_id";
 
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
-constexpr size_t kCases = 18;
+constexpr size_t kCases = 20;
 
 std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
@@ -90,9 +91,14 @@ std::array<Case, kCases> make_cases() {
           // The light integrator's splat film: integer atomics from every work item into any pixel.
           {"cornell box, light tracing", cornell, "--integrator light"},
           {"every light type, light tracing, thin lens, gaussian filter", resized("materials", 16, 12, 2), "--integrator light"},
-          // BDPT: light subpaths in private arrays, connections, splats and the camera sums.
+          // BDPT: light subpaths in a device buffer, connections, splats and the camera sums.
           {"cornell box, bdpt", cornell, "--integrator bdpt"},
           {"every material and light type, bdpt, thin lens, gaussian filter", resized("materials", 8, 6, 1), "--integrator bdpt --max-depth 4"},
+          // Photon merging: light vertices at slots, the grid's integer counts, scan and scatter, each merge
+          // in fixed point; sppm's visible points and next-event estimation.
+          // (Small: Oclgrind interprets a merging camera path in about 0.2 s.)
+          {"cornell box, vcm", resized("cornell-box", 6, 4, 2), "--integrator vcm"},
+          {"every material and light type, sppm, thin lens, gaussian filter", resized("materials", 6, 4, 1), "--integrator sppm --max-depth 4"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
           // With every AOV (kernels/aov.cl): mirror and glass chains followed for albedo and normal.
           {"glass and metal, every AOV", resized("glass-metal", 16, 12, 2), "--aov " + kEveryAov},

@@ -138,14 +138,17 @@ TEST(MultiDevice, AFailingDeviceGivesItsUnitsBack) {
   }
 }
 
-// Light tracing and BDPT splat anywhere: their light paths are split across the devices by index, each
-// unit's splats come back as integers and are added exactly, so any split, a lagging device whose units
-// are copied (only the winner's splats count) and a failing device (its unfinished unit's splats are
-// dropped and the unit runs again elsewhere) all give the one-device film.
+// Light tracing, BDPT and photon merging splat anywhere: their light paths are split across the devices by
+// index (the merging integrators' iterations too: each unit merges every camera path with its own light
+// paths' vertices), each unit's splats come back as integers and are added exactly, so any split, a
+// lagging device whose units are copied (only the winner's splats count) and a failing device (its
+// unfinished unit's splats are dropped and the unit runs again elsewhere) all give the one-device film.
 TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
   DeviceScene scene = small_cornell();
   std::vector<DeviceInfo> devices = all_devices();
-  for (const char* integrator : {"light", "bdpt"}) {
+  for (const char* integrator : {"light", "bdpt", "vcm", "sppm"}) {
+    // A merging unit traces all of its iteration's camera paths: units of 480 paths rather than 7.
+    const bool merging = technique_named(integrator, "test").merging != 0;
     SCOPED_TRACE(integrator);
     RenderOptions opt = base_options();
     opt.integrator = integrator;
@@ -159,7 +162,7 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
     for (uint32_t tile : {1u, 37u, 0u}) {
       RenderOptions split = opt;
       split.tile_pixels = tile;
-      split.max_unit_pixels = tile == 1 ? 7 : 0;
+      split.max_unit_pixels = tile == 1 ? (merging ? 480 : 7) : 0;
       split.pass_spp = tile == 0 ? 0 : tile == 1 ? 1 : 5;
       RenderResult r = render(devices, scene, split);
       same(r, "tile " + std::to_string(tile));
