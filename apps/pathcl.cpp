@@ -201,6 +201,8 @@ nlohmann::json device_stats(const RenderResult& r) {
                     {"kernel_from_cache", d.kernel_from_cache},
                     {"kernel_private_bytes", d.kernel_private_bytes},
                     {"lanes", d.lanes},
+                    {"unit_items", d.unit_items},
+                    {"buffer_bytes", d.buffers},
                     {"probe_seconds", d.probe_seconds}});
   return list;
 }
@@ -363,6 +365,7 @@ int run_render(const RenderArgs& a) {
               {"integrator", opt.integrator},
               {"aovs", aov_names(opt.aovs)},
               {"phases", phase_stats(r)},
+
               {"denoise_seconds", denoise_seconds},
               {"lanes", r.devices.front().lanes},
               {"stop_reason", r.stop_reason},
@@ -383,6 +386,10 @@ int run_render(const RenderArgs& a) {
               {"inf_samples", r.inf_samples},
               {"negative_samples", r.negative_samples},
               {"splat_overflows", r.splat_overflows}});
+    if (r.light.radius > 0) {  // the merging integrators: the first iteration's radius, its exponent
+      j["merging_radius"] = r.light.radius;
+      j["merging_alpha"] = r.light.alpha;
+    }
     write_json(a.stats, j);
   }
   if (!a.quiet)

@@ -56,6 +56,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     const cl_uint zero = 0;
     size_t bytes = std::max<size_t>(b.bytes(sizes), sizeof zero);
     bytes = (bytes + sizeof zero - 1) / sizeof zero * sizeof zero;
+    buffer_bytes_[b.name] = bytes;
     ClBuffer& buffer = technique_buffers_.emplace_back(cl, CL_MEM_READ_WRITE, bytes);
     CL_CHECK(clEnqueueFillBuffer(cl.queue, buffer.mem, &zero, sizeof zero, 0, bytes, 0, nullptr, nullptr));
   }
@@ -119,6 +120,8 @@ WorkerReport DeviceWorker::report() const {
   r.kernel_options = program_->options;
   r.kernel_private_bytes = private_bytes_;
   r.lanes = lanes_;
+  r.unit_items = unit_items_;
+  r.buffers = buffer_bytes_;
   return r;
 }
 

@@ -63,6 +63,7 @@ class DeviceWorker : public UnitWorker {
   uint32_t lanes_ = 1;
   uint64_t private_bytes_ = 0;
   uint32_t unit_items_ = 0;  // the largest unit it takes (technique_unit_items)
+  std::map<std::string, uint64_t> buffer_bytes_;  // the technique's buffers
   DeviceFault fault_;
   uint64_t units_run_ = 0;
 };

@@ -265,6 +265,8 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.kernel_options = w.kernel_options;
     report.kernel_private_bytes = w.kernel_private_bytes;
     report.lanes = w.lanes;
+    report.unit_items = w.unit_items;
+    report.buffers = w.buffers;
     if (e.probe_seconds > 0) schedule_devices[e.device].rate = double(kProbePixels) * kProbeSamples / e.probe_seconds;
   }
   if (std::none_of(ready.begin(), ready.end(), [](bool r) { return r; })) {

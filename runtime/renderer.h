@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,8 @@ struct DeviceReport {
   std::string kernel_options;
   uint64_t kernel_private_bytes = 0;  // the render kernel's private memory per work item, as the driver reports it
   uint32_t lanes = 1;                 // paths per work item
+  uint32_t unit_items = 0;            // the largest unit its buffers take (pixels or paths)
+  std::map<std::string, uint64_t> buffers;  // the technique's device buffers (light vertices, a grid): bytes
   double probe_seconds = 0;
 };
 

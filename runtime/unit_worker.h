@@ -4,6 +4,7 @@
 // prepares it, probes it, hands it units with their input and gets back outputs that own their payload.
 #pragma once
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,8 @@ struct WorkerReport {
   std::string kernel_options;  // the technique's program's
   uint64_t kernel_private_bytes = 0;  // the most private memory per work item of the technique's kernels
   uint32_t lanes = 1;
+  uint32_t unit_items = 0;  // the largest unit (pixels or paths) it takes (Technique::max_unit_items)
+  std::map<std::string, uint64_t> buffers;  // the technique's device buffers and their bytes
 };
 
 class UnitWorker {
