@@ -133,3 +133,15 @@ uint32_t light_vertex_unit_paths(const TechniqueSizes& s, size_t extra_bytes) {
   const uint64_t paths = std::min(alloc / vertices, memory / 4 / (vertices + extra_bytes));
   return uint32_t(std::min<uint64_t>(paths, s.pixels));
 }
+
+double default_merging_radius(const DeviceScene& scene, const LightTransportHeader& lt) {
+  const SceneHeader& h = scene.header;
+  double d = scene.view_distance;
+  if (!(d > 0)) {  // no look_at (a glTF camera): the distance to the scene's centre, or its radius from inside
+    const double dx = h.cam_position.x - lt.bounds.x, dy = h.cam_position.y - lt.bounds.y, dz = h.cam_position.z - lt.bounds.z;
+    d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(d > 0.1 * lt.bounds.w)) d = lt.bounds.w;
+  }
+  const double tan_half = std::sqrt(double(h.cam_up.x) * h.cam_up.x + double(h.cam_up.y) * h.cam_up.y + double(h.cam_up.z) * h.cam_up.z);
+  return d * 2 * tan_half / std::max<uint32_t>(h.height, 1);
+}

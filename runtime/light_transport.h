@@ -36,6 +36,11 @@ void develop_splats(Film& film, const LightTransportHeader& lt, uint64_t* overfl
 struct TechniqueBuild;
 std::string splat_build_options(const TechniqueBuild& build);
 
+// The merging integrators' first radius where the scene gives none: the footprint of a pixel (its height)
+// at the distance the camera looks at (its look_at; a camera without one, glTF's: the distance to the
+// scene's centre, or the scene's radius from near it).
+double default_merging_radius(const DeviceScene& scene, const LightTransportHeader& lt);
+
 // BDPT and the merging integrators keep each light subpath of a unit in max_depth slots of LightVertex
 // (kernels/shared/light_types.h) on the device: the bytes for sizes.unit_items paths, and the most paths a
 // unit may hold on sizes.device when each path also takes extra_bytes (its grid entries): the vertex

@@ -202,7 +202,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   if (technique.merging) {  // kernels/vcm.cl
     LightTransportHeader& lt = light_setup.header;
     lt.vcm_mode = options.merge ? technique.merging : technique.merging & ~PC_VCM_MERGE;
-    lt.radius = float(options.radius > 0 ? options.radius : 1.5 * lt.bounds.w / std::sqrt(double(pixels)));
+    lt.radius = float(options.radius > 0 ? options.radius : default_merging_radius(scene, lt));
     lt.alpha = float(options.alpha);
   }
   result.light = light_setup.header;

@@ -49,9 +49,9 @@ struct RenderOptions {
   // Paths per work item of techniques over lanes (path, kernels/lanes.cl): 1, 8 or 16, the same pixels; 0:
   // each device's own (path_lanes, runtime/device.h), 1 for the other techniques.
   uint32_t lanes = 0;
-  // Photon merging (vcm, bpm, sppm; kernels/vcm.cl): the first iteration's radius in scene units (0: 1.5 times
-  // the scene's bounding radius over the square root of the pixel count), its reduction exponent, and
-  // whether vcm merges (false: bdpt's estimator, the same bits).
+  // Photon merging (vcm, bpm, sppm; kernels/vcm.cl): the first iteration's radius in scene units (0: a pixel's
+  // footprint where the camera looks, default_merging_radius), its reduction exponent, and whether vcm
+  // merges (false: bdpt's estimator, the same bits).
   double radius = 0;
   double alpha = 0.75;
   bool merge = true;

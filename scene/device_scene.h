@@ -81,6 +81,7 @@ struct BvhStats {
 struct DeviceScene {
   SceneHeader header{};              // camera, film size and counts; settings are filled in per render
   glm::dvec3 origin{0};              // world position of the device coordinates' origin (DeviceOrigin)
+  double view_distance = 0;          // from the camera to what it looks at (its look_at); 0: not given (glTF)
 #define PC_DEVICE_SCENE_VECTOR(T, name) std::vector<T> name;
   PC_SCENE_ARRAYS(PC_DEVICE_SCENE_VECTOR)
 #undef PC_DEVICE_SCENE_VECTOR

@@ -184,6 +184,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   DeviceScene out;
   out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
   out.header = camera_header(scene.camera, out.origin);
+  if (scene.camera.aimed) out.view_distance = glm::length(scene.camera.look_at - scene.camera.position);
   // World (double) to device (float) coordinates: the subtraction first, in double, then the rounding.
   // Geometry farther than kMaxSceneExtent would overflow squared distances on the device.
   auto to_device = [&](const ShapeDesc& s, const glm::dvec3& world, double radius = 0) {

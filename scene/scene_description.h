@@ -25,6 +25,7 @@ struct CameraDesc {
   uint32_t filter = 0;        // PC_FILTER_*
   float filter_radius = 0.5f; // pixels
   float filter_sigma = 0.5f;  // pixels (Gaussian)
+  bool aimed = true;          // look_at is what the camera looks at (false: a glTF camera, one unit ahead)
 };
 
 // A material with its parameters as the kernels take them (kernels/shared/types.h, Material); which

@@ -506,6 +506,7 @@ CameraDesc read_gltf_camera(const Node& n, const std::filesystem::path& dir, std
   if (!(glm::length(forward) > 0) || !(glm::length(glm::cross(forward, c.up)) > 0) || !within_float_range(c.position))
     n.at("from_gltf").fail(gltf.camera.where + ": its transform leaves the camera no position or view direction");
   c.look_at = c.position + glm::normalize(forward);
+  c.aimed = false;
   const double degrees = gltf.camera.yfov_radians * 180 / M_PI;
   if (!(degrees >= kSmallestPositive && degrees < 180))
     n.at("from_gltf").fail(gltf.camera.where + ": yfov " + std::to_string(gltf.camera.yfov_radians) +

@@ -59,8 +59,8 @@ std::string sds_unfolded_scene() {
 // The Szirmay-Kalos cap sphere (scripts/make-cap-sphere) lit by its emitting cap has uniform irradiance
 // on its wall, and a ball about a point of a sphere cuts out exactly pi r^2 of it (Archimedes): the
 // density estimate of merging is unbiased at any radius there. Every wall pixel is f Le rho (1 - rho^n)
-// / (1 - rho) after n reflections, for each merging integrator (the default radius, and a 20 times larger
-// one whose ball reaches well across the tessellation's triangles).
+// / (1 - rho) after n reflections, for each merging integrator (the default radius, and one of a fifth of
+// the sphere's radius, whose ball reaches well across the tessellation's triangles).
 TEST(Vcm, CapSphereExactForEveryMergingIntegrator) {
   std::string dir = temp_dir() + "/vcm-cap";
   std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir + " --level 5 --size 16 >/dev/null";
@@ -131,7 +131,7 @@ TEST(Vcm, AgreesWithPathTracingPerPixel) {
     scene.header.width = 48;
     scene.header.height = 48;
     Film reference = render_with(scene, merging("path", 512, 5)).film;
-    const double default_radius = 1.5 * light_transport_setup(scene, 1).header.bounds.w / 48;
+    const double default_radius = default_merging_radius(scene, light_transport_setup(scene, 1).header);
     for (const char* integrator : kMerging) {
       SCOPED_TRACE(std::string(name) + ", " + integrator);
       const bool vcm = std::string(integrator) == "vcm";
@@ -154,5 +154,31 @@ TEST(Vcm, SplatFilmIsBitwiseDeterministic) {
   for (const char* integrator : {"vcm", "sppm"}) {
     SCOPED_TRACE(integrator);
     expect_bitwise_deterministic(scene, merging(integrator, 8, 5));
+  }
+}
+
+// A unit holds at most what the device's buffers allow (Technique::max_unit_items): on a device with 1 MiB
+// allocations and 4 MiB of memory a 64 x 64 film at max_depth 8 takes units of a few hundred light paths, its
+// vertices within the allocation, all buffers within a quarter of the memory; an iteration of more paths is
+// split into units, whose film is the one-unit film (SplatFilmIsBitwiseDeterministic).
+TEST(Vcm, UnitsFitTheDevicesMemory) {
+  DeviceInfo small = test_device().info;
+  small.max_alloc = 1 << 20;
+  small.global_memory = 4 << 20;
+  for (const char* integrator : {"bdpt", "vcm"}) {
+    SCOPED_TRACE(integrator);
+    const Technique& t = technique_named(integrator, "test");
+    TechniqueSizes sizes{64 * 64, 8, 0, &small};
+    sizes.unit_items = technique_unit_items(t, sizes);
+    EXPECT_GE(sizes.unit_items, 64u);  // the probe's paths
+    EXPECT_LT(sizes.unit_items, 64u * 64u);
+    size_t total = 0;
+    for (const TechniqueBuffer& b : t.buffers) {
+      const size_t bytes = b.bytes(sizes);
+      EXPECT_LE(bytes, small.max_alloc) << b.name;
+      total += bytes;
+    }
+    EXPECT_LE(total, small.global_memory / 4);
+    EXPECT_EQ(light_vertex_bytes(sizes), size_t(sizes.unit_items) * 8 * sizeof(LightVertex));
   }
 }
