@@ -296,8 +296,21 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   }
   if (options.allow_mixed_devices && classes.size() > 1) result.determinism = "mixed";
   for (size_t d = 0; d < n; ++d) schedule_devices[d].mixed_class = result.devices[d].arithmetic_class != 0;
-  RenderSchedule schedule(pixels, options.tile_pixels > 0 ? options.tile_pixels : RenderSchedule::default_tile_pixels(pixels),
-                          start_spp, schedule_devices);
+  // Units no larger than every device's buffers take (Technique::max_unit_items), nor than asked.
+  uint32_t unit_limit = options.max_unit_pixels > 0 ? options.max_unit_pixels : pixels;
+  size_t ready_devices = 0;
+  for (size_t d = 0; d < n; ++d)
+    if (ready[d]) {
+      ++ready_devices;
+      unit_limit = std::min(unit_limit, technique_unit_items(technique, {pixels, options.max_depth, 0, &workers[d].info}));
+    }
+  // A per-sample technique's unit traces every camera path of its iteration whatever its share of the light
+  // paths (the merging integrators): by default a device's tile is its share of the image, as large as its
+  // buffers allow, so that one device runs whole iterations.
+  uint32_t tile_pixels = options.tile_pixels > 0 ? options.tile_pixels : RenderSchedule::default_tile_pixels(pixels);
+  if (options.tile_pixels == 0 && technique.per_sample)
+    tile_pixels = std::min<uint32_t>(unit_limit, uint32_t((pixels + ready_devices - 1) / std::max<size_t>(ready_devices, 1)));
+  RenderSchedule schedule(pixels, tile_pixels, start_spp, schedule_devices);
   for (size_t d = 0; d < n; ++d) {
     DeviceReport& report = result.devices[d];
     if (!ready[d]) {
@@ -312,11 +325,6 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     }
   }
   if (options.pass_spp > 0) schedule.fix_samples_per_unit(options.pass_spp);
-  // Units no larger than every device's buffers take (Technique::max_unit_items), nor than asked.
-  uint32_t unit_limit = options.max_unit_pixels > 0 ? options.max_unit_pixels : pixels;
-  for (size_t d = 0; d < n; ++d)
-    if (ready[d])
-      unit_limit = std::min(unit_limit, technique_unit_items(technique, {pixels, options.max_depth, 0, &workers[d].info}));
   if (unit_limit < pixels) schedule.limit_unit_pixels(unit_limit);
   result.setup_seconds = seconds_since(setup_start);
 
