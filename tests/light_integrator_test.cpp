@@ -117,13 +117,10 @@ TEST(LightIntegrator, AgreesWithPathTracingPerPixelOnTheCornellBox) {
   o.integrator = "light";
   o.spp = 256;
   Film light = render_with(scene, o).film;
-  PixelComparison c = compare_pixels(path, light, [&](size_t p) {
+  PixelComparison c = expect_same_pixels(path, light, [&](size_t p) {
     return direct.mean[3 * p] > 0 || direct.mean[3 * p + 1] > 0 || direct.mean[3 * p + 2] > 0;
   });
-  ASSERT_GT(c.compared, path.mean.size() * 8 / 10);
-  // |z| > 4 has probability 6e-5 per pixel for correct estimators; heavier tails of a few pixels allowed.
-  EXPECT_LE(c.failed, c.compared / 200) << c.failed << " of " << c.compared;
-  EXPECT_LE(c.sum_z(), 4.0) << "image sums " << c.sum_a << " and " << c.sum_b;
+  EXPECT_GT(c.compared, path.mean.size() * 8 / 10);
 }
 
 // The image is a pure function of scene, settings and seed: the same bits for any work-group size, any

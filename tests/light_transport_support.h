@@ -98,6 +98,16 @@ inline PixelComparison compare_pixels(const Film& a, const Film& b, const std::f
   return c;
 }
 
+// Films a and b estimate the same pixels (those `skip` does not leave out): per channel |z| > 4, with
+// probability 6e-5 for correct estimators, in at most 1 in 200 channels (heavier tails of a few allowed),
+// and the image sums within 4 standard errors. Returns the comparison.
+inline PixelComparison expect_same_pixels(const Film& a, const Film& b, const std::function<bool(size_t pixel)>& skip = nullptr) {
+  PixelComparison c = compare_pixels(a, b, skip);
+  EXPECT_LE(c.failed, c.compared / 200) << c.failed << " of " << c.compared;
+  EXPECT_LE(c.sum_z(), 4.0) << "image sums " << c.sum_a << " and " << c.sum_b;
+  return c;
+}
+
 // The image is a pure function of scene, settings and seed: the same bits as a render with options o for
 // a work-group size of 16, units of 3 spp over 37 paths, 32-bit word pairs instead of 64-bit atomics, and
 // a render resumed from the half-way film of another (o.spp a power of two), and renders that a stop rule
