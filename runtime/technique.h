@@ -1,4 +1,4 @@
-// Techniques: each integrator (path, light, bdpt, and those to come) is one host object, registered once.
+// Techniques: each integrator (path, light, bdpt, vcm, bpm, sppm) is one host object, registered once.
 // It names its kernel and entry point, its -D flags, the film layers it writes, how its units cover the
 // film, which render options apply to it and how its film becomes an image. The render loop
 // (runtime/renderer.cpp), the OpenCL worker (runtime/device_worker.cpp), checkpoints and the command line
@@ -78,7 +78,7 @@ struct TechniqueOption {
 
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
-  uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2); never reused
+  uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2, vcm 3, bpm 4, sppm 5); never reused
   std::string summary;  // one line for --help and the docs
   std::string kernel_file;             // its program's main file under kernels/
   std::vector<TechniquePhase> phases;  // what a unit runs
@@ -105,12 +105,12 @@ struct Technique {
   std::function<void(Film& film, const LightTransportHeader& lt, uint64_t* overflows)> develop;
 };
 
-// Every registered technique, in registration order (path, light, bdpt, then any a test adds).
+// Every registered technique, in registration order (path, light, bdpt, vcm, bpm, sppm, then any a test adds).
 const std::vector<Technique>& techniques();
 // Adds one (tests: a technique of their own, with a kernel from register_kernel_source); the name and id
 // must be new.
 void register_technique(Technique technique);
-// The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light or bdpt)".
+// The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light, bdpt, vcm, bpm or sppm)".
 const Technique& technique_named(const std::string& name, const std::string& where);
 // Whether a phase takes "lt" or "emission_cdf": the render then sets up the emission distribution and the
 // splat scales (runtime/light_transport.h).
@@ -119,7 +119,7 @@ bool uses_emission(const Technique& t);
 uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes);
 // By id (checkpoints); nullptr if none has it.
 const Technique* technique_with_id(uint32_t id);
-// "path, light or bdpt"
+// "path, light, bdpt, vcm, bpm or sppm"
 std::string technique_list();
 
 // Refuses options that do not apply to the technique or exceed its limits (UsageError naming them).
