@@ -16,7 +16,7 @@
  *   vcm_light    traces the c light paths, their non-delta vertices at slots (path - b) max_depth + k of
  *                light_vertices (never an atomic counter), their camera connections splatted
  *   vcm_count    counts the vertices in each bucket of the hash grid (cells 2 r wide; integer atomics)
- *   vcm_scan     bucket ends by a prefix sum (one work item)
+ *   vcm_scan_*   bucket ends by a prefix sum (blocks of buckets in parallel, then their offsets)
  *   vcm_scatter  each vertex's slot into its bucket's entries
  *   vcm_camera   every pixel's camera path: its own strategies where light path p is the unit's (the
  *                connections need it), and its merges with the unit's vertices
@@ -150,6 +150,9 @@ inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, 
 
 #include "bdpt.cl"
 
+/* Blocks of the grid's prefix sum (vcm_scan_*; runtime/technique_vcm.cpp's kScanBlocks). */
+#define PC_VCM_SCAN_BLOCKS 256u
+
 /* The unit's range: light paths [path_begin, path_begin + path_count) of iteration sample_begin
  * (sample_count is 1: Technique::per_sample). */
 #define PC_VCM_UNIT uint path_begin, uint path_count, uint sample_begin, uint sample_count
@@ -187,14 +190,40 @@ __kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
     atomic_inc(cells + grid_bucket_of(light_vertices[item * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
 }
 
-__kernel void vcm_scan(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
-  if (get_global_id(0) != 0u || path_count == 0u) return;
-  uint table = grid_table(path_count), end = 0u;
-  for (uint b = 0; b < table; ++b) {
+/* The buckets' ends by a prefix sum in three launches of independent work items (no work-group size assumed;
+ * a GPU runs PC_VCM_SCAN_BLOCKS chunks at once instead of one thread over every bucket): each block's
+ * running sums over its chunk, the blocks' offsets (one work item, kept after the buckets' end,
+ * cells[table + 1 + block]), each chunk's offset added. Integer sums: the same bits however it is split. */
+inline uint scan_chunk(uint table) { return (table + PC_VCM_SCAN_BLOCKS - 1u) / PC_VCM_SCAN_BLOCKS; }
+
+__kernel void vcm_scan_blocks(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
+  uint block = get_global_id(0);
+  if (path_count == 0u || block >= PC_VCM_SCAN_BLOCKS) return;
+  uint table = grid_table(path_count), chunk = scan_chunk(table), end = 0u;
+  for (uint b = block * chunk; b < min(table, (block + 1u) * chunk); ++b) {
     end += cells[b];
-    cells[b] = end; /* the bucket's end: vcm_scatter counts it down to its start */
+    cells[b] = end;
   }
-  cells[table] = end;
+  cells[table + 1u + block] = end;
+}
+
+__kernel void vcm_scan_offsets(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
+  if (get_global_id(0) != 0u || path_count == 0u) return;
+  uint table = grid_table(path_count), total = 0u;
+  for (uint block = 0; block < PC_VCM_SCAN_BLOCKS; ++block) {
+    uint sum = cells[table + 1u + block];
+    cells[table + 1u + block] = total;
+    total += sum;
+  }
+  cells[table] = total;
+}
+
+/* After it cells[b] is bucket b's end: vcm_scatter counts it down to the bucket's start. */
+__kernel void vcm_scan_add(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
+  uint block = get_global_id(0);
+  if (path_count == 0u || block >= PC_VCM_SCAN_BLOCKS) return;
+  uint table = grid_table(path_count), chunk = scan_chunk(table), offset = cells[table + 1u + block];
+  for (uint b = block * chunk; b < min(table, (block + 1u) * chunk); ++b) cells[b] += offset;
 }
 
 __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,

@@ -13,6 +13,9 @@
 
 namespace {
 
+// kernels/vcm.cl's PC_VCM_SCAN_BLOCKS: the grid's prefix sum in blocks of buckets.
+constexpr size_t kScanBlocks = 256;
+
 // kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
 size_t grid_table(uint32_t paths) {
   size_t t = 1;
@@ -31,10 +34,11 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.merging = mode;
   t.per_sample = true;
   // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
-  // its vertex count, the grid's buckets (a power of two >= c, and one end) and entries.
+  // its vertex count, the grid's buckets (a power of two >= c, one end and the prefix sum's block offsets)
+  // and entries.
   t.buffers = {{"light_vertices", light_vertex_bytes},
                {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
-               {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1) * sizeof(uint32_t); }},
+               {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + kScanBlocks) * sizeof(uint32_t); }},
                {"entries", [](const TechniqueSizes& s) { return s.unit_items * slots(s) * sizeof(uint32_t); }}};
   t.max_unit_items = [](const TechniqueSizes& s) {
     return light_vertex_unit_paths(s, slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
@@ -44,7 +48,9 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
       {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t) { return grid_table(count) + 1; }},
       {"light", "vcm_light", paths},
       {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}},
-      {"scan", "vcm_scan", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
+      {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
+      {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
       {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}},
       {"camera", "vcm_camera",
        {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "entries", "unit"},
