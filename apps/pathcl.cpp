@@ -390,6 +390,10 @@ int run_render(const RenderArgs& a) {
       j["merging_radius"] = r.light.radius;
       j["merging_alpha"] = r.light.alpha;
     }
+    if (r.light_vertices > 0) {  // bdpt and the merging integrators: light vertices kept, per iteration
+      j["light_vertices"] = r.light_vertices;
+      j["light_vertices_per_iteration"] = double(r.light_vertices) / std::max(r.film.spp - (opt.resume ? opt.resume->spp : 0), 1u);
+    }
     write_json(a.stats, j);
   }
   if (!a.quiet)

@@ -236,7 +236,7 @@ __kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   SampleKey key;
   key.pixel = pixel;
   key.seed = h->seed;
-  SplatCounts n = {0u, 0u, 0u, 0u, 0u};
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, true, 1u};
   __global LightVertex* vertices = light_vertices + item * max(h->max_depth, 1u);
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {

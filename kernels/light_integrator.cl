@@ -17,7 +17,7 @@ __kernel void light_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   SampleKey key;
   key.pixel = path_begin + item;
   key.seed = h->seed;
-  SplatCounts n = {0u, 0u, 0u, 0u, 0u};
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     trace_light_path(&sc, lt, emission_cdf, film, key, &n);

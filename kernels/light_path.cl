@@ -53,7 +53,7 @@ inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 
 #define PC_LT_CUTOUT_BASE 0x40000000u
 
 typedef struct {
-  uint rays, nan_splats, inf_splats, negative_splats, overflows;
+  uint rays, nan_splats, inf_splats, negative_splats, overflows, light_vertices;
 } SplatCounts;
 
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
@@ -269,6 +269,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
 #ifdef PC_BDPT
     if (!bsdf_is_delta(m) && v + 1u >= mis->first_length) {
       __global LightVertex* lv = vertices + (*count)++;
+      ++n->light_vertices;
       lv->p = (float4)(s.p, max_component(s.p_err));
       lv->ng = (float4)(s.ng, dvcm);
       lv->ns = (float4)(s.ns, dvc);
@@ -311,6 +312,7 @@ inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
   if (n->inf_splats) atomic_add(counters + 3, n->inf_splats);
   if (n->negative_splats) atomic_add(counters + 4, n->negative_splats);
   if (n->overflows) atomic_add(counters + 5, n->overflows);
+  if (n->light_vertices) atomic_add(counters + 6, n->light_vertices);
 }
 
 #endif

@@ -172,7 +172,7 @@ __kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   key.pixel = path_begin + item;
   key.seed = h->seed;
   key.sample = sample_begin;
-  SplatCounts n = {0u, 0u, 0u, 0u, 0u};
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MisFactors mis = iteration_factors(lt, h, iteration_radius2(lt, sample_begin));
   uint count = 0u;
   trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, light_vertices + item * max(h->max_depth, 1u), &count);
@@ -266,7 +266,7 @@ __kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   bool own = pixel >= path_begin && item < path_count;
   uint slots = max(h->max_depth, 1u);
   MergeSums merged = {{0ul, 0ul, 0ul}, {0ul, 0ul, 0ul}, 0u};
-  SplatCounts n = {0u, 0u, 0u, 0u, 0u};
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, own,
                                   light_vertices + (own ? item * slots : 0u), own ? vertex_counts[item] : 0u, &n.rays,
                                   &grid, &merged, &n);

@@ -238,12 +238,15 @@ UnitOutput DeviceWorker::run(const WorkUnit& u, const std::vector<uint32_t>* inp
   read_commutative_layers(out.commutative);
   UnitStats s{};
   CL_CHECK(clEnqueueReadBuffer(cl_->queue, stats_.mem, CL_TRUE, 0, sizeof s, &s, 0, nullptr, nullptr));
-  // The splat kernels' SplatStats has the same first words; its overflows are UnitStats's pad[0].
-  static_assert(sizeof(SplatStats) == sizeof(UnitStats) && offsetof(SplatStats, overflows) == offsetof(UnitStats, pad),
+  // The splat kernels' SplatStats has the same first words; its overflows and light vertices are UnitStats's
+  // pad[0] and pad[1].
+  static_assert(sizeof(SplatStats) == sizeof(UnitStats) && offsetof(SplatStats, overflows) == offsetof(UnitStats, pad) &&
+                    offsetof(SplatStats, light_vertices) == offsetof(UnitStats, pad) + sizeof(pc_uint),
                 "SplatStats reads as UnitStats");
   out.stats = s;
   out.splat_overflows = s.pad[0];
-  out.stats.pad[0] = 0;
+  out.light_vertices = s.pad[1];
+  out.stats.pad[0] = out.stats.pad[1] = 0;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -405,6 +405,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     if (f.outcome == UnitOutcome::committed) {
       commit(unit, e.output);
       result.splat_overflows += e.output.splat_overflows;
+      result.light_vertices += e.output.light_vertices;
       const UnitStats& s = e.output.stats;
       result.rays += uint64_t(s.rays_hi) << 32 | s.rays_lo;
       result.nan_samples += s.nan_samples;

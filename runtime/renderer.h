@@ -93,6 +93,7 @@ struct RenderResult {
   Film film;
   uint64_t rays = 0, nan_samples = 0, inf_samples = 0, negative_samples = 0;
   uint64_t splat_overflows = 0;  // light: fixed-point overflows (a hazard: above zero is a bug)
+  uint64_t light_vertices = 0;   // bdpt, vcm, bpm, sppm: light vertices kept on the devices, over the render
   LightTransportHeader light{};  // techniques with emission: the bounds and fixed-point scales of the film
   std::vector<PhaseTime> phases;  // device time of each named launch of the units, all devices (ms)
   double kernel_build_ms = 0;  // the slowest device's build (they build at once)

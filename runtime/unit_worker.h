@@ -48,6 +48,7 @@ struct PhaseTime {
 struct UnitOutput {
   UnitStats stats{};
   uint64_t splat_overflows = 0;  // fixed-point splats too large for the scale (a hazard)
+  uint64_t light_vertices = 0;   // light vertices kept (bdpt, the merging integrators)
   double seconds = 0;    // the unit's wall time on the worker: upload, launches, read-back
   double kernel_ms = 0;  // the launches alone
   std::vector<PhaseTime> phases;

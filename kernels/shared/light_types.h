@@ -53,8 +53,9 @@ typedef struct {
 } LightTransportHeader;
 
 /* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
- * splats dropped for being NaN, infinite or negative, and fixed-point overflows (a splat too large for
- * the scale, or a sum that reached 2^63). rays_lo .. overflows (6 x 4) + pad (8) = 32 bytes. */
+ * splats dropped for being NaN, infinite or negative, fixed-point overflows (a splat too large for the
+ * scale, or a sum that reached 2^63) and the light vertices kept (bdpt, the merging integrators).
+ * rays_lo .. light_vertices (7 x 4) + pad (4) = 32 bytes. */
 typedef struct {
   pc_uint rays_lo;
   pc_uint rays_hi;
@@ -62,7 +63,8 @@ typedef struct {
   pc_uint inf_splats;
   pc_uint negative_splats;
   pc_uint overflows;
-  pc_uint pad[2];
+  pc_uint light_vertices;
+  pc_uint pad;
 } SplatStats;
 
 /* A non-delta vertex of a light subpath, kept for the camera subpaths to connect to or merge with
@@ -85,7 +87,7 @@ typedef struct {
   X(LightTransportHeader, bounds) X(LightTransportHeader, splat_scale) X(LightTransportHeader, square_scale) \
   X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(LightTransportHeader, radius) \
   X(LightTransportHeader, alpha) X(LightTransportHeader, vcm_mode) X(LightVertex, wl) X(LightVertex, material) \
-  X(LightVertex, length) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
+  X(LightVertex, length) X(SplatStats, light_vertices) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
   X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
 
 #ifndef __OPENCL_VERSION__
