@@ -349,7 +349,8 @@ int run_render(const RenderArgs& a) {
   write_image(out, image);
   if (!a.png.empty()) write_png(a.png, image);
   if (!log.path.empty()) write_text_file(log.path, log.text);
-  double samples = double(pixels) * (r.film.spp - (opt.resume ? opt.resume->spp : 0));
+  const uint32_t rendered_spp = r.film.spp - (opt.resume ? opt.resume->spp : 0);
+  double samples = double(pixels) * rendered_spp;
   if (!a.stats.empty()) {
     nlohmann::json j = scene_stats(s);
     j.update({{"device", used_devices(r)},
@@ -365,7 +366,6 @@ int run_render(const RenderArgs& a) {
               {"integrator", opt.integrator},
               {"aovs", aov_names(opt.aovs)},
               {"phases", phase_stats(r)},
-
               {"denoise_seconds", denoise_seconds},
               {"lanes", r.devices.front().lanes},
               {"stop_reason", r.stop_reason},
@@ -392,7 +392,7 @@ int run_render(const RenderArgs& a) {
     }
     if (r.light_vertices > 0) {  // bdpt and the merging integrators: light vertices kept, per iteration
       j["light_vertices"] = r.light_vertices;
-      j["light_vertices_per_iteration"] = double(r.light_vertices) / std::max(r.film.spp - (opt.resume ? opt.resume->spp : 0), 1u);
+      j["light_vertices_per_iteration"] = double(r.light_vertices) / std::max(rendered_spp, 1u);
     }
     write_json(a.stats, j);
   }

@@ -87,6 +87,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
    * connection (t = 1), counted as PC_BDPT_LIGHT_TRACING_COUNT of its paths. */
   float dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = 0.0f, dvm = 0.0f;
   bool specular = true; /* every scattering so far by a delta lobe */
+  const bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
   float3 prev_p = ray.o;
   for (uint depth = 0;; ++depth) {
     Hit hit;
@@ -143,7 +144,6 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     float3 wo_local = to_local(&frame, wo);
     float4 u_light = sample4(h, key, PC_DIM_LIGHT(depth));
     float4 u_bsdf = sample4(h, key, PC_DIM_BSDF(depth));
-    bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
 
     if (!bsdf_is_delta(m) && own && (mis->connect || sppm)) {
       /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
@@ -233,12 +233,10 @@ __kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   uint item = get_global_id(0);
   if (item >= path_count) return;
   uint pixel = path_begin + item;
-  SampleKey key;
-  key.pixel = pixel;
-  key.seed = h->seed;
+  SampleKey key = light_path_key(h, pixel, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, true, 1u};
-  __global LightVertex* vertices = light_vertices + item * max(h->max_depth, 1u);
+  __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     uint count = 0u;

@@ -14,9 +14,7 @@ __kernel void light_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   SceneData sc = PC_SCENE_DATA;
   uint item = get_global_id(0);
   if (item >= path_count) return;
-  SampleKey key;
-  key.pixel = path_begin + item;
-  key.seed = h->seed;
+  SampleKey key = light_path_key(h, path_begin + item, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;

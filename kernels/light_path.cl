@@ -56,6 +56,16 @@ typedef struct {
   uint rays, nan_splats, inf_splats, negative_splats, overflows, light_vertices;
 } SplatCounts;
 
+/* The key of light path `path` in sample `sample` (numbered like the pixels: a sample holds width x height
+ * light paths), the key of the camera path of the same pixel too. */
+inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint sample) {
+  SampleKey key;
+  key.pixel = path;
+  key.seed = h->seed;
+  key.sample = sample;
+  return key;
+}
+
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
 inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
   float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
@@ -109,6 +119,9 @@ typedef struct {
   bool connect;
   uint first_length;
 } MisFactors;
+
+/* Light vertex slots per light path of a unit (runtime/light_transport.h's light_vertex_slots). */
+inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
 
 /* The density with which next-event estimation from x (lights.cl's sample_light) picks light `index` at y
  * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;

@@ -71,6 +71,10 @@ inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, _
   return m;
 }
 
+/* Cells are 2 r wide: what a position is scaled by to find its cell (one expression for the grid's build and
+ * its queries, which must agree). */
+inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
+
 inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
 
 inline uint grid_bucket(int x, int y, int z, uint table) {
@@ -168,14 +172,11 @@ __kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   SceneData sc = PC_SCENE_DATA;
   uint item = get_global_id(0);
   if (item >= path_count) return;
-  SampleKey key;
-  key.pixel = path_begin + item;
-  key.seed = h->seed;
-  key.sample = sample_begin;
+  SampleKey key = light_path_key(h, path_begin + item, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MisFactors mis = iteration_factors(lt, h, iteration_radius2(lt, sample_begin));
   uint count = 0u;
-  trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, light_vertices + item * max(h->max_depth, 1u), &count);
+  trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, light_vertices + item * light_vertex_slots(h), &count);
   vertex_counts[item] = count;
   add_splat_counts(stats, &n);
 }
@@ -184,8 +185,8 @@ __kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
                         __global const uint* vertex_counts, __global uint* cells, PC_VCM_UNIT) {
   uint item = get_global_id(0);
   if (item >= path_count) return;
-  float inv_cell = 0.5f / sqrt(iteration_radius2(lt, sample_begin));
-  uint table = grid_table(path_count), slots = max(h->max_depth, 1u);
+  float inv_cell = grid_inv_cell(iteration_radius2(lt, sample_begin));
+  uint table = grid_table(path_count), slots = light_vertex_slots(h);
   for (uint k = 0; k < vertex_counts[item]; ++k)
     atomic_inc(cells + grid_bucket_of(light_vertices[item * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
 }
@@ -230,8 +231,8 @@ __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader
                           __global const uint* vertex_counts, __global uint* cells, __global uint* entries, PC_VCM_UNIT) {
   uint item = get_global_id(0);
   if (item >= path_count) return;
-  float inv_cell = 0.5f / sqrt(iteration_radius2(lt, sample_begin));
-  uint table = grid_table(path_count), slots = max(h->max_depth, 1u);
+  float inv_cell = grid_inv_cell(iteration_radius2(lt, sample_begin));
+  uint table = grid_table(path_count), slots = light_vertex_slots(h);
   for (uint k = 0; k < vertex_counts[item]; ++k) {
     uint slot = item * slots + k;
     uint b = grid_bucket_of(light_vertices[slot].p.xyz, lt->bounds.xyz, inv_cell, table);
@@ -247,10 +248,7 @@ __kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   SceneData sc = PC_SCENE_DATA;
   uint pixel = get_global_id(0);
   if (path_count == 0u || pixel >= h->width * h->height) return;
-  SampleKey key;
-  key.pixel = pixel;
-  key.seed = h->seed;
-  key.sample = sample_begin;
+  SampleKey key = light_path_key(h, pixel, sample_begin);
   float radius2 = iteration_radius2(lt, sample_begin);
   MisFactors mis = iteration_factors(lt, h, radius2);
   MergeGrid grid;
@@ -259,12 +257,12 @@ __kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   grid.entries = entries;
   grid.table = grid_table(path_count);
   grid.origin = lt->bounds.xyz;
-  grid.inv_cell = 0.5f / sqrt(radius2);
+  grid.inv_cell = grid_inv_cell(radius2);
   grid.radius2 = radius2;
   grid.normalization = 1.0f / (PC_PI * radius2 * (float)(h->width * h->height));
   uint item = pixel - path_begin; /* the pixel's light path in the unit, if it is there */
   bool own = pixel >= path_begin && item < path_count;
-  uint slots = max(h->max_depth, 1u);
+  uint slots = light_vertex_slots(h);
   MergeSums merged = {{0ul, 0ul, 0ul}, {0ul, 0ul, 0ul}, 0u};
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, own,

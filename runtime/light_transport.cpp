@@ -121,9 +121,7 @@ std::string splat_build_options(const TechniqueBuild& b) {
   return !b.splat_pairs && device_has_extension(*b.device, "cl_khr_int64_base_atomics") ? " -DPC_SPLAT_ATOMIC64" : "";
 }
 
-namespace {
 size_t light_vertex_slots(const TechniqueSizes& s) { return std::max<uint32_t>(s.max_depth, 1); }
-}  // namespace
 
 size_t light_vertex_bytes(const TechniqueSizes& s) { return size_t(s.unit_items) * light_vertex_slots(s) * sizeof(LightVertex); }
 

@@ -10,7 +10,6 @@
 #include "kernels/shared/light_types.h"
 #include "scene/device_scene.h"
 
-
 struct LightTransportSetup {
   LightTransportHeader header{};
   std::vector<float> emission_cdf;  // light_count + 1 entries, [0] = 0, last = 1
@@ -46,5 +45,6 @@ double default_merging_radius(const DeviceScene& scene, const LightTransportHead
 // unit may hold on sizes.device when each path also takes extra_bytes (its grid entries): the vertex
 // buffer within the device's largest allocation, all of them within a quarter of its memory.
 struct TechniqueSizes;
+size_t light_vertex_slots(const TechniqueSizes& sizes);  // per path: max_depth, at least 1 (kernels' too)
 size_t light_vertex_bytes(const TechniqueSizes& sizes);
 uint32_t light_vertex_unit_paths(const TechniqueSizes& sizes, size_t extra_bytes);

@@ -296,13 +296,13 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   }
   if (options.allow_mixed_devices && classes.size() > 1) result.determinism = "mixed";
   for (size_t d = 0; d < n; ++d) schedule_devices[d].mixed_class = result.devices[d].arithmetic_class != 0;
-  // Units no larger than every device's buffers take (Technique::max_unit_items), nor than asked.
+  // Units no larger than every device's buffers take (each worker's unit_items), nor than asked.
   uint32_t unit_limit = options.max_unit_pixels > 0 ? options.max_unit_pixels : pixels;
   size_t ready_devices = 0;
   for (size_t d = 0; d < n; ++d)
     if (ready[d]) {
       ++ready_devices;
-      unit_limit = std::min(unit_limit, technique_unit_items(technique, {pixels, options.max_depth, 0, &workers[d].info}));
+      if (result.devices[d].unit_items > 0) unit_limit = std::min(unit_limit, result.devices[d].unit_items);
     }
   // A per-sample technique's unit traces every camera path of its iteration whatever its share of the light
   // paths (the merging integrators): by default a device's tile is its share of the image, as large as its

@@ -23,8 +23,6 @@ size_t grid_table(uint32_t paths) {
   return t;
 }
 
-size_t slots(const TechniqueSizes& s) { return std::max<uint32_t>(s.max_depth, 1); }
-
 Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const char* summary) {
   Technique t = bdpt_technique();
   t.name = name;
@@ -39,9 +37,9 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.buffers = {{"light_vertices", light_vertex_bytes},
                {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
                {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + kScanBlocks) * sizeof(uint32_t); }},
-               {"entries", [](const TechniqueSizes& s) { return s.unit_items * slots(s) * sizeof(uint32_t); }}};
+               {"entries", [](const TechniqueSizes& s) { return s.unit_items * light_vertex_slots(s) * sizeof(uint32_t); }}};
   t.max_unit_items = [](const TechniqueSizes& s) {
-    return light_vertex_unit_paths(s, slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
+    return light_vertex_unit_paths(s, light_vertex_slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
   };
   const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
   t.phases = {

@@ -63,7 +63,7 @@ struct WorkerReport {
   std::string kernel_options;  // the technique's program's
   uint64_t kernel_private_bytes = 0;  // the most private memory per work item of the technique's kernels
   uint32_t lanes = 1;
-  uint32_t unit_items = 0;  // the largest unit (pixels or paths) it takes (Technique::max_unit_items)
+  uint32_t unit_items = 0;  // the largest unit (pixels or paths) it takes (Technique::max_unit_items); 0: any
   std::map<std::string, uint64_t> buffers;  // the technique's device buffers and their bytes
 };
 
