@@ -42,8 +42,8 @@ class DeviceWorker : public UnitWorker {
   void set_unit_args(Phase& p, uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride,
                      uint32_t sample_begin, uint32_t sample_count);
   // Each phase launched once over no pixels (its kernel does nothing for a count of 0): PoCL generates a
-  // kernel's code for its work-group size at its first launch, seconds even for a program from the cache,
-  // which then count as set-up instead of the first unit's time (and the schedule's first rate estimate).
+  // kernel's code for its work-group size at its first launch (seconds, unless its cache has it), which
+  // then counts as the kernel build instead of the first unit's time (and the schedule's first rate).
   void first_launches();
   void launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t pixel_stride, uint32_t sample_begin,
               uint32_t sample_count, UnitOutput* out);
@@ -62,6 +62,7 @@ class DeviceWorker : public UnitWorker {
   std::deque<ClBuffer> technique_buffers_;  // Technique::buffers, in order (a deque: bound by address)
   uint32_t lanes_ = 1;
   uint64_t private_bytes_ = 0;
+  double first_launch_ms_ = 0;  // first_launches(): PoCL's code generation, part of the kernel build
   uint32_t unit_items_ = 0;  // the largest unit it takes (technique_unit_items)
   std::map<std::string, uint64_t> buffer_bytes_;  // the technique's buffers
   DeviceFault fault_;

@@ -89,17 +89,24 @@ std::vector<unsigned char> program_binary(cl_program program) {
   return binary;
 }
 
-// Loads and builds a cached binary; nullptr if there is none, it is damaged (the file ends with an FNV-1a
-// checksum of the binary, checked before a driver ever sees the bytes) or the driver rejects it.
-cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& options) {
+// A cache file's contents; empty if there is none or it is damaged (the file ends with an FNV-1a checksum of
+// the contents, checked before a driver ever sees the bytes).
+std::vector<unsigned char> read_cached(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) return nullptr;
+  if (!in) return {};
   std::vector<unsigned char> binary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (binary.size() <= sizeof(uint64_t)) return nullptr;
+  if (binary.size() <= sizeof(uint64_t)) return {};
   uint64_t stored;
   std::memcpy(&stored, binary.data() + binary.size() - sizeof stored, sizeof stored);
   binary.resize(binary.size() - sizeof stored);
-  if (fnv1a(binary.data(), binary.size()) != stored) return nullptr;
+  if (fnv1a(binary.data(), binary.size()) != stored) return {};
+  return binary;
+}
+
+// Loads and builds a cached binary; nullptr if there is none, it is damaged or the driver rejects it.
+cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& options) {
+  std::vector<unsigned char> binary = read_cached(file);
+  if (binary.empty()) return nullptr;
   const unsigned char* ptr = binary.data();
   size_t size = binary.size();
   cl_int status = CL_SUCCESS, binary_status = CL_SUCCESS;
@@ -114,6 +121,11 @@ cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& o
     return nullptr;
   }
   return program;
+}
+
+bool driver_caches_programs(const DeviceInfo& d) {
+  const char* pocl_cache = std::getenv("POCL_KERNEL_CACHE");
+  return d.platform_name == "Portable Computing Language" && !(pocl_cache && std::string(pocl_cache) == "0");
 }
 
 // Written atomically (runtime/atomic_file.h), so concurrent processes never read half a binary.
@@ -144,7 +156,12 @@ std::string assemble_kernel_source(const std::string& main_file) {
   // In force from the first line of every program: a fused multiply-add rounds once where the source
   // rounds twice, and drivers differ in where they fuse, so contraction would make the bits depend on
   // the OpenCL implementation (and let rays slip through shared triangle edges).
-  std::string out = "#pragma OPENCL FP_CONTRACT OFF\n";
+  // And clang's ABI notes (-Wpsabi) are off: compiled for a CPU without AVX-512 (PoCL on AVX2), every call
+  // passing a float16 or uint16 draws one (the ray tracer's 16-wide packets: 136; 16 lanes: 1152), which
+  // PoCL prints at each build. They say that such a call would differ from one compiled for AVX-512; all
+  // functions of a program are compiled together, for one target. (The 612 that an 8-lane build printed
+  // came from 16-lane functions compiled though never called; the kernels' functions are static now.)
+  std::string out = "#pragma OPENCL FP_CONTRACT OFF\n#ifdef __clang__\n#pragma clang diagnostic ignored \"-Wpsabi\"\n#endif\n";
   expand(main_file, seen, out);
   return out;
 }
@@ -215,8 +232,16 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
         return result;
       }
   }
-  if (!file.empty()) result.program = load_cached(cl, file, options);
-  result.from_cache = result.program != nullptr;
+  // PoCL keeps what it compiles in a cache of its own (POCL_CACHE_DIR, else ~/.cache/pocl/kcache), the code
+  // it generates for a kernel's work-group size at the first launch included. Asked for a binary, it
+  // compiles a generic work-group function of every kernel besides, which no launch of ours uses: 2.8 of
+  // the 7.9 s that the Cornell box's path program took cold. So for PoCL our cache holds a stamp saying
+  // that the program was built, and the build from source finds PoCL's cached code (unless PoCL's cache is
+  // off: POCL_KERNEL_CACHE=0, then the binary as for other drivers).
+  const bool stamp_only = !file.empty() && driver_caches_programs(d);
+  if (stamp_only) file.replace_extension(".built");
+  if (!file.empty() && !stamp_only) result.program = load_cached(cl, file, options);
+  result.from_cache = stamp_only ? !read_cached(file).empty() : result.program != nullptr;
   if (!result.program) {
     const char* text = source.c_str();
     size_t length = source.size();
@@ -225,7 +250,8 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
     if (status != CL_SUCCESS)
       throw RuntimeFailure("kernel build of " + main_file + " failed (" + cl_error_name(status) + ") on " + d.name +
                            " with options \"" + options + "\":\n" + build_log(result.program, d.device));
-    if (!file.empty()) store_cached(file, program_binary(result.program));
+    if (stamp_only && !result.from_cache) store_cached(file, {'s', 't', 'a', 'm', 'p'});
+    if (!file.empty() && !stamp_only) store_cached(file, program_binary(result.program));
   }
   if (cl.keep_programs) {
     std::lock_guard<std::mutex> lock(cl.kept_programs_mutex);

@@ -58,7 +58,7 @@ struct UnitOutput {
 
 // What the render's statistics say of a worker's set-up.
 struct WorkerReport {
-  double kernel_build_ms = 0;  // its programs' builds (or cache loads), summed
+  double kernel_build_ms = 0;  // its programs' builds (or cache loads) and the driver's code generation at their first launches, summed
   bool kernel_from_cache = false;
   std::string kernel_options;  // the technique's program's
   uint64_t kernel_private_bytes = 0;  // the most private memory per work item of the technique's kernels

@@ -210,11 +210,17 @@ TEST(Cli, FilmLargerThanTheDeviceIsAClearRuntimeFailure) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-TEST(Cli, DamagedKernelCacheEntryIsDetectedAndRebuilt) {
-  std::string cache = temp_dir() + "/kernel-cache-damage", stats = temp_dir() + "/cache.json";
+// On PoCL with its own cache on, the cache holds stamps (kernel_program.cpp); with it off, binaries: both kinds.
+class CliKernelCache : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CliKernelCache, DamagedEntryIsDetectedAndRebuilt) {
+  std::string cache = temp_dir() + "/kernel-cache-damage-" + GetParam(), stats = temp_dir() + "/cache.json";
+  fs::remove_all(cache);
   const char* previous = std::getenv("PATHCL_KERNEL_CACHE");
   std::string saved = previous ? previous : "";
   setenv("PATHCL_KERNEL_CACHE", cache.c_str(), 1);
+  const bool binaries = std::string(GetParam()) == "binaries";
+  if (binaries) setenv("POCL_KERNEL_CACHE", "0", 1);
   std::string render = "render " + scene("tiny.json") + " --spp 1 --quiet -o " + temp_dir() + "/c.exr --stats " + stats;
   auto from_cache = [&] { return nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>(); };
   std::string err;
@@ -234,8 +240,13 @@ TEST(Cli, DamagedKernelCacheEntryIsDetectedAndRebuilt) {
   EXPECT_FALSE(from_cache());
   ASSERT_EQ(run_pathcl(render, &err), 0) << err;  // and stored again
   EXPECT_TRUE(from_cache());
+  const bool is_pocl = test_device().info.platform_name == "Portable Computing Language";
+  for (const auto& entry : fs::directory_iterator(cache))  // the kind of entry this test is about
+    EXPECT_EQ(entry.path().extension() == ".built", is_pocl && !binaries) << entry.path();
+  if (binaries) unsetenv("POCL_KERNEL_CACHE");
   if (previous) setenv("PATHCL_KERNEL_CACHE", saved.c_str(), 1); else unsetenv("PATHCL_KERNEL_CACHE");
 }
+INSTANTIATE_TEST_SUITE_P(Kinds, CliKernelCache, ::testing::Values("stamps", "binaries"));
 
 // The command line refuses what the scene file refuses: one set of limits (scene/scene_limits.h).
 TEST(Cli, OptionsHaveTheSceneFilesLimits) {
