@@ -24,6 +24,9 @@ ClContext& test_device() {
   if (!cl) {
     const char* selector = std::getenv("PATHCL_TEST_DEVICE");
     cl = std::make_unique<ClContext>(select_device(selector ? selector : ""));
+    // Tests render the same programs again and again: each kept on the context, not loaded from the cache
+    // for every render (runtime/device.h). The loads themselves are tested by cli_test's cache tests.
+    cl->keep_programs = true;
   }
   return *cl;
 }
