@@ -11,7 +11,7 @@ Technique bdpt_technique() {
   t.id = PC_INTEGRATOR_BDPT;
   t.summary = "bidirectional path tracing, every strategy weighted by MIS";
   t.kernel_file = "bdpt.cl";
-  t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "light_vertices", "unit"}}};
+  t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "light_vertices", "unit"}, {}}};
   // Each work item keeps its light subpath in device memory (max_depth slots): units as large as it allows.
   t.buffers = {{"light_vertices", light_vertex_bytes}};
   t.max_unit_items = [](const TechniqueSizes& s) { return light_vertex_unit_paths(s, 0); };

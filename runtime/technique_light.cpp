@@ -10,7 +10,7 @@ Technique light_technique() {
   t.id = PC_INTEGRATOR_LIGHT;
   t.summary = "light tracing: light paths connected to the camera";
   t.kernel_file = "light_integrator.cl";
-  t.phases = {{"render", "light_pass", {"lt", "emission_cdf", "film", "stats", "unit"}}};
+  t.phases = {{"render", "light_pass", {"lt", "emission_cdf", "film", "stats", "unit"}, {}}};
   t.layers = {{"splats", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS}};
   t.units = UnitKind::paths;
   // A unit also clears, reads back and adds the whole splat film (96 bytes a pixel, ~20 ms at 512 x 512 on

@@ -10,7 +10,7 @@ Technique path_technique() {
   t.id = PC_INTEGRATOR_PATH;
   t.summary = "unidirectional path tracing with next-event estimation and MIS";
   t.kernel_file = "integrator.cl";
-  t.phases = {{"render", "render_pass", {"film", "stats", "unit"}}};
+  t.phases = {{"render", "render_pass", {"film", "stats", "unit"}, {}}};
   t.layers = {{"radiance", PC_LAYER_ORDERED, PC_RADIANCE_WORDS}};
   t.units = UnitKind::pixels;
   t.lanes = true;

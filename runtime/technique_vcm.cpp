@@ -44,12 +44,12 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
   t.phases = {
       {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t) { return grid_table(count) + 1; }},
-      {"light", "vcm_light", paths},
-      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}},
+      {"light", "vcm_light", paths, {}},
+      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}, {}},
       {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
       {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
       {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
-      {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}},
+      {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}, {}},
       {"camera", "vcm_camera",
        {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "entries", "unit"},
        [](uint32_t, uint32_t pixels) { return size_t(pixels); }},

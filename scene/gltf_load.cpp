@@ -721,7 +721,7 @@ GltfScene load_gltf(const std::string& path, std::vector<std::string>& warnings)
     ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), dir);
   }
   if (!ok) throw SceneError(path + ": " + (err.empty() ? "tinygltf cannot read the file" : one_line(err)));
-  Reader r{path, model, warnings, {}};
+  Reader r{path, model, warnings, {}, -1, {}};
   std::string ignored;
   for (const std::string& e : model.extensionsUsed)
     if (!kSupportedExtensions.count(e)) ignored += (ignored.empty() ? "" : ", ") + e;

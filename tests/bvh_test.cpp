@@ -116,7 +116,7 @@ std::vector<uint32_t> leaf_slots(const TreeWide<Node>& tree, uint32_t node_ref, 
         EXPECT_EQ(lane(b.by, k), p.b.y);
         EXPECT_EQ(lane(b.cz, k), p.c.z);
       }
-      if (!slots.empty()) EXPECT_EQ(slot, slots.back() + 1);
+      if (!slots.empty()) { EXPECT_EQ(slot, slots.back() + 1); }
       slots.push_back(slot);
     }
     if (b.last) break;

@@ -180,7 +180,7 @@ TEST_P(EveryFeature, RendersTheSameBitsOnPoclAndOclgrind) {
                 std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)) == 0)
         << "AOV layer " << a.name << " differs";
   }
-  if (c.options.find("--aov") != std::string::npos) EXPECT_FALSE(pocl.image.layers.empty());
+  if (c.options.find("--aov") != std::string::npos) { EXPECT_FALSE(pocl.image.layers.empty()); }
   double sum = 0;
   for (float v : pocl.image.rgb) sum += v;
   EXPECT_GT(sum / pocl.image.rgb.size(), 1e-3) << "a black image proves little";

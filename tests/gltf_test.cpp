@@ -168,8 +168,9 @@ TEST(Gltf, HierarchyAndTransforms) {
   ASSERT_EQ(child.uvs.size(), 2u);
   for (size_t t = 0; t < 2; ++t)
     for (int k = 0; k < 3; ++k)
-      if (glm::length(child.positions[child.triangles[t][k]] - placed(glm::dvec3(0))) < 1e-9)
+      if (glm::length(child.positions[child.triangles[t][k]] - placed(glm::dvec3(0))) < 1e-9) {
         EXPECT_EQ(child.uvs[t][k], glm::vec2(0, 0));
+      }
   // No material: glTF's default one (white, metallic 1, roughness 1).
   EXPECT_EQ(scene.materials[scene.shapes[0].material].type_id, uint32_t(PC_MAT_ROUGH_CONDUCTOR));
 }

@@ -203,11 +203,11 @@ TEST(RenderSchedule, RandomDevicesDelaysAndFailuresNeverBreakTheOrder) {
     ASSERT_EQ(r.failure, "") << "trial " << trial;
     bool any_survivor = std::any_of(devices.begin(), devices.end(), [](const SimDevice& d) { return std::isinf(d.fail_at); });
     // Every device may fail; with one that does not, the render always finishes.
-    if (any_survivor) ASSERT_TRUE(r.finished) << "trial " << trial;
+    if (any_survivor) { ASSERT_TRUE(r.finished) << "trial " << trial; }
     finished += r.finished;
     uint64_t committed = 0;
     for (const ScheduleDeviceStats& st : r.stats) committed += st.samples;
-    if (r.finished) EXPECT_EQ(committed, uint64_t(s.pixels) * (s.spp - s.start_spp)) << "trial " << trial;
+    if (r.finished) { EXPECT_EQ(committed, uint64_t(s.pixels) * (s.spp - s.start_spp)) << "trial " << trial; }
   }
   EXPECT_GT(finished, 200);
 }
@@ -248,8 +248,8 @@ TEST(RenderSchedule, AddingADeviceNeverMakesTheRenderSlower) {
       EXPECT_LE(both.seconds, alone * 1.03) << "a device at " << share << " of the fast one's speed, seed " << seed;
       // And it helps: within 20 % of the ideal time, the fast one's alone over the combined speed.
       double efficiency = alone / (1 + share) / both.seconds;
-      if (share >= 0.1) EXPECT_GE(efficiency, 1 / 1.2) << share << ", seed " << seed;
-      if (share <= 0.01) EXPECT_TRUE(both.stats[0].dropped) << share << ", seed " << seed;
+      if (share >= 0.1) { EXPECT_GE(efficiency, 1 / 1.2) << share << ", seed " << seed; }
+      if (share <= 0.01) { EXPECT_TRUE(both.stats[0].dropped) << share << ", seed " << seed; }
       std::printf("a device at %g of the fast one's speed, seed %d: %.4f s, alone %.4f s, efficiency %.3f\n", share,
                   int(seed), both.seconds, alone, efficiency);
     }

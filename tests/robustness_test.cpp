@@ -245,7 +245,7 @@ TEST(Robustness, ZeroLengthSmoothNormalsFallBackToTheFaceNormal) {
       }
       EXPECT_NEAR(glm::length(corner), 1.0f, 1e-6f) << "triangle " << i << " corner " << k;
       // Where the corner had no normal, it has the face's.
-      if (mesh.normals[i][k] == glm::vec3(0)) EXPECT_NEAR(glm::dot(corner, face), 1.0f, 1e-6f);
+      if (mesh.normals[i][k] == glm::vec3(0)) { EXPECT_NEAR(glm::dot(corner, face), 1.0f, 1e-6f); }
     }
   }
   RenderOptions opt;

@@ -242,7 +242,7 @@ TEST(Sampler, TargetErrorStopsAtTheRequestedError) {
     truth /= image.rgb.size();
     EXPECT_LT(truth, 2e-4 * (sampler == "sobol" ? 1.0 : 1.5)) << sampler;
     // and it did not overshoot by more than the last doubling allows
-    if (sampler == "independent") EXPECT_GT(truth, 2e-4 / 4);
+    if (sampler == "independent") { EXPECT_GT(truth, 2e-4 / 4); }
   }
 }
 

@@ -1256,7 +1256,7 @@ void expect_square(const SceneDescription& scene, bool uvs) {
       const uint32_t v = s.mesh.triangles[t][k];
       const glm::vec3 expected = glm::normalize(glm::vec3(kSquare[v][3], kSquare[v][4], kSquare[v][5]));
       EXPECT_NEAR(glm::distance(s.mesh.normals[t][k], expected), 0.0f, 1e-6f) << t << " " << k;
-      if (uvs) EXPECT_EQ(s.mesh.uvs[t][k], glm::vec2(kSquare[v][6], kSquare[v][7])) << t << " " << k;
+      if (uvs) { EXPECT_EQ(s.mesh.uvs[t][k], glm::vec2(kSquare[v][6], kSquare[v][7])) << t << " " << k; }
     }
 }
 

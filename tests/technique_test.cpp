@@ -49,7 +49,7 @@ const Technique& constant_technique() {
     t.summary = "test only: a constant per pixel";
     t.kernel_file = "test_constant.cl";
     t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count, uint32_t) { return 2 * size_t(count); }},
-                {"add", "add", {"film", "stats", "weights", "unit"}}};
+                {"add", "add", {"film", "stats", "weights", "unit"}, {}}};
     t.buffers = {{"weights", [](const TechniqueSizes& s) { return 2 * s.pixels * sizeof(float); }}};
     t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
     t.develop = [](Film& f, const LightTransportHeader&, uint64_t*) {
