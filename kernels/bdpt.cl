@@ -27,7 +27,7 @@
 
 /* The contribution of connecting camera vertex s (material m, shading frame f, wo_local towards the
  * previous camera vertex; dvcm, dvc its partial sums) to light vertex y, unweighted sums in *others. */
-static inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
+inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
                                float wo_ng, float dvcm, float dvc, float vm, __global const LightVertex* y, float* others) {
   float3 d = y->p.xyz - s->p;
   float dist2 = pc_dot(d, d);
@@ -63,7 +63,7 @@ static inline float3 connect_vertices(const SceneData* sc, const Surface* s, Mat
  * the grid's light vertices, into *merged); without connections (bpm, sppm) an emitter counts only where
  * the path to it is specular (merging makes the others), and SPPM stops at its first non-delta vertex,
  * after next-event estimation and merging there, unweighted. */
-static inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
+inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, SampleKey key, uint px, uint py,
                                    const MisFactors* mis, bool own, __global const LightVertex* lv, uint lv_count,
                                    uint* rays

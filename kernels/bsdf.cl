@@ -59,14 +59,14 @@ typedef struct {
   LaneI delta;
 } BsdfSampleLanes;
 
-static inline LaneI bsdf_is_delta_lanes(LaneU type) { return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC); }
+inline LaneI bsdf_is_delta_lanes(LaneU type) { return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC); }
 
 /* Where wo is on the back of a two-sided material: the lanes whose directions are mirrored to the front. */
-static inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
+inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
 
-static inline Lane3 flip_z_lanes(Lane3 w, LaneI flip) { return lane3(w.x, w.y, select(w.z, -w.z, flip)); }
+inline Lane3 flip_z_lanes(Lane3 w, LaneI flip) { return lane3(w.x, w.y, select(w.z, -w.z, flip)); }
 
-static inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   wi = flip_z_lanes(wi, flip);
@@ -94,7 +94,7 @@ static inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, 
   return f;
 }
 
-static inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   wi = flip_z_lanes(wi, flip);
@@ -122,7 +122,7 @@ static inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, L
 }
 
 /* u0, u1 for the direction, u2 to choose a lobe. Returns the lanes of mask with a valid sample. */
-static inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
+inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
                                BsdfSampleLanes* s) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
@@ -194,7 +194,7 @@ static inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0
 
 #if PC_LANES == 1
 /* A Material's BSDF parameters as one lane. */
-static inline MaterialLanes material_lanes_of(Material m) {
+inline MaterialLanes material_lanes_of(Material m) {
   MaterialLanes l;
   l.type = m.type;
   l.color = m.color.xyz;
@@ -208,20 +208,20 @@ static inline MaterialLanes material_lanes_of(Material m) {
 }
 
 /* Materials whose every lobe is a delta: light sampling is useless there. */
-static inline bool bsdf_is_delta(Material m) { return bsdf_is_delta_lanes(m.type) != 0; }
+inline bool bsdf_is_delta(Material m) { return bsdf_is_delta_lanes(m.type) != 0; }
 
-static inline float3 bsdf_eval(Material m, float3 wo, float3 wi) {
+inline float3 bsdf_eval(Material m, float3 wo, float3 wi) {
   MaterialLanes l = material_lanes_of(m);
   return bsdf_eval_lanes(&l, wo, wi, 1);
 }
 
-static inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
+inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
   MaterialLanes l = material_lanes_of(m);
   return bsdf_pdf_lanes(&l, wo, wi, 1);
 }
 
 /* u: three numbers, xy for the direction, z to choose a lobe. */
-static inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
+inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   MaterialLanes l = material_lanes_of(m);
   BsdfSampleLanes b;
   bool ok = bsdf_sample_lanes(&l, wo, u.x, u.y, u.z, 1, &b) != 0;

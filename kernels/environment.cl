@@ -13,7 +13,7 @@
 #include "texture.cl"
 #include "lanes.cl"
 
-static inline float3 env_direction(float2 uv) {
+inline float3 env_direction(float2 uv) {
   float phi = 2.0f * PC_PI * uv.x, theta = PC_PI * uv.y;
   float2 c, s = pc_sincos((float2)(theta, phi), &c); /* one call for both angles */
   return (float3)(s.x * c.y, c.x, s.x * s.y);
@@ -21,28 +21,28 @@ static inline float3 env_direction(float2 uv) {
 
 /* theta from atan2, not acos(d.y): near a pole a float d.y keeps few digits of theta (within 0.05 degrees
  * of it, sin(theta) and with it env_pdf came out 1 % off), while d.x and d.z keep sin(theta) exactly. */
-static inline float2 env_uv(float3 d) {
+inline float2 env_uv(float3 d) {
   float u = pc_atan2(d.z, d.x) * (0.5f * PC_INV_PI);
   if (u < 0.0f) u += 1.0f;
   return (float2)(fmin(u, 1.0f), pc_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
 }
 
-static inline uint2 env_texel(Texture t, float2 uv) {
+inline uint2 env_texel(Texture t, float2 uv) {
   return (uint2)(min((uint)(uv.x * (float)t.width), t.width - 1u), min((uint)(uv.y * (float)t.height), t.height - 1u));
 }
 
 /* sin(theta) from the direction itself: near the -y pole v is close to 1, where a float keeps few digits
  * of pi - theta (at 1e-4 of the pole, pc_sin(PC_PI * v) came out 0.2 % off). pc_dot: dot() may fuse or
  * reorder. */
-static inline float env_sin_theta(float3 d) { return sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); }
+inline float env_sin_theta(float3 d) { return sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); }
 
 /* The map's bilinear radiance at (u, v), scale included. */
-static inline float3 env_map_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
+inline float3 env_map_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
   return light.emission.xyz * texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, uv.y * (float)t.height - 0.5f,
                                                PC_WRAP_REPEAT, PC_WRAP_CLAMP);
 }
 
-static inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
+inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) return env_map_radiance(light, textures[light.texture], texels, env_uv(d));
 #endif
@@ -50,7 +50,7 @@ static inline float3 env_radiance(Light light, __global const Texture* textures,
 }
 
 /* Solid-angle density of direction d, light choice excluded. */
-static inline float env_pdf(Light light, __global const Texture* textures, __global const float* dist, float3 d) {
+inline float env_pdf(Light light, __global const Texture* textures, __global const float* dist, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
@@ -70,7 +70,7 @@ static inline float env_pdf(Light light, __global const Texture* textures, __glo
  * the radiance at the (u, v) drawn. Neither is looked up again from the direction: the float direction of
  * a sample at a cell's edge may lie in the neighbouring cell, whose density need not bound this radiance
  * (the bilinear radiance itself is continuous across the edge). */
-static inline float3 env_sample(Light light, __global const Texture* textures, __global const uint* texels,
+inline float3 env_sample(Light light, __global const Texture* textures, __global const uint* texels,
                          __global const float* dist, float2 u, float* pdf, float3* le) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
@@ -99,7 +99,7 @@ static inline float3 env_sample(Light light, __global const Texture* textures, _
 
 /* env_radiance and env_pdf by lane (kernels/lanes.cl), for the lanes in m: a constant for all lanes at
  * once, a map lane by lane. */
-static inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, __global const uint* texels, Lane3 d,
+inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, __global const uint* texels, Lane3 d,
                                 LaneI m) {
   Lane3 le = lane3_splat(light.emission.xyz);
 #ifdef PC_HAS_ENVIRONMENT_MAP
@@ -110,7 +110,7 @@ static inline Lane3 env_radiance_lanes(Light light, __global const Texture* text
   return le;
 }
 
-static inline LaneF env_pdf_lanes(Light light, __global const Texture* textures, __global const float* dist, Lane3 d,
+inline LaneF env_pdf_lanes(Light light, __global const Texture* textures, __global const float* dist, Lane3 d,
                            LaneI m) {
   LaneF pdf = (LaneF)(0.25f * PC_INV_PI);
 #ifdef PC_HAS_ENVIRONMENT_MAP

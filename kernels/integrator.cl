@@ -25,7 +25,7 @@
 
 /* Light along the rays of the lanes in m that escaped: the environment, weighted against light sampling
  * by MIS. */
-static inline Lane3 escaped_radiance_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneF prev_bsdf_pdf, LaneI prev_delta,
+inline Lane3 escaped_radiance_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneF prev_bsdf_pdf, LaneI prev_delta,
                                     LaneI m) {
 #ifdef PC_HAS_ENVIRONMENT
   if (sc->h->env_light != PC_INVALID) {
@@ -54,7 +54,7 @@ typedef struct {
 } PathLanes;
 
 /* New paths: the camera rays of sample `sample` of each lane's pixel, taken where m is set. */
-static inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
+inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
   __constant const SceneHeader* h = sc->h;
   LaneF u0, u1, u2, u3;
   sample4_lanes(h, pixel, sample, h->seed, (LaneU)(PC_DIM_CAMERA), &u0, &u1, &u2, &u3);
@@ -101,7 +101,7 @@ static inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU samp
  * there; where a light sample wants a shadow ray, sets *shadow, st->nee and the lane in *has_shadow (the
  * caller adds st->nee where the shadow ray is not blocked, before the next bounce); samples the BSDF for
  * st->ray's successor. Returns the lanes whose paths go on. */
-static inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, PathLanes* st, LaneI m, LaneI found,
+inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, PathLanes* st, LaneI m, LaneI found,
                               const HitLanes* hit, RayLanes* shadow, LaneI* has_shadow) {
   __constant const SceneHeader* h = sc->h;
   *has_shadow = (LaneI)(0);
@@ -190,7 +190,7 @@ static inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sam
 
 /* Adds sample s's radiance to a pixel's accumulators (even and odd half sums, squares). A sample that is
  * not a finite non-negative radiance is counted and dropped: it is a bug to find. */
-static inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
+inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
                               uint* inf_samples, uint* negative_samples) {
 #ifdef PC_DEBUG_INJECT_HAZARDS
   /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
@@ -213,7 +213,7 @@ static inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4*
 }
 
 /* The unit's counters into stats (UnitStats) with integer atomics. */
-static inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_samples, uint inf_samples,
+inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_samples, uint inf_samples,
                            uint negative_samples) {
   volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
   add_counter64(counters, rays);

@@ -42,7 +42,7 @@
 /* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
  * every group a camera path of the same key takes (PC_DIM_* of sampler.cl: BDPT's camera subpath, the path
  * integrator's), so that the two subpaths of a BDPT sample are independent. */
-static inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
+inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
 #define PC_LT_EMIT_POS(h) (light_group_base(h) + 0u)          /* x: light choice, yz: point, w: side */
 #define PC_LT_EMIT_DIR(h) (light_group_base(h) + 1u)          /* xy: direction */
 #define PC_LT_CONNECT(h, v) (light_group_base(h) + 2u + 2u * (v)) /* xy: lens point, z: roulette, at vertex v */
@@ -58,7 +58,7 @@ typedef struct {
 
 /* The key of light path `path` in sample `sample` (numbered like the pixels: a sample holds width x height
  * light paths), the key of the camera path of the same pixel too. */
-static inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint sample) {
+inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint sample) {
   SampleKey key;
   key.pixel = path;
   key.seed = h->seed;
@@ -67,14 +67,14 @@ static inline SampleKey light_path_key(__constant const SceneHeader* h, uint pat
 }
 
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
-static inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
+inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
   float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
   float den = fabs(pc_dot(w_light, ng)) * fabs(pc_dot(w_out, ns));
   return den > 0.0f ? num / den : 0.0f;
 }
 
 /* False (and counted) for a colour that is not finite and non-negative: such a splat is dropped. */
-static inline bool splat_is_valid(float3 c, SplatCounts* n) {
+inline bool splat_is_valid(float3 c, SplatCounts* n) {
   if (isnan(c.x) || isnan(c.y) || isnan(c.z)) {
     ++n->nan_splats;
     return false;
@@ -91,7 +91,7 @@ static inline bool splat_is_valid(float3 c, SplatCounts* n) {
 }
 
 /* Splats colour c landing at image position `raster` into every pixel the filter reaches, weighted by it. */
-static inline void splat_filtered(__global uint* film, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
+inline void splat_filtered(__global uint* film, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
                            float2 raster, uint parity, float3 c, SplatCounts* n) {
   if (!splat_is_valid(c, n)) return;
   float r = h->filter_radius;
@@ -121,13 +121,13 @@ typedef struct {
 } MisFactors;
 
 /* Light vertex slots per light path of a unit (runtime/light_transport.h's light_vertex_slots). */
-static inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
+inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
 
 /* The density with which next-event estimation from x (lights.cl's sample_light) picks light `index` at y
  * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;
  * for a point or spot light the choice times the squared distance (its solid-angle density at the light
  * being a delta of area density 1; SmallVCM's convention). */
-static inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
+inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
   Light light = sc->lights[index];
   switch (light.type) {
 #ifdef PC_HAS_AREA_LIGHTS
@@ -169,7 +169,7 @@ static inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
  * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
  * unweighted, and no other. */
-static inline float strategy_weight(__constant const LightTransportHeader* lt, uint s, uint t, float others) {
+inline float strategy_weight(__constant const LightTransportHeader* lt, uint s, uint t, float others) {
   if (lt->only_strategy != PC_INVALID) return lt->only_strategy == (s | (t << 16)) ? 1.0f : 0.0f;
   return 1.0f / (1.0f + others);
 }
@@ -177,7 +177,7 @@ static inline float strategy_weight(__constant const LightTransportHeader* lt, u
 
 /* Traces light path (key) and splats its camera connections. BDPT: with MIS weights (and the merging
  * factors *mis), and its non-delta vertices in vertices[0 .. *count) (room for max_depth). */
-static inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
+inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
                              __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
 #ifdef PC_BDPT
                              , const MisFactors* mis, __global LightVertex* vertices, uint* count
@@ -318,7 +318,7 @@ static inline void trace_light_path(const SceneData* sc, __constant const LightT
 }
 
 /* Adds a work unit's counts to its SplatStats (integer atomics). */
-static inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
+inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
   volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
   add_counter64(counters, n->rays);
   if (n->nan_splats) atomic_add(counters + 2, n->nan_splats);

@@ -9,9 +9,9 @@
 #define PC_MACHINE_EPSILON (FLT_EPSILON * 0.5f)
 
 /* pbrt's gamma(n): bound on the relative error of n floating-point operations. */
-static inline float error_gamma(int n) { return (n * PC_MACHINE_EPSILON) / (1.0f - n * PC_MACHINE_EPSILON); }
+inline float error_gamma(int n) { return (n * PC_MACHINE_EPSILON) / (1.0f - n * PC_MACHINE_EPSILON); }
 
-static inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
+inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
 
 /* Written once over lanes (V3 lane3f/lane3f8/lane3f16 of exact_math.cl, F, I their float and int types,
  * for issue 15's lane-generic kernel), branches as per-lane selects; the float3 functions below are the
@@ -24,9 +24,9 @@ static inline float max_component(float3 v) { return fmax(v.x, fmax(v.y, v.z)); 
 #include "templates/math.cl"
 
 /* A float3 as one lane and back (the same type: kept where a call reads better as a conversion). */
-static inline float3 lane3_of(float3 v) { return v; }
-static inline float3 float3_of(float3 v) { return v; }
+inline float3 lane3_of(float3 v) { return v; }
+inline float3 float3_of(float3 v) { return v; }
 
-static inline float luminance(float3 c) { return luminance_lanes(c); }
+inline float luminance(float3 c) { return luminance_lanes(c); }
 
 #endif

@@ -66,9 +66,9 @@ __constant uint kPrimes[PC_HALTON_DIMENSIONS] = {2, 3, 5, 7, 11, 13, 17, 19, 23,
 
 /* Lane j of a uint table lookup a[i]: a vector built from one load per lane (a private array read back as
  * one vector waits for every store to reach the cache). */
-static inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
-static inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
-static inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
+inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
+inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
+inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
   return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7],
     a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
 }
@@ -76,9 +76,9 @@ static inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
 /* The XOR of the direction numbers of the four bits of index & 15 (a row of kSobolNibbles): one table
  * load for one lane; for 8 or 16 lanes four selects of the row's single-bit entries, since a gather of 8
  * or 16 loads costs more than the arithmetic. */
-static inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
+inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
 #define PC_SOBOL_NIBBLE_LANES(U)                                                                          \
-  static inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                                \
+  inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                                \
     return select((U)(0u), (U)(row[1]), (index & 1u) != 0u) ^ select((U)(0u), (U)(row[2]), (index & 2u) != 0u) ^ \
            select((U)(0u), (U)(row[4]), (index & 4u) != 0u) ^ select((U)(0u), (U)(row[8]), (index & 8u) != 0u); \
   }
@@ -94,7 +94,7 @@ PC_SOBOL_NIBBLE_LANES(uint16)
 #include "templates/sampler.cl"
 
 /* pcg4d of the four components of v. */
-static inline uint4 pcg4d(uint4 v) {
+inline uint4 pcg4d(uint4 v) {
   uint x = v.x, y = v.y, z = v.z, w = v.w;
   pcg4d_lanes(&x, &y, &z, &w);
   return (uint4)(x, y, z, w);
@@ -115,7 +115,7 @@ static inline uint4 pcg4d(uint4 v) {
 #define PC_RAY_NEXT(depth) (2u * (depth) + 2u)
 
 /* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key. */
-static inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
+inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
   float x, y, z, w;
   sample4_lanes(h, key.pixel, key.sample, key.seed, group, &x, &y, &z, &w);
   return (float4)(x, y, z, w);

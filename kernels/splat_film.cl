@@ -15,7 +15,7 @@
 #define PC_SPLAT_LIMIT 0x1.0p62f
 
 /* Adds q to the 64-bit word pair (low word first). */
-static inline void splat_add_u64(volatile __global uint* word, ulong q) {
+inline void splat_add_u64(volatile __global uint* word, ulong q) {
 #ifdef PC_SPLAT_ATOMIC64
   atom_add((volatile __global ulong*)word, q);
 #else
@@ -27,7 +27,7 @@ static inline void splat_add_u64(volatile __global uint* word, ulong q) {
 }
 
 /* v (>= 0, finite) in fixed point with `scale` units per unit: false (nothing added) when too large. */
-static inline bool splat_add(volatile __global uint* word, float v, float scale) {
+inline bool splat_add(volatile __global uint* word, float v, float scale) {
   float q = v * scale;
   if (!(q < PC_SPLAT_LIMIT)) return false;
   ulong n = convert_ulong_rte(q);
@@ -37,7 +37,7 @@ static inline bool splat_add(volatile __global uint* word, float v, float scale)
 
 /* Adds colour c to pixel `pixel` of parity `parity` (the sample's parity), and its square to the squares;
  * returns the number of overflows (0 to 2). */
-static inline uint splat_pixel(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
+inline uint splat_pixel(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
   volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
   uint overflows = 0u;
   float v[3] = {c.x, c.y, c.z};
@@ -50,7 +50,7 @@ static inline uint splat_pixel(__global uint* film, __constant const LightTransp
 }
 
 /* BDPT: adds a camera subpath's colour c to its own pixel, as splat_pixel does and to the camera sums. */
-static inline uint splat_camera(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
+inline uint splat_camera(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
   volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
   uint overflows = splat_pixel(film, lt, pixel, parity, c);
   float v[3] = {c.x, c.y, c.z};

@@ -11,7 +11,7 @@
 __constant float pc_srgb_to_linear[256] = PC_SRGB_TO_LINEAR_TABLE;
 
 /* Texel index along an axis of n texels for integer coordinate i under the wrap mode. */
-static inline int wrap_texel(int i, int n, uint wrap) {
+inline int wrap_texel(int i, int n, uint wrap) {
   if (wrap == PC_WRAP_CLAMP) return clamp(i, 0, n - 1);
   if (wrap == PC_WRAP_MIRROR) {
     int period = 2 * n;
@@ -22,7 +22,7 @@ static inline int wrap_texel(int i, int n, uint wrap) {
 }
 
 /* The linear RGB of texel (x, y); the conversions from bytes and halves are exact. */
-static inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
+inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
   uint i = (uint)y * t.width + (uint)x;
   __global const uint* image = texels + t.offset;
   if (t.format == PC_TEXELS_SRGB8) {
@@ -41,7 +41,7 @@ static inline float3 texel_at(__global const uint* texels, Texture t, int x, int
 
 /* Bilinear interpolation at texel coordinates (x, y), texel centres at integers, columns wrapped by
  * wrap_x and rows by wrap_y. */
-static inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, float y, uint wrap_x, uint wrap_y) {
+inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, float y, uint wrap_x, uint wrap_y) {
   /* Far outside the image the coordinates lose precision; keep them bounded. */
   x = clamp(x, -1.0e6f, 1.0e6f);
   y = clamp(y, -1.0e6f, 1.0e6f);
@@ -56,13 +56,13 @@ static inline float3 texture_bilinear(__global const uint* texels, Texture t, fl
 }
 
 /* uv at barycentrics (u, v) of triangle prim (uvs: 2 per primitive, kernels/scene.cl). */
-static inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float v) {
+inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float v) {
   float4 a = uvs[2 * prim], b = uvs[2 * prim + 1];
   return (1.0f - u - v) * a.xy + u * a.zw + v * b.xy;
 }
 
 /* Bilinear lookup at (u, v) under the texture's wrap mode; texel centres at half-integer coordinates. */
-static inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
+inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
   Texture t = textures[index];
   return texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, (1.0f - uv.y) * (float)t.height - 0.5f, t.wrap,
                           t.wrap);

@@ -49,18 +49,18 @@ typedef struct {
   uint overflows;
 } MergeSums;
 
-static inline uint grid_table(uint paths) {
+inline uint grid_table(uint paths) {
   uint t = 1u;
   while (t < paths) t <<= 1;
   return t;
 }
 
-static inline float iteration_radius2(__constant const LightTransportHeader* lt, uint iteration) {
+inline float iteration_radius2(__constant const LightTransportHeader* lt, uint iteration) {
   return lt->radius * lt->radius * pc_powr((float)(iteration + 1u), lt->alpha - 1.0f);
 }
 
 /* The merging factors of an iteration (light_path.cl's MisFactors). */
-static inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, float radius2) {
+inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, float radius2) {
   MisFactors m;
   bool merge = (lt->vcm_mode & PC_VCM_MERGE) != 0u, sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
   m.connect = (lt->vcm_mode & PC_VCM_CONNECT) != 0u;
@@ -73,21 +73,21 @@ static inline MisFactors iteration_factors(__constant const LightTransportHeader
 
 /* Cells are 2 r wide: what a position is scaled by to find its cell (one expression for the grid's build and
  * its queries, which must agree). */
-static inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
+inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
 
-static inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
+inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
 
-static inline uint grid_bucket(int x, int y, int z, uint table) {
+inline uint grid_bucket(int x, int y, int z, uint table) {
   return (((uint)x * 73856093u) ^ ((uint)y * 19349663u) ^ ((uint)z * 83492791u)) & (table - 1u);
 }
 
-static inline uint grid_bucket_of(float3 p, float3 origin, float inv_cell, uint table) {
+inline uint grid_bucket_of(float3 p, float3 origin, float inv_cell, uint table) {
   float3 q = floor((p - origin) * inv_cell);
   return grid_bucket(grid_coordinate(q.x), grid_coordinate(q.y), grid_coordinate(q.z), table);
 }
 
 /* Adds merge c to the sums (NaN, infinite or negative ones counted and dropped, as splats are). */
-static inline void merge_add(MergeSums* m, float3 c, __constant const LightTransportHeader* lt, SplatCounts* n) {
+inline void merge_add(MergeSums* m, float3 c, __constant const LightTransportHeader* lt, SplatCounts* n) {
   if (!splat_is_valid(c, n)) return;
   float v[3] = {c.x, c.y, c.z};
   for (uint k = 0; k < 3u; ++k) {
@@ -113,7 +113,7 @@ static inline void merge_add(MergeSums* m, float3 c, __constant const LightTrans
  * f(wo, wl) beta / (pi r^2 N) times the shading normal's cosine over the geometric one (the photon's
  * density is per area, the camera's integral over the shading normal's cosine, as in path tracing), weighted
  * by MIS against every strategy making the path (SmallVCM's eq.), or not at all for SPPM. */
-static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, Material m, const FrameLanes* f,
+inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, Material m, const FrameLanes* f,
                      float3 wo_local, float wo_ng, uint depth, float3 throughput, float dvcm, float dvm, float vc,
                      bool sppm, __constant const LightTransportHeader* lt, MergeSums* out, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
@@ -195,7 +195,7 @@ __kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
  * a GPU runs PC_VCM_SCAN_BLOCKS chunks at once instead of one thread over every bucket): each block's
  * running sums over its chunk, the blocks' offsets (one work item, kept after the buckets' end,
  * cells[table + 1 + block]), each chunk's offset added. Integer sums: the same bits however it is split. */
-static inline uint scan_chunk(uint table) { return (table + PC_VCM_SCAN_BLOCKS - 1u) / PC_VCM_SCAN_BLOCKS; }
+inline uint scan_chunk(uint table) { return (table + PC_VCM_SCAN_BLOCKS - 1u) / PC_VCM_SCAN_BLOCKS; }
 
 __kernel void vcm_scan_blocks(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   uint block = get_global_id(0);

@@ -2,7 +2,7 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-static inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight, F* eta2) {
+inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight, F* eta2) {
   I entering = wo.z > 0.0f;
   F eta = select(1.0f / ior, ior, entering); /* n_t / n_i */
   F f = fresnel_dielectric(fabs(wo.z), eta);
