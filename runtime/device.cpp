@@ -80,6 +80,7 @@ std::vector<DeviceInfo> list_devices() {
 }
 
 bool is_oclgrind(const DeviceInfo& device) { return lower(device.platform_name).find("oclgrind") != std::string::npos; }
+bool is_pocl(const DeviceInfo& device) { return device.platform_name == "Portable Computing Language"; }
 
 uint32_t bvh_width(const DeviceInfo& device) {
   if (const char* forced = std::getenv("PATHCL_BVH_WIDTH")) {

@@ -38,6 +38,8 @@ bool device_has_extension(const DeviceInfo& device, const char* name);
 // Oclgrind: an interpreter for debugging that calls itself a GPU. Never a default device, and its 21.10
 // cannot run optimised kernels (runtime/kernel_program.cpp).
 bool is_oclgrind(const DeviceInfo& device);
+// PoCL (Portable Computing Language), which keeps its compiled programs in a cache of its own.
+bool is_pocl(const DeviceInfo& device);
 
 // The BVH layout for the device, 4, 8 or 16 children a node (kernels/shared/types.h): on CPU devices 16
 // where the preferred float vector is 16 wide (AVX-512: the float16 slab test is one instruction, and the

@@ -123,9 +123,10 @@ cl_program load_cached(ClContext& cl, const fs::path& file, const std::string& o
   return program;
 }
 
+// PoCL with its own cache on (POCL_KERNEL_CACHE=0 turns it off).
 bool driver_caches_programs(const DeviceInfo& d) {
   const char* pocl_cache = std::getenv("POCL_KERNEL_CACHE");
-  return d.platform_name == "Portable Computing Language" && !(pocl_cache && std::string(pocl_cache) == "0");
+  return is_pocl(d) && !(pocl_cache && std::string(pocl_cache) == "0");
 }
 
 // Written atomically (runtime/atomic_file.h), so concurrent processes never read half a binary.
@@ -219,7 +220,15 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
   fs::path dir = cache_directory();
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
-  fs::path file = dir.empty() ? fs::path() : dir / (fs::path(main_file).stem().string() + "-" + hex + ".bin");
+  // PoCL keeps what it compiles in a cache of its own (POCL_CACHE_DIR, else ~/.cache/pocl/kcache), the code
+  // it generates for a kernel's work-group size at the first launch included. Asked for a binary, it
+  // compiles a generic work-group function of every kernel besides, which no launch of ours uses: 2.8 of
+  // the 7.9 s that the Cornell box's path program took cold. So for PoCL our cache holds a stamp saying
+  // that the program was built, and the build from source finds PoCL's cached code (unless PoCL's cache is
+  // off: POCL_KERNEL_CACHE=0, then the binary as for other drivers).
+  const bool stamp_only = driver_caches_programs(d);
+  fs::path file = dir.empty() ? fs::path()
+                              : dir / (fs::path(main_file).stem().string() + "-" + hex + (stamp_only ? ".built" : ".bin"));
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
 
   if (cl.keep_programs) {
@@ -233,16 +242,8 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
         return result;
       }
   }
-  // PoCL keeps what it compiles in a cache of its own (POCL_CACHE_DIR, else ~/.cache/pocl/kcache), the code
-  // it generates for a kernel's work-group size at the first launch included. Asked for a binary, it
-  // compiles a generic work-group function of every kernel besides, which no launch of ours uses: 2.8 of
-  // the 7.9 s that the Cornell box's path program took cold. So for PoCL our cache holds a stamp saying
-  // that the program was built, and the build from source finds PoCL's cached code (unless PoCL's cache is
-  // off: POCL_KERNEL_CACHE=0, then the binary as for other drivers).
-  const bool stamp_only = !file.empty() && driver_caches_programs(d);
-  if (stamp_only) file.replace_extension(".built");
-  if (!file.empty() && !stamp_only) result.program = load_cached(cl, file, options);
-  result.from_cache = stamp_only ? !read_cached(file).empty() : result.program != nullptr;
+  if (!file.empty() && stamp_only) result.from_cache = !read_cached(file).empty();
+  if (!file.empty() && !stamp_only) result.from_cache = (result.program = load_cached(cl, file, options)) != nullptr;
   if (!result.program) {
     const char* text = source.c_str();
     size_t length = source.size();
@@ -251,8 +252,8 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
     if (status != CL_SUCCESS)
       throw RuntimeFailure("kernel build of " + main_file + " failed (" + cl_error_name(status) + ") on " + d.name +
                            " with options \"" + options + "\":\n" + build_log(result.program, d.device));
-    if (stamp_only && !result.from_cache) store_cached(file, {'s', 't', 'a', 'm', 'p'});
-    if (!file.empty() && !stamp_only) store_cached(file, program_binary(result.program));
+    if (!file.empty() && !result.from_cache)
+      store_cached(file, stamp_only ? std::vector<unsigned char>{'s', 't', 'a', 'm', 'p'} : program_binary(result.program));
   }
   if (cl.keep_programs) {
     std::lock_guard<std::mutex> lock(cl.kept_programs_mutex);

@@ -24,7 +24,8 @@ struct KernelProgram {
 // The cache directory is $PATHCL_KERNEL_CACHE, else $XDG_CACHE_HOME/pathcl/kernels, else
 // ~/.cache/pathcl/kernels; an empty PATHCL_KERNEL_CACHE turns caching off. A cached binary that the
 // driver rejects is rebuilt from source. PoCL caches its compiled programs itself: for PoCL the cache holds
-// only a stamp (from_cache: built before; kernel_program.cpp says why). A failed build throws RuntimeFailure with the build log.
+// only a stamp (from_cache: built before; kernel_program.cpp says why). A failed build throws RuntimeFailure
+// with the build log.
 // Where the device has correctly rounded divide and sqrt, -cl-fp32-correctly-rounded-divide-sqrt is
 // added to the options (KernelProgram::options has it). With ClContext::keep_programs, a program built
 // on the same context before for the same source and options is handed out again (from_cache is true).
