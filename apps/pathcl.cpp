@@ -27,6 +27,7 @@
 #include "runtime/interrupt.h"
 #include "runtime/kernel_program.h"
 #include "runtime/output_files.h"
+#include "runtime/ranks.h"
 #include "runtime/ray_trace.h"
 #include "runtime/renderer.h"
 #include "runtime/technique.h"
@@ -107,6 +108,9 @@ struct RenderArgs {
   std::string scene, out, png, stats, device, sampler, integrator, reference, convergence, checkpoint, resume;
   std::optional<std::string> aovs;
   double checkpoint_every = 60;
+  double rank_timeout = 30;         // MPI: seconds beside a unit's expected time before a rank is lost
+  bool coordinator_only = false;    // MPI: rank 0 renders on no device of its own
+  RankJob::Faults rank_faults;      // MPI, tests: faults of the ranks other than 0
   std::optional<int64_t> spp, seed, max_depth;
   std::optional<double> time_budget, target_error;
   int64_t pass_spp = 0;
@@ -170,12 +174,17 @@ void warn_about_clean_up(const LoadedScene& s) {
                  s.device.lights.empty() ? ", and the scene has no other light: it renders black" : "");
 }
 
+// A device's name, with its rank's in an MPI render.
+std::string device_name(const DeviceReport& d) {
+  return d.rank == 0 ? d.name : d.name + " (rank " + std::to_string(d.rank) + ")";
+}
+
 // The names of the devices that rendered, joined.
 std::string used_devices(const RenderResult& r) {
   std::string names;
   for (const DeviceReport& d : r.devices)
-    if (d.used && d.units > 0) names += (names.empty() ? "" : ", ") + d.name;
-  return names.empty() ? r.devices.front().name : names;
+    if (d.used && d.units > 0) names += (names.empty() ? "" : ", ") + device_name(d);
+  return names.empty() ? device_name(r.devices.front()) : names;
 }
 
 nlohmann::json device_stats(const RenderResult& r) {
@@ -183,6 +192,9 @@ nlohmann::json device_stats(const RenderResult& r) {
   for (const DeviceReport& d : r.devices)
     list.push_back({{"name", d.name},
                     {"platform", d.platform},
+                    {"rank", d.rank},
+                    {"host", d.host},
+                    {"transfer_bytes", d.transfer_bytes},
                     {"class", d.arithmetic_class},
                     {"used", d.used},
                     {"note", d.note},
@@ -204,6 +216,34 @@ nlohmann::json device_stats(const RenderResult& r) {
                     {"unit_items", d.unit_items},
                     {"buffer_bytes", d.buffers},
                     {"probe_seconds", d.probe_seconds}});
+  return list;
+}
+
+// An MPI render's ranks: each one's host, devices and what they did, summed over its devices.
+nlohmann::json rank_stats(const RenderResult& r, int ranks, const std::vector<std::string>& lost) {
+  nlohmann::json list = nlohmann::json::array();
+  for (int k = 0; k < ranks; ++k) {
+    nlohmann::json devices = nlohmann::json::array();
+    uint64_t units = 0, samples = 0, bytes = 0;
+    double transfer = 0, idle = 0, kernel = 0;
+    std::string host;
+    for (const DeviceReport& d : r.devices) {
+      if (d.rank != uint32_t(k)) continue;
+      devices.push_back(d.name);
+      host = d.host;
+      units += d.units;
+      samples += d.samples;
+      bytes += d.transfer_bytes;
+      transfer += d.transfer_seconds;
+      idle += d.idle_seconds;
+      kernel += d.kernel_seconds;
+    }
+    const std::string prefix = "rank " + std::to_string(k) + " ";
+    bool is_lost = std::any_of(lost.begin(), lost.end(), [&](const std::string& l) { return l.rfind(prefix, 0) == 0; });
+    list.push_back({{"rank", k}, {"host", k == 0 ? host_name() : host}, {"devices", devices},
+                    {"units", units}, {"samples", samples}, {"kernel_seconds", kernel}, {"transfer_seconds", transfer},
+                    {"transfer_bytes", bytes}, {"idle_seconds", idle}, {"lost", is_lost}});
+  }
   return list;
 }
 
@@ -243,7 +283,7 @@ void add_aov_layers(const Film& film, const SceneDescription& scene, Image& imag
   if (!names.empty()) image.attributes["aovs"] = names;
 }
 
-int run_render(const RenderArgs& a) {
+int run_render(const RenderArgs& a, RankJob& job) {
   auto started = std::chrono::steady_clock::now();
   // Everything the command line can get wrong is refused before the scene is loaded.
   RenderOptions opt;
@@ -313,7 +353,14 @@ int run_render(const RenderArgs& a) {
     opt.resume = &resumed;
   }
 
-  std::vector<DeviceInfo> devices = select_devices(a.device);
+  // This process's devices, then in an MPI render every other rank's.
+  std::vector<WorkerSource> workers;
+  if (!a.coordinator_only) workers = device_workers(select_devices(a.device));
+  std::vector<std::string> rank_warnings;
+  for (WorkerSource& w : job.remote_workers(a.rank_timeout, &rank_warnings)) workers.push_back(std::move(w));
+  for (const std::string& w : rank_warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (workers.empty())
+    throw UsageError("--coordinator-only: no other rank has a device to render on (run under mpirun with more than one rank)");
   bool show = !a.quiet && isatty(STDERR_FILENO);
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
   opt.interrupt = stop_signal();
@@ -327,7 +374,9 @@ int run_render(const RenderArgs& a) {
   install_stop_handlers(out + " is not written; " +
                         (a.checkpoint.empty() ? std::string("the render is lost (--checkpoint keeps its state)")
                                               : "the checkpoint " + a.checkpoint + " holds the render as of its last save"));
-  RenderResult r = render(devices, s.device, opt, callbacks);
+  RenderResult r = render(workers, s.device, opt, callbacks);
+  job.finish();
+  const std::vector<std::string> lost = job.lost_ranks();
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", r.stop_reason.c_str(), r.film.spp);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
@@ -386,6 +435,10 @@ int run_render(const RenderArgs& a) {
               {"inf_samples", r.inf_samples},
               {"negative_samples", r.negative_samples},
               {"splat_overflows", r.splat_overflows}});
+    if (job.size() > 1) {
+      j["ranks"] = rank_stats(r, job.size(), lost);
+      j["lost_ranks"] = lost.size();
+    }
     if (r.light.radius > 0) {  // the merging integrators: the first iteration's radius, its exponent
       j["merging_radius"] = r.light.radius;
       j["merging_alpha"] = r.light.alpha;
@@ -407,6 +460,11 @@ int run_render(const RenderArgs& a) {
   if (r.splat_overflows > 0)
     std::fprintf(stderr, "warning: %llu fixed-point splat overflows (a bug: the splat scale is too fine for this scene)\n",
                  (unsigned long long)r.splat_overflows);
+  if (!lost.empty()) {  // the image is whole and exact; the job script should still hear of the lost ranks
+    for (const std::string& l : lost) std::fprintf(stderr, "error: lost %s; its units were rendered by the others\n", l.c_str());
+    std::fprintf(stderr, "error: lost_ranks = %zu\n", lost.size());
+    return 1;
+  }
   if (int signal = *stop_signal()) {
     std::fprintf(stderr, "interrupted after %u spp, wrote %s%s\n", r.film.spp, out.c_str(),
                  a.checkpoint.empty() ? "" : ("; resume with --resume " + a.checkpoint).c_str());
@@ -625,6 +683,14 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--checkpoint-every", ra.checkpoint_every, "seconds between checkpoints (default 60)");
   render_cmd->add_option("--resume", ra.resume, "continue a render from a checkpoint of the same scene and settings");
   render_cmd->add_flag("-q,--quiet", ra.quiet, "no progress or summary on stderr");
+  render_cmd->add_option("--rank-timeout", ra.rank_timeout,
+                         "MPI (mpirun -np K pathcl render ...): seconds beyond a unit's expected time after which a rank "
+                         "that has not answered is lost and its units go to the others (default 30)");
+  render_cmd->add_flag("--coordinator-only", ra.coordinator_only,
+                       "MPI: rank 0 coordinates and writes the output but renders on no device of its own");
+  render_cmd->add_option("--debug-rank-delay", ra.rank_faults.unit_delay)->group("");
+  render_cmd->add_option("--debug-rank-kill-after", ra.rank_faults.kill_after_units)->group("");
+  render_cmd->add_flag("--debug-rank-corrupt", ra.rank_faults.corrupt_answers)->group("");
 
   app.add_subcommand("devices", "list OpenCL platforms and devices");
 
@@ -658,7 +724,12 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    if (render_cmd->parsed()) return run_render(ra);
+    if (render_cmd->parsed()) {
+      positive_option("--rank-timeout", ra.rank_timeout, false, "a finite number of seconds > 0");
+      RankJob job(&argc, &argv);
+      if (job.rank() > 0) return job.serve(ra.device, ra.rank_faults);
+      return run_render(ra, job);
+    }
     if (info_cmd->parsed()) return run_info(info_scene, info_dump_obj);
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();

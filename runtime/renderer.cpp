@@ -165,12 +165,6 @@ uint32_t next_power_of_two_above(uint32_t s) {
 
 bool is_power_of_two(uint32_t s) { return s > 0 && (s & (s - 1)) == 0; }
 
-// A device to render on, and how its thread makes its worker.
-struct WorkerSource {
-  DeviceInfo info;
-  std::function<std::unique_ptr<UnitWorker>()> make;
-};
-
 RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceScene& scene,
                        const RenderOptions& options, const RenderCallbacks& callbacks) {
   RenderResult result;
@@ -224,6 +218,8 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.platform = info.platform_name;
     report.sub_device = info.sub_device;
     report.compute_units = info.compute_units;
+    report.rank = workers[d].rank;
+    report.host = workers[d].host;
     double target = info.is_gpu ? kGpuUnitSeconds : technique.cpu_unit_seconds;
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
@@ -395,6 +391,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     UnitFinish f = schedule.finish(e.unit, e.output.seconds);
     report.kernel_seconds += e.output.kernel_ms * 1e-3;
     report.transfer_seconds += std::max(0.0, e.output.seconds - e.output.kernel_ms * 1e-3);
+    report.transfer_bytes += e.output.transfer_bytes;
     result.kernel_ms += e.output.kernel_ms;
     result.launches++;
     for (const PhaseTime& p : e.output.phases) {
@@ -519,17 +516,26 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
 RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks) {
   if (devices.empty()) throw UsageError("no device to render on");
-  // With a GPU in the set, CPU devices leave one core to the host threads that feed it.
+  return render_on(device_workers(devices), scene, options, callbacks);
+}
+
+std::vector<WorkerSource> device_workers(const std::vector<DeviceInfo>& devices) {
   bool has_gpu = std::any_of(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.is_gpu; });
   std::vector<WorkerSource> workers;
   for (const DeviceInfo& d : devices) {
     DeviceInfo use = has_gpu && d.is_cpu && d.compute_units > 1 ? partition_device(d, d.compute_units - 1) : d;
-    workers.push_back({use, [use] { return std::make_unique<DeviceWorker>(use); }});
+    workers.push_back({use, [use] { return std::make_unique<DeviceWorker>(use); }, 0, {}});
   }
+  return workers;
+}
+
+RenderResult render(const std::vector<WorkerSource>& workers, const DeviceScene& scene, const RenderOptions& options,
+                    const RenderCallbacks& callbacks) {
+  if (workers.empty()) throw UsageError("no device to render on");
   return render_on(workers, scene, options, callbacks);
 }
 
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks) {
-  return render_on({{cl.info, [&cl] { return std::make_unique<DeviceWorker>(cl); }}}, scene, options, callbacks);
+  return render_on({{cl.info, [&cl] { return std::make_unique<DeviceWorker>(cl); }, 0, {}}}, scene, options, callbacks);
 }

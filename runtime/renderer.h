@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,8 @@ struct RenderOptions {
 // What each device did.
 struct DeviceReport {
   std::string name, platform;
+  uint32_t rank = 0;              // the MPI rank whose device it is (runtime/ranks.h); 0 in one process
+  std::string host;               // that rank's host (empty in one process)
   uint32_t arithmetic_class = 0;  // 0: the first device's; devices of other classes are left out unless mixed
   bool used = true;               // rendered units (false: left out, or failed before its first unit)
   std::string note;               // why it left or was left out
@@ -79,6 +82,7 @@ struct DeviceReport {
   uint32_t compute_units = 0;
   uint64_t units = 0, samples = 0, duplicates_run = 0, duplicates_won = 0, failures = 0;
   double kernel_seconds = 0, transfer_seconds = 0, busy_seconds = 0, idle_seconds = 0;
+  uint64_t transfer_bytes = 0;        // to and from its rank (0 for this process's devices)
   double kernel_build_ms = 0;
   bool kernel_from_cache = false;
   std::string kernel_options;
@@ -120,6 +124,19 @@ struct RenderCallbacks {
 };
 
 RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& scene, const RenderOptions& options,
+                    const RenderCallbacks& callbacks = {});
+
+// A unit worker of a render, as its thread makes it, and what the reports say of it: this process's OpenCL
+// devices (device_workers) or another rank's (runtime/ranks.h).
+struct WorkerSource {
+  DeviceInfo info;  // another rank's device: its names, type and compute units only
+  std::function<std::unique_ptr<UnitWorker>()> make;
+  uint32_t rank = 0;
+  std::string host;
+};
+// The devices as workers; with a GPU in the set, CPU devices leave one core to the host threads that feed it.
+std::vector<WorkerSource> device_workers(const std::vector<DeviceInfo>& devices);
+RenderResult render(const std::vector<WorkerSource>& workers, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks = {});
 // One device whose context the caller keeps (tests).
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,

@@ -51,6 +51,7 @@ struct UnitOutput {
   uint64_t light_vertices = 0;   // light vertices kept (bdpt, the merging integrators)
   double seconds = 0;    // the unit's wall time on the worker: upload, launches, read-back
   double kernel_ms = 0;  // the launches alone
+  uint64_t transfer_bytes = 0;  // sent to and from another process (runtime/ranks.h), both ways
   std::vector<PhaseTime> phases;
   std::vector<uint32_t> ordered;
   std::vector<uint32_t> commutative;

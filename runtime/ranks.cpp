@@ -1,0 +1,506 @@
+#include "runtime/ranks.h"
+
+#include <cstdlib>
+#include <string>
+
+#include <unistd.h>
+
+#include "runtime/errors.h"
+
+namespace {
+
+// The number of processes of the job this process was launched in by mpirun or mpiexec, 0 if none.
+int launched_ranks() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* v = std::getenv(name)) return std::atoi(v);
+  return 0;
+}
+
+}  // namespace
+
+std::string host_name() {
+  char name[256] = {};
+  gethostname(name, sizeof name - 1);
+  return name;
+}
+
+#ifndef PATHCL_MPI
+
+struct RankJob::Impl {};
+
+RankJob::RankJob(int*, char***) {
+  if (launched_ranks() > 1)
+    throw UsageError("this pathcl was built without MPI (CMake found no MPI library), so it cannot render as one of " +
+                     std::to_string(launched_ranks()) + " ranks: install libopenmpi-dev and rebuild, or run one process");
+}
+RankJob::~RankJob() = default;
+std::vector<WorkerSource> RankJob::remote_workers(double, std::vector<std::string>*) { return {}; }
+std::vector<std::string> RankJob::lost_ranks() const { return {}; }
+void RankJob::finish() {}
+int RankJob::serve(const std::string&, const Faults&) { return 0; }
+
+#else
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <mpi.h>
+
+#include "runtime/device_worker.h"
+#include "runtime/rank_messages.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Message tags. Rank-wide messages below 8; a device's requests and its answers at kind + 8 (device + 1).
+enum : int { kTagHello = 1, kTagScene = 2, kTagQuit = 3 };
+enum : int { kPrepare = 1, kProbe = 2, kRun = 3, kAnswer = 7 };
+int device_tag(int kind, uint32_t device) { return kind + 8 * int(device + 1); }
+
+constexpr uint64_t kChunkBytes = uint64_t(1) << 30;         // MPI counts are ints: large messages in parts
+constexpr uint64_t kMaxMessageBytes = uint64_t(1) << 40;    // a size beyond this is garbage
+constexpr auto kPoll = std::chrono::microseconds(500);      // waits poll (Open MPI's blocking calls spin)
+constexpr double kSetupSeconds = 600;  // a kernel build and the scene's upload, beside --rank-timeout
+
+void check_mpi(int rc, const char* what) {
+  if (rc == MPI_SUCCESS) return;
+  char text[MPI_MAX_ERROR_STRING];
+  int length = 0;
+  MPI_Error_string(rc, text, &length);
+  throw RuntimeFailure(std::string(what) + ": " + std::string(text, length));
+}
+
+// A message: its size, then its bytes in parts, all with one tag (MPI keeps their order).
+void send_bytes(int to, int tag, const std::vector<uint8_t>& bytes) {
+  uint64_t n = bytes.size();
+  check_mpi(MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD), "MPI_Send");
+  for (uint64_t at = 0; at < n; at += kChunkBytes)
+    check_mpi(MPI_Send(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD), "MPI_Send");
+}
+
+// Completes a request by `deadline`, or cancels it and says false.
+bool wait_until(MPI_Request& request, Clock::time_point deadline) {
+  for (;;) {
+    int done = 0;
+    check_mpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (done) return true;
+    if (Clock::now() >= deadline) {
+      MPI_Cancel(&request);
+      MPI_Wait(&request, MPI_STATUS_IGNORE);
+      return false;
+    }
+    std::this_thread::sleep_for(kPoll);
+  }
+}
+
+// A message sent with send_bytes, or nothing if it has not come whole by `deadline`.
+std::optional<std::vector<uint8_t>> receive_bytes(int from, int tag, Clock::time_point deadline) {
+  uint64_t n = 0;
+  MPI_Request request;
+  check_mpi(MPI_Irecv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &request), "MPI_Irecv");
+  if (!wait_until(request, deadline)) return std::nullopt;
+  if (n > kMaxMessageBytes) throw RankMessageError("a message of " + std::to_string(n) + " bytes");
+  std::vector<uint8_t> bytes(n);
+  for (uint64_t at = 0; at < n; at += kChunkBytes) {
+    check_mpi(MPI_Irecv(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, &request),
+              "MPI_Irecv");
+    if (!wait_until(request, deadline)) return std::nullopt;
+  }
+  return bytes;
+}
+
+Clock::time_point after(double seconds) {
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Rank 0's view of another rank.
+struct RankLink {
+  int rank = 0;
+  std::string host;
+  std::vector<RankDevice> devices;
+  std::mutex mutex;
+  bool scene_sent = false;
+  std::string lost;  // why it was given up, once it was
+  std::string who() const { return "rank " + std::to_string(rank) + " (" + host + ")"; }
+};
+
+}  // namespace
+
+struct RankJob::Impl {
+  std::vector<std::unique_ptr<RankLink>> links;  // ranks 1 .. K-1
+  double timeout = 30;
+  bool finished = false;
+  std::mutex scene_mutex;
+  const DeviceScene* encoded_scene = nullptr;
+  std::vector<uint8_t> scene_bytes;
+  mutable std::mutex lost_mutex;
+  std::vector<std::string> lost;
+
+  // The device scene to a rank, once (the first of its workers to prepare sends it; the others wait).
+  void send_scene(RankLink& link, const DeviceScene& scene) {
+    std::lock_guard<std::mutex> lock(link.mutex);
+    if (link.scene_sent) return;
+    {
+      std::lock_guard<std::mutex> encode_lock(scene_mutex);
+      if (encoded_scene != &scene) {
+        scene_bytes = encode_scene(scene);
+        encoded_scene = &scene;
+      }
+    }
+    send_bytes(link.rank, kTagScene, scene_bytes);
+    link.scene_sent = true;
+  }
+  void lose(RankLink& link, const std::string& why) {
+    {
+      std::lock_guard<std::mutex> lock(link.mutex);
+      if (!link.lost.empty()) return;
+      link.lost = why;
+    }
+    std::lock_guard<std::mutex> lock(lost_mutex);
+    lost.push_back(link.who() + ": " + why);
+  }
+  std::string lost_why(RankLink& link) {
+    std::lock_guard<std::mutex> lock(link.mutex);
+    return link.lost;
+  }
+};
+
+namespace {
+
+// A device of another rank as a unit worker of rank 0's render loop: each call is a request and its
+// answer, waited for with a deadline.
+class RemoteWorker : public UnitWorker {
+ public:
+  RemoteWorker(RankJob::Impl& job, RankLink& link, uint32_t device) : job_(job), link_(link), device_(device) {
+    who_ = link.who() + " device " + std::to_string(device);
+  }
+  void prepare(const DeviceScene& scene, const SceneHeader& header, const WorkerSettings& settings) override {
+    layout_ = settings.layout;
+    exchange(kPrepare, [&] {
+      job_.send_scene(link_, scene);
+      return encode_setup(header, settings);
+    }, job_.timeout + kSetupSeconds, "its set-up", [&](const std::vector<uint8_t>& b) { report_ = decode_report(b, who_); });
+  }
+  uint64_t probe(uint32_t count, uint32_t spp) override {
+    uint64_t hash = 0;
+    auto start = Clock::now();
+    exchange(kProbe, [&] {
+      ByteWriter w;
+      w.pod(count);
+      w.pod(spp);
+      return w.finish();
+    }, job_.timeout + kSetupSeconds, "the probe", [&](const std::vector<uint8_t>& b) { hash = decode_probe(b, who_); });
+    seconds_per_sample_ = seconds_since(start) / std::max(1.0, double(count) * spp);
+    return hash;
+  }
+  UnitOutput run(const WorkUnit& unit, const std::vector<uint32_t>* input) override {
+    const double samples = double(unit.pixel_count) * unit.sample_count;
+    // Its expected time from the probe and the units before (the slowest rate seen lately), four times over.
+    const double expected = seconds_per_sample_ > 0 ? seconds_per_sample_ * samples : kSetupSeconds;
+    UnitOutput out;
+    uint64_t bytes = 0;
+    auto start = Clock::now();
+    exchange(kRun, [&] {
+      std::vector<uint8_t> b = encode_unit(unit, input);
+      bytes += b.size();
+      return b;
+    }, job_.timeout + 4 * expected, "unit " + std::to_string(unit.id), [&](const std::vector<uint8_t>& b) {
+      bytes += b.size();
+      out = decode_output(b, who_);
+      const size_t ordered = layout_.words_per_pixel(PC_LAYER_ORDERED) * unit.pixel_count;
+      const size_t commutative = layout_.words_per_pixel(PC_LAYER_COMMUTATIVE) * layout_.pixels;
+      if (out.ordered.size() != ordered || out.commutative.size() != commutative)
+        throw RankMessageError("its result of unit " + std::to_string(unit.id) + " has " +
+                               std::to_string(out.ordered.size()) + " + " + std::to_string(out.commutative.size()) +
+                               " words, not " + std::to_string(ordered) + " + " + std::to_string(commutative));
+    });
+    out.seconds = seconds_since(start);
+    out.transfer_bytes = bytes;
+    const double rate = out.seconds / std::max(1.0, samples);
+    seconds_per_sample_ = std::max(rate, seconds_per_sample_ * 0.5);
+    return out;
+  }
+  WorkerReport report() const override { return report_; }
+
+ private:
+  // Sends a request (made by `make`, which may send the scene first) and reads its answer with `read` by
+  // `seconds` from now. The rank is lost when it does not answer in time or answers garbage; a worker
+  // that fails (a kernel build) answers an error, which is thrown without losing the rank.
+  template <class Make, class Read>
+  void exchange(int kind, Make&& make, double seconds, const std::string& what, Read&& read) {
+    if (std::string why = job_.lost_why(link_); !why.empty()) throw RuntimeFailure(link_.who() + " was lost: " + why);
+    std::optional<std::vector<uint8_t>> answer;
+    try {
+      send_bytes(link_.rank, device_tag(kind, device_), make());
+      answer = receive_bytes(link_.rank, device_tag(kAnswer, device_), after(seconds));
+    } catch (const RuntimeFailure& e) {  // MPI's own errors (MPI_ERRORS_RETURN)
+      lose(e.what());
+    } catch (const RankMessageError& e) {
+      lose(std::string("sent garbage: ") + e.what());
+    }
+    if (!answer) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%.0f", seconds);
+      lose("no answer to " + what + " within " + text + " s");
+    }
+    try {
+      read(*answer);
+    } catch (const RankMessageError& e) {
+      lose(std::string("sent garbage: ") + e.what());
+    }
+  }
+  [[noreturn]] void lose(const std::string& why) {
+    job_.lose(link_, why);
+    throw RuntimeFailure(link_.who() + " is lost: " + why);
+  }
+
+  RankJob::Impl& job_;
+  RankLink& link_;
+  uint32_t device_;
+  std::string who_;
+  FilmLayout layout_;
+  WorkerReport report_;
+  double seconds_per_sample_ = 0;
+};
+
+// A rank's device, serving rank 0's requests in a thread of its own, one at a time.
+class DeviceServer {
+ public:
+  DeviceServer(const DeviceInfo& info, uint32_t device, std::shared_ptr<const DeviceScene>* scene,
+               std::string* scene_error, const RankJob::Faults& faults, std::atomic<int64_t>* units_answered)
+      : info_(info), device_(device), scene_(scene), scene_error_(scene_error), faults_(faults), units_(units_answered) {
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~DeviceServer() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+  // scene: the device scene as received, read when a prepare request comes (the main thread sets it
+  // before it reads any request after it).
+  void push(int kind, std::vector<uint8_t> bytes) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back({kind, std::move(bytes)});
+    }
+    cv_.notify_one();
+  }
+
+ private:
+  void serve() {
+    for (;;) {
+      std::pair<int, std::vector<uint8_t>> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return quit_ || !jobs_.empty(); });
+        if (quit_) break;
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      std::vector<uint8_t> answer;
+      try {
+        answer = handle(job.first, job.second);
+      } catch (const UsageError& e) {
+        answer = encode_error(e.what(), true);
+      } catch (const std::exception& e) {
+        answer = encode_error(e.what(), false);
+      }
+      try {
+        send_bytes(0, device_tag(kAnswer, device_), answer);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+      }
+    }
+    worker_.reset();  // the context is released in the thread that made it
+  }
+  std::vector<uint8_t> handle(int kind, const std::vector<uint8_t>& bytes) {
+    if (kind == kPrepare) {
+      setup_ = std::make_unique<WorkerSetupMessage>();
+      decode_setup(bytes, *setup_);
+      if (!*scene_) throw RuntimeFailure("no device scene came: " + *scene_error_);
+      worker_.reset();
+      worker_ = std::make_unique<DeviceWorker>(info_);
+      worker_->prepare(**scene_, setup_->header, setup_->settings);
+      return encode_report(worker_->report());
+    }
+    if (!worker_) throw RuntimeFailure("a request before the worker's set-up");
+    if (kind == kProbe) {
+      ByteReader r(bytes, "a probe request");
+      uint32_t count = r.pod<uint32_t>(), spp = r.pod<uint32_t>();
+      r.done();
+      return encode_probe(worker_->probe(count, spp));
+    }
+    if (kind != kRun) throw RankMessageError("a request of unknown kind " + std::to_string(kind));
+    if (faults_.kill_after_units >= 0 && *units_ >= faults_.kill_after_units) kill(getpid(), SIGKILL);  // tests: a lost node
+    if (faults_.unit_delay > 0) std::this_thread::sleep_for(std::chrono::duration<double>(faults_.unit_delay));
+    std::vector<uint32_t> input;
+    WorkUnit unit = decode_unit(bytes, input);
+    std::vector<uint8_t> answer = encode_output(worker_->run(unit, unit.upload ? &input : nullptr));
+    if (faults_.corrupt_answers) answer[answer.size() / 2] ^= 1;
+    ++*units_;
+    return answer;
+  }
+
+  DeviceInfo info_;
+  uint32_t device_;
+  std::shared_ptr<const DeviceScene>* scene_;
+  std::string* scene_error_;
+  RankJob::Faults faults_;
+  std::atomic<int64_t>* units_;
+  std::unique_ptr<WorkerSetupMessage> setup_;  // the worker's settings point into it
+  std::unique_ptr<DeviceWorker> worker_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::pair<int, std::vector<uint8_t>>> jobs_;
+  bool quit_ = false;
+  std::thread thread_;
+};
+
+}  // namespace
+
+RankJob::RankJob(int* argc, char*** argv) : impl_(std::make_unique<Impl>()) {
+  if (launched_ranks() == 0) return;
+  int provided = 0;
+  check_mpi(MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided), "MPI_Init_thread");
+  MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  if (provided < MPI_THREAD_MULTIPLE && size_ > 1) {
+    MPI_Finalize();
+    throw RuntimeFailure("the MPI library does not support MPI_THREAD_MULTIPLE, which pathcl's ranks need");
+  }
+}
+
+RankJob::~RankJob() {
+  if (launched_ranks() == 0) return;
+  try {
+    finish();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+  }
+  MPI_Finalize();
+}
+
+std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::vector<std::string>* warnings) {
+  impl_->timeout = timeout_seconds;
+  std::vector<WorkerSource> workers;
+  for (int r = 1; r < size_; ++r) {
+    auto link = std::make_unique<RankLink>();
+    link->rank = r;
+    link->host = "rank " + std::to_string(r);
+    std::optional<std::vector<uint8_t>> bytes;
+    std::string error;
+    try {
+      bytes = receive_bytes(r, kTagHello, after(timeout_seconds + kSetupSeconds));
+      if (!bytes) error = "no list of devices came";
+      else {
+        RankHello hello = decode_hello(*bytes);
+        link->host = hello.host;
+        link->devices = hello.devices;
+        error = hello.error;
+      }
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (!error.empty() || link->devices.empty()) {
+      if (error.empty()) error = "it has no device";
+      impl_->lose(*link, error);
+      warnings->push_back(link->who() + " renders nothing: " + error);
+    }
+    for (uint32_t d = 0; d < link->devices.size() && error.empty(); ++d) {
+      WorkerSource s;
+      s.info = device_info(link->devices[d]);
+      s.rank = uint32_t(r);
+      s.host = link->host;
+      RankLink* l = link.get();
+      Impl* job = impl_.get();
+      s.make = [job, l, d] { return std::make_unique<RemoteWorker>(*job, *l, d); };
+      workers.push_back(std::move(s));
+    }
+    impl_->links.push_back(std::move(link));
+  }
+  return workers;
+}
+
+std::vector<std::string> RankJob::lost_ranks() const {
+  std::lock_guard<std::mutex> lock(impl_->lost_mutex);
+  return impl_->lost;
+}
+
+void RankJob::finish() {
+  if (rank_ != 0 || impl_->finished) return;
+  impl_->finished = true;
+  // Every rank, lost ones too (a short message is sent without waiting for its receiver).
+  for (int r = 1; r < size_; ++r) {
+    try {
+      send_bytes(r, kTagQuit, {});
+    } catch (const std::exception&) {
+    }
+  }
+}
+
+int RankJob::serve(const std::string& selector, const Faults& faults) {
+  const std::string who = "rank " + std::to_string(rank_) + " (" + host_name() + ")";
+  try {
+    RankHello hello;
+    hello.host = host_name();
+    std::vector<DeviceInfo> devices;
+    try {
+      devices = select_devices(selector);
+      for (const DeviceInfo& d : devices) hello.devices.push_back(rank_device(d));
+    } catch (const std::exception& e) {
+      hello.error = e.what();
+    }
+    send_bytes(0, kTagHello, encode_hello(hello));
+    std::shared_ptr<const DeviceScene> scene;
+    std::string scene_error = "none was sent";
+    std::atomic<int64_t> units_answered{0};
+    std::map<uint32_t, std::unique_ptr<DeviceServer>> servers;
+    for (;;) {
+      int arrived = 0;
+      MPI_Status status;
+      check_mpi(MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, &status), "MPI_Iprobe");
+      if (!arrived) {
+        std::this_thread::sleep_for(kPoll);
+        continue;
+      }
+      const int tag = status.MPI_TAG;
+      std::optional<std::vector<uint8_t>> bytes = receive_bytes(0, tag, Clock::time_point::max());
+      if (tag == kTagQuit) break;
+      if (tag == kTagScene) {
+        try {
+          scene = std::make_shared<const DeviceScene>(decode_scene(*bytes));
+        } catch (const std::exception& e) {
+          scene_error = e.what();
+        }
+        continue;
+      }
+      const uint32_t device = uint32_t(tag / 8 - 1);
+      if (tag < 8 || device >= devices.size()) throw RankMessageError("a request with tag " + std::to_string(tag));
+      auto& server = servers[device];
+      if (!server) server = std::make_unique<DeviceServer>(devices[device], device, &scene, &scene_error, faults, &units_answered);
+      server->push(tag % 8, std::move(*bytes));
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s: %s\n", who.c_str(), e.what());
+    return 1;
+  }
+}
+
+#endif
