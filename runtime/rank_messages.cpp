@@ -1,10 +1,32 @@
 #include "runtime/rank_messages.h"
 
 #include "runtime/errors.h"
-#include "runtime/hash.h"
 #include "runtime/technique.h"
 
 namespace {
+
+// A message's checksum: four independent multiply-rotate lanes over 8-byte words (about 8 bytes a cycle;
+// FNV-1a's one byte a step took 2 ms of every 1.6 MB unit result at each end), then the tail bytes. Finds
+// damage, not attacks.
+uint64_t message_checksum(const uint8_t* p, size_t n) {
+  constexpr uint64_t k = 0x9e3779b97f4a7c15ull;
+  uint64_t lane[4] = {k, k ^ 1, k ^ 2, k ^ 3};
+  auto mix = [&](uint64_t h, uint64_t w) {
+    h ^= w;
+    h *= k;
+    return h << 31 | h >> 33;
+  };
+  size_t i = 0;
+  for (; i + 32 <= n; i += 32)
+    for (int l = 0; l < 4; ++l) {
+      uint64_t w;
+      std::memcpy(&w, p + i + 8 * l, 8);
+      lane[l] = mix(lane[l], w);
+    }
+  uint64_t h = mix(mix(mix(mix(uint64_t(n), lane[0]), lane[1]), lane[2]), lane[3]);
+  for (; i < n; ++i) h = mix(h, p[i]);
+  return h ^ h >> 29;
+}
 
 enum : uint8_t { kAnswerOk = 1, kAnswerError = 2, kAnswerUsageError = 3 };
 
@@ -31,7 +53,7 @@ ByteReader answer(const std::vector<uint8_t>& bytes, const std::string& who, con
 
 std::vector<uint8_t> ByteWriter::finish() {
   std::vector<uint8_t> out = std::move(bytes_);
-  uint64_t h = fnv1a(out.data(), out.size());
+  uint64_t h = message_checksum(out.data(), out.size());
   const auto* p = reinterpret_cast<const uint8_t*>(&h);
   out.insert(out.end(), p, p + sizeof h);
   return out;
@@ -43,7 +65,7 @@ ByteReader::ByteReader(const std::vector<uint8_t>& bytes, const std::string& wha
   end_ = bytes.data() + bytes.size() - sizeof(uint64_t);
   uint64_t h;
   std::memcpy(&h, end_, sizeof h);
-  if (h != fnv1a(at_, end_ - at_)) fail("its checksum does not match its " + std::to_string(bytes.size()) + " bytes");
+  if (h != message_checksum(at_, end_ - at_)) fail("its checksum does not match its " + std::to_string(bytes.size()) + " bytes");
 }
 
 const uint8_t* ByteReader::take(size_t n) {

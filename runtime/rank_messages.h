@@ -1,6 +1,6 @@
 // The messages between the ranks of an MPI render (runtime/ranks.h) as bytes, without MPI: what a rank's
 // devices are, the device scene, a worker's settings, a work unit and its input, and what the worker gives
-// back. Every message ends with a checksum of its bytes (FNV-1a), and a decoder reads exactly the bytes it
+// back. Every message ends with a checksum of its bytes, and a decoder reads exactly the bytes it
 // was given: a message that is short, long or damaged is refused (RankMessageError), never trusted.
 #pragma once
 #include <cstdint>

@@ -9,11 +9,13 @@
 
 namespace {
 
-// The number of processes of the job this process was launched in by mpirun or mpiexec, 0 if none.
+// The number of processes of the job this process was launched in by mpirun or mpiexec (Open MPI's
+// OMPI_COMM_WORLD_SIZE, Hydra's and Slurm's PMI_SIZE), 0 if none; -1 when a PMIx launcher (srun --mpi=pmix)
+// started it without saying how many.
 int launched_ranks() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
     if (const char* v = std::getenv(name)) return std::atoi(v);
-  return 0;
+  return std::getenv("PMIX_RANK") ? -1 : 0;
 }
 
 }  // namespace
@@ -71,6 +73,11 @@ constexpr uint64_t kChunkBytes = uint64_t(1) << 30;         // MPI counts are in
 constexpr uint64_t kMaxMessageBytes = uint64_t(1) << 40;    // a size beyond this is garbage
 constexpr auto kPoll = std::chrono::microseconds(500);      // waits poll (Open MPI's blocking calls spin)
 constexpr double kSetupSeconds = 600;  // a kernel build and the scene's upload, beside --rank-timeout
+// A remote device's units: long enough that their fixed cost (a few ms of messages and wake-ups) and their
+// pixels' results (48 bytes a pixel for path, however many samples the unit added) stay a small part of
+// their time: 2 s on CPUs carry about 2 % (docs/ranks.md); shorter on GPUs, whose drivers may stop kernels
+// of a few seconds.
+constexpr double kRemoteCpuUnitSeconds = 2.0, kRemoteGpuUnitSeconds = 0.5;
 
 void check_mpi(int rc, const char* what) {
   if (rc == MPI_SUCCESS) return;
@@ -88,8 +95,10 @@ void send_bytes(int to, int tag, const std::vector<uint8_t>& bytes) {
     check_mpi(MPI_Send(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD), "MPI_Send");
 }
 
-// Completes a request by `deadline`, or cancels it and says false.
-bool wait_until(MPI_Request& request, Clock::time_point deadline) {
+// Completes a request by `deadline`, or cancels it and says false. `eager`: the message is known to be on its
+// way (its size came): poll without sleeping, since Open MPI moves a large message's fragments only while the
+// receiver calls into it (sleeping 0.5 ms between polls made a 1.6 MB result take 15 ms).
+bool wait_until(MPI_Request& request, Clock::time_point deadline, bool eager = false) {
   for (;;) {
     int done = 0;
     check_mpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
@@ -99,7 +108,8 @@ bool wait_until(MPI_Request& request, Clock::time_point deadline) {
       MPI_Wait(&request, MPI_STATUS_IGNORE);
       return false;
     }
-    std::this_thread::sleep_for(kPoll);
+    if (eager) std::this_thread::yield();
+    else std::this_thread::sleep_for(kPoll);
   }
 }
 
@@ -114,7 +124,7 @@ std::optional<std::vector<uint8_t>> receive_bytes(int from, int tag, Clock::time
   for (uint64_t at = 0; at < n; at += kChunkBytes) {
     check_mpi(MPI_Irecv(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, &request),
               "MPI_Irecv");
-    if (!wait_until(request, deadline)) return std::nullopt;
+    if (!wait_until(request, deadline, true)) return std::nullopt;
   }
   return bytes;
 }
@@ -139,6 +149,7 @@ struct RankLink {
 }  // namespace
 
 struct RankJob::Impl {
+  bool initialised = false;  // MPI_Init_thread was called (and MPI_Finalize is due)
   std::vector<std::unique_ptr<RankLink>> links;  // ranks 1 .. K-1
   double timeout = 30;
   bool finished = false;
@@ -377,17 +388,19 @@ RankJob::RankJob(int* argc, char*** argv) : impl_(std::make_unique<Impl>()) {
   if (launched_ranks() == 0) return;
   int provided = 0;
   check_mpi(MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided), "MPI_Init_thread");
+  impl_->initialised = true;
   MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
   if (provided < MPI_THREAD_MULTIPLE && size_ > 1) {
     MPI_Finalize();
+    impl_->initialised = false;
     throw RuntimeFailure("the MPI library does not support MPI_THREAD_MULTIPLE, which pathcl's ranks need");
   }
 }
 
 RankJob::~RankJob() {
-  if (launched_ranks() == 0) return;
+  if (!impl_->initialised) return;
   try {
     finish();
   } catch (const std::exception& e) {
@@ -427,6 +440,7 @@ std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::v
       s.info = device_info(link->devices[d]);
       s.rank = uint32_t(r);
       s.host = link->host;
+      s.unit_seconds = s.info.is_gpu ? kRemoteGpuUnitSeconds : kRemoteCpuUnitSeconds;
       RankLink* l = link.get();
       Impl* job = impl_.get();
       s.make = [job, l, d] { return std::make_unique<RemoteWorker>(*job, *l, d); };

@@ -129,14 +129,19 @@ uint32_t RenderSchedule::count_from(uint32_t level) {
   if (it != next_level_.end()) return it->second - level;
   uint32_t count = fixed_count_;
   if (count == 0) {
-    // The combined throughput fills the film in about the fastest device's target time.
-    double fastest = 0, target = 0.1;
-    for (uint32_t d = 0; d < devices_.size(); ++d)
-      if (stats_[d].active && throughput(d) > fastest) {
+    // The combined throughput fills the film in about the fastest device's target time, or in the longest
+    // target of a device that asks for few, large units (another rank's: each unit carries its pixels'
+    // accumulators over the network, so a unit should add many samples to each pixel it carries).
+    double fastest = 0, target = 0.1, few_units_target = 0;
+    for (uint32_t d = 0; d < devices_.size(); ++d) {
+      if (!stats_[d].active) continue;
+      if (throughput(d) > fastest) {
         fastest = throughput(d);
         target = devices_[d].target_seconds;
       }
-    count = floor_power_of_two(active_throughput() * target / pixels_);
+      if (devices_[d].few_units) few_units_target = std::max(few_units_target, devices_[d].target_seconds);
+    }
+    count = floor_power_of_two(active_throughput() * std::max(target, few_units_target) / pixels_);
   }
   uint32_t next = std::min(level + count, horizon_);
   next_level_[level] = next;

@@ -36,6 +36,9 @@ struct ScheduleDevice {
   double target_seconds = 0.1;  // unit duration to aim for (GPU: 75 ms, within its watchdog)
   double rate = 0;              // samples per second before any unit is measured (the probe), 0: unknown
   bool mixed_class = false;     // computes other bits than device 0 (--allow-mixed-devices): no copies
+  // Each unit costs it a fixed latency and its pixels' accumulators moved both ways (another MPI rank's
+  // device): levels are then counted so that the combined throughput fills the film in its target time too.
+  bool few_units = false;
 };
 
 // seconds = latency + samples * seconds_per_sample, least squares over a device's recent units.

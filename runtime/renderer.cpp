@@ -221,6 +221,10 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
     report.rank = workers[d].rank;
     report.host = workers[d].host;
     double target = info.is_gpu ? kGpuUnitSeconds : technique.cpu_unit_seconds;
+    if (workers[d].unit_seconds > 0) {
+      target = std::max(target, workers[d].unit_seconds);
+      schedule_devices[d].few_units = true;
+    }
     if (options.time_budget > 0) target = std::min(target, options.time_budget / 20);  // overrun by a few percent at most
     schedule_devices[d].target_seconds = target;
     WorkerThread::Setup setup{&scene, header, {}, n > 1};
@@ -524,7 +528,7 @@ std::vector<WorkerSource> device_workers(const std::vector<DeviceInfo>& devices)
   std::vector<WorkerSource> workers;
   for (const DeviceInfo& d : devices) {
     DeviceInfo use = has_gpu && d.is_cpu && d.compute_units > 1 ? partition_device(d, d.compute_units - 1) : d;
-    workers.push_back({use, [use] { return std::make_unique<DeviceWorker>(use); }, 0, {}});
+    workers.push_back({use, [use] { return std::make_unique<DeviceWorker>(use); }, 0, {}, 0});
   }
   return workers;
 }
@@ -537,5 +541,5 @@ RenderResult render(const std::vector<WorkerSource>& workers, const DeviceScene&
 
 RenderResult render(ClContext& cl, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks) {
-  return render_on({{cl.info, [&cl] { return std::make_unique<DeviceWorker>(cl); }, 0, {}}}, scene, options, callbacks);
+  return render_on({{cl.info, [&cl] { return std::make_unique<DeviceWorker>(cl); }, 0, {}, 0}}, scene, options, callbacks);
 }

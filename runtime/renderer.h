@@ -133,6 +133,9 @@ struct WorkerSource {
   std::function<std::unique_ptr<UnitWorker>()> make;
   uint32_t rank = 0;
   std::string host;
+  // Units of at least this many seconds (0: the device's usual target), counted in samples per pixel so that
+  // the whole film fills them (RenderSchedule's few_units): another rank's device, whose units cross a network.
+  double unit_seconds = 0;
 };
 // The devices as workers; with a GPU in the set, CPU devices leave one core to the host threads that feed it.
 std::vector<WorkerSource> device_workers(const std::vector<DeviceInfo>& devices);
