@@ -1,8 +1,8 @@
 // Renders over the ranks of an MPI job (runtime/ranks.h), run with Open MPI's mpiexec on this machine
 // (shared memory, several processes per core): the image is the bits of a one-process render for any number
-// of ranks, device sets and timings, for path and for a splatting integrator; a killed rank ends the job
-// and the checkpoint resumes with another number of ranks; with --enable-recovery a lost rank's units are
-// rendered by the others; a rank that sends garbage is dropped.
+// of ranks, device sets and timings, for path and for the splatting integrators bdpt and vcm; a killed rank
+// ends the job and the checkpoint resumes with another number of ranks; with --enable-recovery a lost rank's
+// units are rendered by the others; a rank that sends garbage is dropped.
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -72,7 +72,9 @@ nlohmann::json read_stats(const std::string& path) { return nlohmann::json::pars
 }  // namespace
 
 TEST(MpiRender, AnyNumberOfRanksGivesTheOneProcessBits) {
-  for (const std::string integrator : {"path", "bdpt"}) {
+  // path (ordered units), bdpt (ordered and commutative layers) and vcm (per-sample units: one iteration's
+  // light paths and camera paths in one unit).
+  for (const std::string integrator : {"path", "bdpt", "vcm"}) {
     for (int ranks : {1, 2, 3}) {
       SCOPED_TRACE(integrator + " on " + std::to_string(ranks) + " ranks");
       std::string file = out("ranks.exr"), stats = out("ranks.json"), err;
