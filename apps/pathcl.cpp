@@ -461,7 +461,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
     std::fprintf(stderr, "warning: %llu fixed-point splat overflows (a bug: the splat scale is too fine for this scene)\n",
                  (unsigned long long)r.splat_overflows);
   if (!lost.empty()) {  // the image is whole and exact; the job script should still hear of the lost ranks
-    for (const std::string& l : lost) std::fprintf(stderr, "error: lost %s; its units were rendered by the others\n", l.c_str());
+    for (const std::string& l : lost) std::fprintf(stderr, "error: lost %s; the other ranks rendered the whole image\n", l.c_str());
     std::fprintf(stderr, "error: lost_ranks = %zu\n", lost.size());
     return 1;
   }
