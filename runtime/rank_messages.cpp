@@ -242,6 +242,20 @@ void decode_setup(const std::vector<uint8_t>& bytes, WorkerSetupMessage& out) {
   r.done();
 }
 
+std::vector<uint8_t> encode_probe_request(uint32_t count, uint32_t spp) {
+  ByteWriter w;
+  w.pod(count);
+  w.pod(spp);
+  return w.finish();
+}
+
+void decode_probe_request(const std::vector<uint8_t>& bytes, uint32_t* count, uint32_t* spp) {
+  ByteReader r(bytes, "a probe request");
+  *count = r.pod<uint32_t>();
+  *spp = r.pod<uint32_t>();
+  r.done();
+}
+
 std::vector<uint8_t> encode_unit(const WorkUnit& unit, const std::vector<uint32_t>* input) {
   ByteWriter w;
   w.pod(unit);

@@ -109,6 +109,10 @@ std::vector<uint8_t> encode_setup(const SceneHeader& header, const WorkerSetting
 // settings.technique is looked up by name; settings.light points at `out.light` (keep `out` alive).
 void decode_setup(const std::vector<uint8_t>& bytes, WorkerSetupMessage& out);
 
+// probe(count, spp)'s request.
+std::vector<uint8_t> encode_probe_request(uint32_t count, uint32_t spp);
+void decode_probe_request(const std::vector<uint8_t>& bytes, uint32_t* count, uint32_t* spp);
+
 std::vector<uint8_t> encode_unit(const WorkUnit& unit, const std::vector<uint32_t>* input);
 WorkUnit decode_unit(const std::vector<uint8_t>& bytes, std::vector<uint32_t>& input);
 

@@ -79,20 +79,62 @@ constexpr double kSetupSeconds = 600;  // a kernel build and the scene's upload,
 // of a few seconds.
 constexpr double kRemoteCpuUnitSeconds = 2.0, kRemoteGpuUnitSeconds = 0.5;
 
+// An error an MPI call returned (MPI_ERRORS_RETURN).
+struct MpiError : RuntimeFailure {
+  using RuntimeFailure::RuntimeFailure;
+};
+
 void check_mpi(int rc, const char* what) {
   if (rc == MPI_SUCCESS) return;
   char text[MPI_MAX_ERROR_STRING];
   int length = 0;
   MPI_Error_string(rc, text, &length);
-  throw RuntimeFailure(std::string(what) + ": " + std::string(text, length));
+  throw MpiError(std::string(what) + ": " + std::string(text, length));
 }
 
-// A message: its size, then its bytes in parts, all with one tag (MPI keeps their order).
-void send_bytes(int to, int tag, const std::vector<uint8_t>& bytes) {
-  uint64_t n = bytes.size();
-  check_mpi(MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD), "MPI_Send");
-  for (uint64_t at = 0; at < n; at += kChunkBytes)
-    check_mpi(MPI_Send(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD), "MPI_Send");
+using Bytes = std::vector<uint8_t>;
+
+// The buffers of sends given up at their deadline (a receiver that is gone): MPI may still read them, so they
+// are kept until the process ends.
+std::mutex abandoned_mutex;
+std::vector<std::shared_ptr<const void>> abandoned;
+
+// Completes a send by `deadline`, else says false and leaves it pending. Polls without sleeping: Open MPI moves
+// a large message's fragments only while the sender calls into it.
+bool wait_sent(MPI_Request& request, Clock::time_point deadline) {
+  for (;;) {
+    int done = 0;
+    check_mpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (done) return true;
+    if (Clock::now() >= deadline) return false;
+    std::this_thread::yield();
+  }
+}
+
+// A message: its size, then its bytes in parts, all with one tag (MPI keeps their order). False when the
+// receiver has not taken it by `deadline`.
+bool send_bytes(int to, int tag, std::shared_ptr<const Bytes> bytes, Clock::time_point deadline) {
+  auto size = std::make_shared<const uint64_t>(bytes->size());
+  MPI_Request request;
+  bool sent = true;
+  check_mpi(MPI_Isend(size.get(), 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD, &request), "MPI_Isend");
+  sent = wait_sent(request, deadline);
+  for (uint64_t at = 0; sent && at < *size; at += kChunkBytes) {
+    check_mpi(MPI_Isend(bytes->data() + at, int(std::min(kChunkBytes, *size - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD,
+                        &request),
+              "MPI_Isend");
+    sent = wait_sent(request, deadline);
+  }
+  if (!sent) {
+    std::lock_guard<std::mutex> lock(abandoned_mutex);
+    abandoned.push_back(size);
+    abandoned.push_back(bytes);
+  }
+  return sent;
+}
+
+bool send_bytes(int to, int tag, Bytes bytes, Clock::time_point deadline = Clock::time_point::max()) {
+  return send_bytes(to, tag, std::make_shared<const Bytes>(std::move(bytes)), deadline);
 }
 
 // Completes a request by `deadline`, or cancels it and says false. `eager`: the message is known to be on its
@@ -114,13 +156,13 @@ bool wait_until(MPI_Request& request, Clock::time_point deadline, bool eager = f
 }
 
 // A message sent with send_bytes, or nothing if it has not come whole by `deadline`.
-std::optional<std::vector<uint8_t>> receive_bytes(int from, int tag, Clock::time_point deadline) {
+std::optional<Bytes> receive_bytes(int from, int tag, Clock::time_point deadline) {
   uint64_t n = 0;
   MPI_Request request;
   check_mpi(MPI_Irecv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &request), "MPI_Irecv");
   if (!wait_until(request, deadline)) return std::nullopt;
   if (n > kMaxMessageBytes) throw RankMessageError("a message of " + std::to_string(n) + " bytes");
-  std::vector<uint8_t> bytes(n);
+  Bytes bytes(n);
   for (uint64_t at = 0; at < n; at += kChunkBytes) {
     check_mpi(MPI_Irecv(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, &request),
               "MPI_Irecv");
@@ -155,23 +197,26 @@ struct RankJob::Impl {
   bool finished = false;
   std::mutex scene_mutex;
   const DeviceScene* encoded_scene = nullptr;
-  std::vector<uint8_t> scene_bytes;
+  std::shared_ptr<const Bytes> scene_bytes;
   mutable std::mutex lost_mutex;
   std::vector<std::string> lost;
 
-  // The device scene to a rank, once (the first of its workers to prepare sends it; the others wait).
-  void send_scene(RankLink& link, const DeviceScene& scene) {
+  // The device scene to a rank, once (the first of its workers to prepare sends it; the others wait); false
+  // when the rank has not taken it by `deadline`.
+  bool send_scene(RankLink& link, const DeviceScene& scene, Clock::time_point deadline) {
     std::lock_guard<std::mutex> lock(link.mutex);
-    if (link.scene_sent) return;
+    if (link.scene_sent) return true;
+    std::shared_ptr<const Bytes> bytes;
     {
       std::lock_guard<std::mutex> encode_lock(scene_mutex);
       if (encoded_scene != &scene) {
-        scene_bytes = encode_scene(scene);
+        scene_bytes = std::make_shared<const Bytes>(encode_scene(scene));
         encoded_scene = &scene;
       }
+      bytes = scene_bytes;
     }
-    send_bytes(link.rank, kTagScene, scene_bytes);
-    link.scene_sent = true;
+    link.scene_sent = send_bytes(link.rank, kTagScene, bytes, deadline);
+    return link.scene_sent;
   }
   void lose(RankLink& link, const std::string& why) {
     {
@@ -199,20 +244,17 @@ class RemoteWorker : public UnitWorker {
   }
   void prepare(const DeviceScene& scene, const SceneHeader& header, const WorkerSettings& settings) override {
     layout_ = settings.layout;
-    exchange(kPrepare, [&] {
-      job_.send_scene(link_, scene);
-      return encode_setup(header, settings);
-    }, job_.timeout + kSetupSeconds, "its set-up", [&](const std::vector<uint8_t>& b) { report_ = decode_report(b, who_); });
+    const double seconds = job_.timeout + kSetupSeconds;
+    check_not_lost();
+    if (!job_.send_scene(link_, scene, after(seconds))) lose("it did not take the device scene within " + whole(seconds) + " s");
+    exchange(kPrepare, encode_setup(header, settings), seconds, "its set-up",
+             [&](const Bytes& b) { report_ = decode_report(b, who_); });
   }
   uint64_t probe(uint32_t count, uint32_t spp) override {
     uint64_t hash = 0;
     auto start = Clock::now();
-    exchange(kProbe, [&] {
-      ByteWriter w;
-      w.pod(count);
-      w.pod(spp);
-      return w.finish();
-    }, job_.timeout + kSetupSeconds, "the probe", [&](const std::vector<uint8_t>& b) { hash = decode_probe(b, who_); });
+    exchange(kProbe, encode_probe_request(count, spp), job_.timeout + kSetupSeconds, "the probe",
+             [&](const Bytes& b) { hash = decode_probe(b, who_); });
     seconds_per_sample_ = seconds_since(start) / std::max(1.0, double(count) * spp);
     return hash;
   }
@@ -221,13 +263,10 @@ class RemoteWorker : public UnitWorker {
     // Its expected time from the probe and the units before (the slowest rate seen lately), four times over.
     const double expected = seconds_per_sample_ > 0 ? seconds_per_sample_ * samples : kSetupSeconds;
     UnitOutput out;
-    uint64_t bytes = 0;
+    Bytes request = encode_unit(unit, input);
+    uint64_t bytes = request.size();
     auto start = Clock::now();
-    exchange(kRun, [&] {
-      std::vector<uint8_t> b = encode_unit(unit, input);
-      bytes += b.size();
-      return b;
-    }, job_.timeout + 4 * expected, "unit " + std::to_string(unit.id), [&](const std::vector<uint8_t>& b) {
+    exchange(kRun, std::move(request), job_.timeout + 4 * expected, "unit " + std::to_string(unit.id), [&](const Bytes& b) {
       bytes += b.size();
       out = decode_output(b, who_);
       const size_t ordered = layout_.words_per_pixel(PC_LAYER_ORDERED) * unit.pixel_count;
@@ -246,31 +285,37 @@ class RemoteWorker : public UnitWorker {
   WorkerReport report() const override { return report_; }
 
  private:
-  // Sends a request (made by `make`, which may send the scene first) and reads its answer with `read` by
-  // `seconds` from now. The rank is lost when it does not answer in time or answers garbage; a worker
-  // that fails (a kernel build) answers an error, which is thrown without losing the rank.
-  template <class Make, class Read>
-  void exchange(int kind, Make&& make, double seconds, const std::string& what, Read&& read) {
-    if (std::string why = job_.lost_why(link_); !why.empty()) throw RuntimeFailure(link_.who() + " was lost: " + why);
-    std::optional<std::vector<uint8_t>> answer;
+  // Sends a request and reads its answer with `read`, both by `seconds` from now. The rank is lost when it
+  // does not take the request or answer in time, or answers garbage; a worker that fails (a kernel build)
+  // answers an error, which is thrown without losing the rank.
+  template <class Read>
+  void exchange(int kind, Bytes request, double seconds, const std::string& what, Read&& read) {
+    check_not_lost();
+    const Clock::time_point deadline = after(seconds);
+    std::optional<Bytes> answer;
     try {
-      send_bytes(link_.rank, device_tag(kind, device_), make());
-      answer = receive_bytes(link_.rank, device_tag(kAnswer, device_), after(seconds));
-    } catch (const RuntimeFailure& e) {  // MPI's own errors (MPI_ERRORS_RETURN)
-      lose(e.what());
+      if (!send_bytes(link_.rank, device_tag(kind, device_), std::move(request), deadline))
+        lose("it did not take " + what + " within " + whole(seconds) + " s");
+      answer = receive_bytes(link_.rank, device_tag(kAnswer, device_), deadline);
     } catch (const RankMessageError& e) {
       lose(std::string("sent garbage: ") + e.what());
+    } catch (const MpiError& e) {
+      lose(e.what());
     }
-    if (!answer) {
-      char text[64];
-      std::snprintf(text, sizeof text, "%.0f", seconds);
-      lose("no answer to " + what + " within " + text + " s");
-    }
+    if (!answer) lose("no answer to " + what + " within " + whole(seconds) + " s");
     try {
       read(*answer);
     } catch (const RankMessageError& e) {
       lose(std::string("sent garbage: ") + e.what());
     }
+  }
+  void check_not_lost() {
+    if (std::string why = job_.lost_why(link_); !why.empty()) throw RuntimeFailure(link_.who() + " was lost: " + why);
+  }
+  static std::string whole(double seconds) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.0f", seconds);
+    return text;
   }
   [[noreturn]] void lose(const std::string& why) {
     job_.lose(link_, why);
@@ -304,7 +349,7 @@ class DeviceServer {
   }
   // scene: the device scene as received, read when a prepare request comes (the main thread sets it
   // before it reads any request after it).
-  void push(int kind, std::vector<uint8_t> bytes) {
+  void push(int kind, Bytes bytes) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       jobs_.push_back({kind, std::move(bytes)});
@@ -315,7 +360,7 @@ class DeviceServer {
  private:
   void serve() {
     for (;;) {
-      std::pair<int, std::vector<uint8_t>> job;
+      std::pair<int, Bytes> job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         cv_.wait(lock, [&] { return quit_ || !jobs_.empty(); });
@@ -323,7 +368,7 @@ class DeviceServer {
         job = std::move(jobs_.front());
         jobs_.pop_front();
       }
-      std::vector<uint8_t> answer;
+      Bytes answer;
       try {
         answer = handle(job.first, job.second);
       } catch (const UsageError& e) {
@@ -332,14 +377,14 @@ class DeviceServer {
         answer = encode_error(e.what(), false);
       }
       try {
-        send_bytes(0, device_tag(kAnswer, device_), answer);
+        send_bytes(0, device_tag(kAnswer, device_), std::move(answer));
       } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
       }
     }
     worker_.reset();  // the context is released in the thread that made it
   }
-  std::vector<uint8_t> handle(int kind, const std::vector<uint8_t>& bytes) {
+  Bytes handle(int kind, const Bytes& bytes) {
     if (kind == kPrepare) {
       setup_ = std::make_unique<WorkerSetupMessage>();
       decode_setup(bytes, *setup_);
@@ -351,9 +396,8 @@ class DeviceServer {
     }
     if (!worker_) throw RuntimeFailure("a request before the worker's set-up");
     if (kind == kProbe) {
-      ByteReader r(bytes, "a probe request");
-      uint32_t count = r.pod<uint32_t>(), spp = r.pod<uint32_t>();
-      r.done();
+      uint32_t count = 0, spp = 0;
+      decode_probe_request(bytes, &count, &spp);
       return encode_probe(worker_->probe(count, spp));
     }
     if (kind != kRun) throw RankMessageError("a request of unknown kind " + std::to_string(kind));
@@ -361,7 +405,7 @@ class DeviceServer {
     if (faults_.unit_delay > 0) std::this_thread::sleep_for(std::chrono::duration<double>(faults_.unit_delay));
     std::vector<uint32_t> input;
     WorkUnit unit = decode_unit(bytes, input);
-    std::vector<uint8_t> answer = encode_output(worker_->run(unit, unit.upload ? &input : nullptr));
+    Bytes answer = encode_output(worker_->run(unit, unit.upload ? &input : nullptr));
     if (faults_.corrupt_answers) answer[answer.size() / 2] ^= 1;
     ++*units_;
     return answer;
@@ -377,7 +421,7 @@ class DeviceServer {
   std::unique_ptr<DeviceWorker> worker_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<std::pair<int, std::vector<uint8_t>>> jobs_;
+  std::deque<std::pair<int, Bytes>> jobs_;
   bool quit_ = false;
   std::thread thread_;
 };
@@ -416,7 +460,7 @@ std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::v
     auto link = std::make_unique<RankLink>();
     link->rank = r;
     link->host = "rank " + std::to_string(r);
-    std::optional<std::vector<uint8_t>> bytes;
+    std::optional<Bytes> bytes;
     std::string error;
     try {
       bytes = receive_bytes(r, kTagHello, after(timeout_seconds + kSetupSeconds));
@@ -459,10 +503,10 @@ std::vector<std::string> RankJob::lost_ranks() const {
 void RankJob::finish() {
   if (rank_ != 0 || impl_->finished) return;
   impl_->finished = true;
-  // Every rank, lost ones too (a short message is sent without waiting for its receiver).
+  // Every rank, lost ones too (a lost rank that is gone never takes it: it is given up after a second).
   for (int r = 1; r < size_; ++r) {
     try {
-      send_bytes(r, kTagQuit, {});
+      send_bytes(r, kTagQuit, Bytes{}, after(1.0));
     } catch (const std::exception&) {
     }
   }
@@ -494,7 +538,7 @@ int RankJob::serve(const std::string& selector, const Faults& faults) {
         continue;
       }
       const int tag = status.MPI_TAG;
-      std::optional<std::vector<uint8_t>> bytes = receive_bytes(0, tag, Clock::time_point::max());
+      std::optional<Bytes> bytes = receive_bytes(0, tag, Clock::time_point::max());
       if (tag == kTagQuit) break;
       if (tag == kTagScene) {
         try {

@@ -128,6 +128,10 @@ TEST(RankMessages, SettingsUnitsAndResultsComeBack) {
   EXPECT_EQ(r.lanes, 16u);
   EXPECT_EQ(r.buffers.at("light_vertices"), 4096u);
   EXPECT_EQ(decode_probe(encode_probe(0x1234567890abcdefull), "rank 1"), 0x1234567890abcdefull);
+  uint32_t count = 0, spp = 0;
+  decode_probe_request(encode_probe_request(64, 4), &count, &spp);
+  EXPECT_EQ(count, 64u);
+  EXPECT_EQ(spp, 4u);
 
   RankHello hello{"node7", {{"pthread-x", "Portable Computing Language", false, true, 16, 1ull << 34}}, ""};
   RankHello h = decode_hello(encode_hello(hello));
