@@ -50,6 +50,7 @@ int RankJob::serve(const std::string&, const Faults&) { return 0; }
 #include <csignal>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -155,14 +156,12 @@ bool wait_until(MPI_Request& request, Clock::time_point deadline, bool eager = f
   }
 }
 
-// A message sent with send_bytes, or nothing if it has not come whole by `deadline`.
-std::optional<Bytes> receive_bytes(int from, int tag, Clock::time_point deadline) {
-  uint64_t n = 0;
-  MPI_Request request;
-  check_mpi(MPI_Irecv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &request), "MPI_Irecv");
-  if (!wait_until(request, deadline)) return std::nullopt;
+// The bytes of a message whose size came (receive_bytes, AnswerCourier), or nothing if they have not come by
+// `deadline`.
+std::optional<Bytes> receive_body(int from, int tag, uint64_t n, Clock::time_point deadline) {
   if (n > kMaxMessageBytes) throw RankMessageError("a message of " + std::to_string(n) + " bytes");
   Bytes bytes(n);
+  MPI_Request request;
   for (uint64_t at = 0; at < n; at += kChunkBytes) {
     check_mpi(MPI_Irecv(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, &request),
               "MPI_Irecv");
@@ -170,6 +169,96 @@ std::optional<Bytes> receive_bytes(int from, int tag, Clock::time_point deadline
   }
   return bytes;
 }
+
+// A message sent with send_bytes, or nothing if it has not come whole by `deadline`.
+std::optional<Bytes> receive_bytes(int from, int tag, Clock::time_point deadline) {
+  uint64_t n = 0;
+  MPI_Request request;
+  check_mpi(MPI_Irecv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &request), "MPI_Irecv");
+  if (!wait_until(request, deadline)) return std::nullopt;
+  return receive_body(from, tag, n, deadline);
+}
+
+// Rank 0's answers from every remote device, received by one thread: a device's thread waits on a condition
+// instead of polling MPI itself, so that rank 0 wakes every 0.5 ms once, not once for each remote device.
+class AnswerCourier {
+ public:
+  AnswerCourier() : thread_([this] { run(); }) {}
+  ~AnswerCourier() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    work_.notify_all();
+    thread_.join();
+  }
+  // As receive_bytes.
+  std::optional<Bytes> receive(int from, int tag, Clock::time_point deadline) {
+    auto wait = std::make_shared<Wait>();
+    wait->from = from;
+    wait->tag = tag;
+    wait->deadline = deadline;
+    check_mpi(MPI_Irecv(&wait->size, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &wait->header), "MPI_Irecv");
+    std::unique_lock<std::mutex> lock(mutex_);
+    waits_.push_back(wait);
+    work_.notify_all();
+    done_.wait(lock, [&] { return wait->finished; });
+    if (wait->error) std::rethrow_exception(wait->error);
+    return std::move(wait->bytes);
+  }
+
+ private:
+  struct Wait {
+    int from = 0, tag = 0;
+    Clock::time_point deadline;
+    uint64_t size = 0;
+    MPI_Request header = MPI_REQUEST_NULL;
+    bool finished = false;
+    std::optional<Bytes> bytes;
+    std::exception_ptr error;
+  };
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      work_.wait(lock, [&] { return quit_ || !waits_.empty(); });
+      if (waits_.empty()) return;  // quit, with nobody waiting
+      bool finished = false;
+      for (auto it = waits_.begin(); it != waits_.end();) {
+        Wait& w = **it;
+        try {
+          int done = 0;
+          check_mpi(MPI_Test(&w.header, &done, MPI_STATUS_IGNORE), "MPI_Test");
+          if (!done && Clock::now() < w.deadline) {
+            ++it;
+            continue;
+          }
+          if (done) {
+            w.bytes = receive_body(w.from, w.tag, w.size, w.deadline);
+          } else {
+            MPI_Cancel(&w.header);
+            MPI_Wait(&w.header, MPI_STATUS_IGNORE);
+          }
+        } catch (...) {
+          w.error = std::current_exception();
+        }
+        w.finished = finished = true;
+        it = waits_.erase(it);
+      }
+      if (finished) done_.notify_all();
+      if (!waits_.empty()) {
+        lock.unlock();
+        std::this_thread::sleep_for(kPoll);
+        lock.lock();
+      }
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable work_, done_;
+  std::vector<std::shared_ptr<Wait>> waits_;
+  bool quit_ = false;
+  std::thread thread_;
+};
 
 Clock::time_point after(double seconds) {
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -192,6 +281,7 @@ struct RankLink {
 
 struct RankJob::Impl {
   bool initialised = false;  // MPI_Init_thread was called (and MPI_Finalize is due)
+  std::unique_ptr<AnswerCourier> courier;  // while remote devices render
   std::vector<std::unique_ptr<RankLink>> links;  // ranks 1 .. K-1
   double timeout = 30;
   bool finished = false;
@@ -296,7 +386,7 @@ class RemoteWorker : public UnitWorker {
     try {
       if (!send_bytes(link_.rank, device_tag(kind, device_), std::move(request), deadline))
         lose("it did not take " + what + " within " + whole(seconds) + " s");
-      answer = receive_bytes(link_.rank, device_tag(kAnswer, device_), deadline);
+      answer = job_.courier->receive(link_.rank, device_tag(kAnswer, device_), deadline);
     } catch (const RankMessageError& e) {
       lose(std::string("sent garbage: ") + e.what());
     } catch (const MpiError& e) {
@@ -455,6 +545,7 @@ RankJob::~RankJob() {
 
 std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::vector<std::string>* warnings) {
   impl_->timeout = timeout_seconds;
+  if (size_ > 1) impl_->courier = std::make_unique<AnswerCourier>();
   std::vector<WorkerSource> workers;
   for (int r = 1; r < size_; ++r) {
     auto link = std::make_unique<RankLink>();
@@ -503,6 +594,7 @@ std::vector<std::string> RankJob::lost_ranks() const {
 void RankJob::finish() {
   if (rank_ != 0 || impl_->finished) return;
   impl_->finished = true;
+  impl_->courier.reset();  // nobody waits for an answer any more: the render's worker threads have ended
   // Every rank, lost ones too (a lost rank that is gone never takes it: it is given up after a second).
   for (int r = 1; r < size_; ++r) {
     try {
