@@ -34,8 +34,9 @@ class MpiEnvironment : public ::testing::Environment {
 };
 const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
 
+// Each job within 3 minutes (they take seconds): a job that hangs fails its test instead of holding CI.
 std::string mpiexec(const std::string& options = "") {
-  return std::string(PATHCL_MPIEXEC) + " --oversubscribe " + options + " ";
+  return "timeout -k 10 180 " + std::string(PATHCL_MPIEXEC) + " --oversubscribe " + options + " ";
 }
 
 // Runs a shell command; its exit code (-1 if it did not exit), stderr in *err.
