@@ -74,9 +74,11 @@ nlohmann::json read_stats(const std::string& path) { return nlohmann::json::pars
 
 TEST(MpiRender, AnyNumberOfRanksGivesTheOneProcessBits) {
   // path (ordered units), bdpt (ordered and commutative layers) and vcm (per-sample units: one iteration's
-  // light paths and camera paths in one unit).
-  for (const std::string integrator : {"path", "bdpt", "vcm"}) {
+  // light paths and camera paths in one unit) on 1, 2 and 3 ranks; light, bpm and sppm on 3.
+  for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm"}) {
+    const bool all_counts = integrator == "path" || integrator == "bdpt" || integrator == "vcm";
     for (int ranks : {1, 2, 3}) {
+      if (!all_counts && ranks != 3) continue;
       SCOPED_TRACE(integrator + " on " + std::to_string(ranks) + " ranks");
       std::string file = out("ranks.exr"), stats = out("ranks.json"), err;
       // Two ranks: rank 0 only coordinates, so that every unit crosses between processes.
