@@ -691,6 +691,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--debug-rank-delay", ra.rank_faults.unit_delay)->group("");
   render_cmd->add_option("--debug-rank-kill-after", ra.rank_faults.kill_after_units)->group("");
   render_cmd->add_flag("--debug-rank-corrupt", ra.rank_faults.corrupt_answers)->group("");
+  render_cmd->add_flag("--debug-rank-perturb", ra.rank_faults.perturb)->group("");
 
   app.add_subcommand("devices", "list OpenCL platforms and devices");
 

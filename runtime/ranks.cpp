@@ -478,6 +478,7 @@ class DeviceServer {
     if (kind == kPrepare) {
       setup_ = std::make_unique<WorkerSetupMessage>();
       decode_setup(bytes, *setup_);
+      setup_->settings.fault.perturb |= faults_.perturb;
       if (!*scene_) throw RuntimeFailure("no device scene came: " + *scene_error_);
       worker_.reset();
       worker_ = std::make_unique<DeviceWorker>(info_);

@@ -48,11 +48,12 @@ class RankJob {
   void finish();
 
   // Test-only faults of a rank other than 0: a delay before each unit, the process killed (SIGKILL) when
-  // asked for a unit after this many, damaged answers.
+  // asked for a unit after this many, damaged answers, arithmetic that differs in one operation.
   struct Faults {
     double unit_delay = 0;
     int64_t kill_after_units = -1;
     bool corrupt_answers = false;  // a byte of every unit's answer flipped: a rank that sends garbage
+    bool perturb = false;          // its devices built with PC_DEBUG_PERTURB: another arithmetic class
   };
   // Ranks other than 0: sends rank 0 this rank's devices (those `selector` picks, as --device) and runs the
   // units rank 0 sends until it says the render is over. Returns the exit code (1 after a failure, which it

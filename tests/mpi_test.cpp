@@ -2,7 +2,8 @@
 // (shared memory, several processes per core): the image is the bits of a one-process render for any number
 // of ranks, device sets and timings, for path and for the splatting integrators bdpt and vcm; a killed rank
 // ends the job and the checkpoint resumes with another number of ranks; with --enable-recovery a lost rank's
-// units are rendered by the others; a rank that sends garbage is dropped.
+// units are rendered by the others; a rank that sends garbage is dropped; a rank of another arithmetic class is
+// left out unless mixed devices are allowed.
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -182,6 +183,36 @@ TEST(MpiRender, ARankThatSendsGarbageIsDropped) {
   EXPECT_TRUE(same_bits(read_exr(file), reference("bdpt")));
   EXPECT_EQ(read_stats(stats)["lost_ranks"], 1);
   EXPECT_NE(err.find("sent garbage"), std::string::npos) << err;
+}
+
+TEST(MpiRender, ARankOfAnotherArithmeticClassIsLeftOutUnlessMixedIsAllowed) {
+  // Rank 1's devices compute other bits (PC_DEBUG_PERTURB): its probe differs from rank 0's device's, so it
+  // is left out and the image keeps the one-process bits; with --allow-mixed-devices it renders, and the
+  // image says determinism "mixed".
+  for (bool mixed : {false, true}) {
+    SCOPED_TRACE(mixed ? "mixed allowed" : "left out");
+    std::string file = out("class.exr"), stats = out("class.json"), err;
+    ASSERT_EQ(run(mpiexec() + "-n 1 " + kPathcl + " render " + kScene + settings("path") + " -o " + file + " --stats " +
+                      stats + (mixed ? " --allow-mixed-devices" : "") + " : -n 1 " + kPathcl + " render " + kScene +
+                      " --debug-rank-perturb",
+                  &err),
+              0)
+        << err;
+    nlohmann::json j = read_stats(stats);
+    ASSERT_EQ(j["devices"].size(), 2u);
+    EXPECT_EQ(j["devices"][1]["rank"], 1);
+    EXPECT_EQ(j["devices"][1]["class"], 1);
+    EXPECT_EQ(j["lost_ranks"], 0);
+    if (!mixed) {
+      EXPECT_TRUE(same_bits(read_exr(file), reference("path")));
+      EXPECT_EQ(j["devices"][1]["used"], false);
+      EXPECT_EQ(j["determinism"], "bitwise");
+      EXPECT_NE(err.find("another arithmetic class"), std::string::npos) << err;
+    } else {
+      EXPECT_EQ(j["devices"][1]["used"], true);
+      EXPECT_EQ(j["determinism"], "mixed");
+    }
+  }
 }
 
 TEST(MpiRender, BadRankOptionsAreUsageErrors) {
