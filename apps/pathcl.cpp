@@ -361,7 +361,9 @@ int run_render(const RenderArgs& a, RankJob& job) {
   for (const std::string& w : rank_warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (workers.empty())
     throw UsageError("--coordinator-only: no other rank has a device to render on (run under mpirun with more than one rank)");
-  bool show = !a.quiet && isatty(STDERR_FILENO);
+  // Someone watches: stderr is a terminal, or under mpirun rank 0's stdout is (Open MPI gives rank 0 a terminal
+  // for stdout only; its stderr reaches mpirun's terminal through a pipe, progress bar and all).
+  bool show = !a.quiet && (isatty(STDERR_FILENO) || (job.size() > 1 && isatty(STDOUT_FILENO)));
   size_t pixels = size_t(s.device.header.width) * s.device.header.height;
   opt.interrupt = stop_signal();
   RenderCallbacks callbacks;

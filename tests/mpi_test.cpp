@@ -215,6 +215,19 @@ TEST(MpiRender, ARankOfAnotherArithmeticClassIsLeftOutUnlessMixedIsAllowed) {
   }
 }
 
+TEST(MpiRender, RankZeroShowsTheProgressBarOnMpirunsTerminal) {
+  // script(1) gives mpiexec a terminal; Open MPI passes rank 0 a terminal for stdout and a pipe for stderr.
+  std::string file = out("progress.exr"), log = out("progress.txt"), err;
+  ASSERT_EQ(run("script -qec \"" + mpiexec("-n 2") + kPathcl + " render " + kScene + settings("path") + " -o " + file +
+                    "\" " + log,
+                &err),
+            0)
+      << err;
+  const std::string text = read_text_file(log);
+  EXPECT_NE(text.find("12/12 spp"), std::string::npos) << text;
+  EXPECT_NE(text.find("Msamples/s  ETA"), std::string::npos) << text;
+}
+
 TEST(MpiRender, BadRankOptionsAreUsageErrors) {
   std::string err;
   EXPECT_EQ(run(kPathcl + " render " + kScene + " --rank-timeout 0 -o " + out("x.exr"), &err), 2);
