@@ -220,7 +220,7 @@ nlohmann::json device_stats(const RenderResult& r) {
 }
 
 // An MPI render's ranks: each one's host, devices and what they did, summed over its devices.
-nlohmann::json rank_stats(const RenderResult& r, int ranks, const std::vector<std::string>& lost) {
+nlohmann::json rank_stats(const RenderResult& r, int ranks, const std::vector<RankJob::LostRank>& lost) {
   nlohmann::json list = nlohmann::json::array();
   for (int k = 0; k < ranks; ++k) {
     nlohmann::json devices = nlohmann::json::array();
@@ -238,8 +238,7 @@ nlohmann::json rank_stats(const RenderResult& r, int ranks, const std::vector<st
       idle += d.idle_seconds;
       kernel += d.kernel_seconds;
     }
-    const std::string prefix = "rank " + std::to_string(k) + " ";
-    bool is_lost = std::any_of(lost.begin(), lost.end(), [&](const std::string& l) { return l.rfind(prefix, 0) == 0; });
+    bool is_lost = std::any_of(lost.begin(), lost.end(), [&](const RankJob::LostRank& l) { return l.rank == k; });
     list.push_back({{"rank", k}, {"host", k == 0 ? host_name() : host}, {"devices", devices},
                     {"units", units}, {"samples", samples}, {"kernel_seconds", kernel}, {"transfer_seconds", transfer},
                     {"transfer_bytes", bytes}, {"idle_seconds", idle}, {"lost", is_lost}});
@@ -378,7 +377,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
                                               : "the checkpoint " + a.checkpoint + " holds the render as of its last save"));
   RenderResult r = render(workers, s.device, opt, callbacks);
   job.finish();
-  const std::vector<std::string> lost = job.lost_ranks();
+  const std::vector<RankJob::LostRank> lost = job.lost_ranks();
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (show && budgeted) std::fprintf(stderr, "stopped by %s after %u spp\n", r.stop_reason.c_str(), r.film.spp);
   if (!log.path.empty() && (r.film.spp & (r.film.spp - 1)) != 0)
@@ -463,7 +462,8 @@ int run_render(const RenderArgs& a, RankJob& job) {
     std::fprintf(stderr, "warning: %llu fixed-point splat overflows (a bug: the splat scale is too fine for this scene)\n",
                  (unsigned long long)r.splat_overflows);
   if (!lost.empty()) {  // the image is whole and exact; the job script should still hear of the lost ranks
-    for (const std::string& l : lost) std::fprintf(stderr, "error: lost %s; the other ranks rendered the whole image\n", l.c_str());
+    for (const RankJob::LostRank& l : lost)
+      std::fprintf(stderr, "error: lost %s; the other ranks rendered the whole image\n", l.why.c_str());
     std::fprintf(stderr, "error: lost_ranks = %zu\n", lost.size());
     return 1;
   }

@@ -37,7 +37,7 @@ RankJob::RankJob(int*, char***) {
 }
 RankJob::~RankJob() = default;
 std::vector<WorkerSource> RankJob::remote_workers(double, std::vector<std::string>*) { return {}; }
-std::vector<std::string> RankJob::lost_ranks() const { return {}; }
+std::vector<RankJob::LostRank> RankJob::lost_ranks() const { return {}; }
 void RankJob::finish() {}
 int RankJob::serve(const std::string&, const Faults&) { return 0; }
 
@@ -100,15 +100,18 @@ using Bytes = std::vector<uint8_t>;
 std::mutex abandoned_mutex;
 std::vector<std::shared_ptr<const void>> abandoned;
 
-// Completes a send by `deadline`, else says false and leaves it pending. Polls without sleeping: Open MPI moves
-// a large message's fragments only while the sender calls into it.
-bool wait_sent(MPI_Request& request, Clock::time_point deadline) {
+// Polls a request until it completes (true) or `deadline` passes (false: it is left pending). `sleep`: wait
+// 0.5 ms between polls, for a message that may take long to start (Open MPI's blocking calls spin); else
+// yield only, for one known to be on its way, since Open MPI moves a large message's fragments only while both
+// sides call into it (sleeping between polls made a 1.6 MB result take 15 ms).
+bool poll_until(MPI_Request& request, Clock::time_point deadline, bool sleep) {
   for (;;) {
     int done = 0;
     check_mpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
     if (done) return true;
     if (Clock::now() >= deadline) return false;
-    std::this_thread::yield();
+    if (sleep) std::this_thread::sleep_for(kPoll);
+    else std::this_thread::yield();
   }
 }
 
@@ -117,14 +120,13 @@ bool wait_sent(MPI_Request& request, Clock::time_point deadline) {
 bool send_bytes(int to, int tag, std::shared_ptr<const Bytes> bytes, Clock::time_point deadline) {
   auto size = std::make_shared<const uint64_t>(bytes->size());
   MPI_Request request;
-  bool sent = true;
   check_mpi(MPI_Isend(size.get(), 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD, &request), "MPI_Isend");
-  sent = wait_sent(request, deadline);
+  bool sent = poll_until(request, deadline, false);
   for (uint64_t at = 0; sent && at < *size; at += kChunkBytes) {
     check_mpi(MPI_Isend(bytes->data() + at, int(std::min(kChunkBytes, *size - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD,
                         &request),
               "MPI_Isend");
-    sent = wait_sent(request, deadline);
+    sent = poll_until(request, deadline, false);
   }
   if (!sent) {
     std::lock_guard<std::mutex> lock(abandoned_mutex);
@@ -138,22 +140,17 @@ bool send_bytes(int to, int tag, Bytes bytes, Clock::time_point deadline = Clock
   return send_bytes(to, tag, std::make_shared<const Bytes>(std::move(bytes)), deadline);
 }
 
-// Completes a request by `deadline`, or cancels it and says false. `eager`: the message is known to be on its
-// way (its size came): poll without sleeping, since Open MPI moves a large message's fragments only while the
-// receiver calls into it (sleeping 0.5 ms between polls made a 1.6 MB result take 15 ms).
-bool wait_until(MPI_Request& request, Clock::time_point deadline, bool eager = false) {
-  for (;;) {
-    int done = 0;
-    check_mpi(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
-    if (done) return true;
-    if (Clock::now() >= deadline) {
-      MPI_Cancel(&request);
-      MPI_Wait(&request, MPI_STATUS_IGNORE);
-      return false;
-    }
-    if (eager) std::this_thread::yield();
-    else std::this_thread::sleep_for(kPoll);
-  }
+// A receive given up: cancelled, so that no late message lands in its buffer.
+void cancel_receive(MPI_Request& request) {
+  MPI_Cancel(&request);
+  MPI_Wait(&request, MPI_STATUS_IGNORE);
+}
+
+// A receive completed by `deadline`, or cancelled (false).
+bool received_by(MPI_Request& request, Clock::time_point deadline, bool sleep) {
+  if (poll_until(request, deadline, sleep)) return true;
+  cancel_receive(request);
+  return false;
 }
 
 // The bytes of a message whose size came (receive_bytes, AnswerCourier), or nothing if they have not come by
@@ -165,7 +162,7 @@ std::optional<Bytes> receive_body(int from, int tag, uint64_t n, Clock::time_poi
   for (uint64_t at = 0; at < n; at += kChunkBytes) {
     check_mpi(MPI_Irecv(bytes.data() + at, int(std::min(kChunkBytes, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, &request),
               "MPI_Irecv");
-    if (!wait_until(request, deadline, true)) return std::nullopt;
+    if (!received_by(request, deadline, false)) return std::nullopt;
   }
   return bytes;
 }
@@ -175,7 +172,7 @@ std::optional<Bytes> receive_bytes(int from, int tag, Clock::time_point deadline
   uint64_t n = 0;
   MPI_Request request;
   check_mpi(MPI_Irecv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, &request), "MPI_Irecv");
-  if (!wait_until(request, deadline)) return std::nullopt;
+  if (!received_by(request, deadline, true)) return std::nullopt;
   return receive_body(from, tag, n, deadline);
 }
 
@@ -235,8 +232,7 @@ class AnswerCourier {
           if (done) {
             w.bytes = receive_body(w.from, w.tag, w.size, w.deadline);
           } else {
-            MPI_Cancel(&w.header);
-            MPI_Wait(&w.header, MPI_STATUS_IGNORE);
+            cancel_receive(w.header);
           }
         } catch (...) {
           w.error = std::current_exception();
@@ -288,8 +284,6 @@ struct RankJob::Impl {
   std::mutex scene_mutex;
   const DeviceScene* encoded_scene = nullptr;
   std::shared_ptr<const Bytes> scene_bytes;
-  mutable std::mutex lost_mutex;
-  std::vector<std::string> lost;
 
   // The device scene to a rank, once (the first of its workers to prepare sends it; the others wait); false
   // when the rank has not taken it by `deadline`.
@@ -309,15 +303,10 @@ struct RankJob::Impl {
     return link.scene_sent;
   }
   void lose(RankLink& link, const std::string& why) {
-    {
-      std::lock_guard<std::mutex> lock(link.mutex);
-      if (!link.lost.empty()) return;
-      link.lost = why;
-    }
-    std::lock_guard<std::mutex> lock(lost_mutex);
-    lost.push_back(link.who() + ": " + why);
+    std::lock_guard<std::mutex> lock(link.mutex);
+    if (link.lost.empty()) link.lost = why;
   }
-  std::string lost_why(RankLink& link) {
+  std::string lost_why(RankLink& link) const {
     std::lock_guard<std::mutex> lock(link.mutex);
     return link.lost;
   }
@@ -587,9 +576,11 @@ std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::v
   return workers;
 }
 
-std::vector<std::string> RankJob::lost_ranks() const {
-  std::lock_guard<std::mutex> lock(impl_->lost_mutex);
-  return impl_->lost;
+std::vector<RankJob::LostRank> RankJob::lost_ranks() const {
+  std::vector<LostRank> lost;
+  for (const auto& link : impl_->links)
+    if (std::string why = impl_->lost_why(*link); !why.empty()) lost.push_back({link->rank, link->who() + ": " + why});
+  return lost;
 }
 
 void RankJob::finish() {

@@ -42,8 +42,12 @@ class RankJob {
   // Rank 0: the devices of ranks 1 .. K-1 as unit workers (each rank's list, in rank order). A rank whose
   // devices could not be chosen is left out with a warning. timeout_seconds: --rank-timeout.
   std::vector<WorkerSource> remote_workers(double timeout_seconds, std::vector<std::string>* warnings);
-  // Rank 0: the ranks lost during the render, each with why ("rank 2 (host): no answer ...").
-  std::vector<std::string> lost_ranks() const;
+  // Rank 0: the ranks lost during the render, in rank order.
+  struct LostRank {
+    int rank = 0;
+    std::string why;  // "rank 2 (host): no answer ..."
+  };
+  std::vector<LostRank> lost_ranks() const;
   // Rank 0: ends the job's other ranks (also done when the job goes away).
   void finish();
 

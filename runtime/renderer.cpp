@@ -519,8 +519,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
 
 RenderResult render(const std::vector<DeviceInfo>& devices, const DeviceScene& scene, const RenderOptions& options,
                     const RenderCallbacks& callbacks) {
-  if (devices.empty()) throw UsageError("no device to render on");
-  return render_on(device_workers(devices), scene, options, callbacks);
+  return render(device_workers(devices), scene, options, callbacks);
 }
 
 std::vector<WorkerSource> device_workers(const std::vector<DeviceInfo>& devices) {
