@@ -27,6 +27,23 @@ inline float2 env_uv(float3 d) {
   return (float2)(fmin(u, 1.0f), pc_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
 }
 
+/* A map placed by a rotation (the environment's `transform`): light.position holds the unit quaternion
+ * (x, y, z, w) that takes the map's directions to the world's, or is all 0 for the map as it is, which
+ * then stays bit for bit untouched. q v q* written out as v + 2 w (q x v) + 2 q x (q x v). */
+inline float3 env_rotated(float3 axis, float w, float3 v) {
+  float3 t = 2.0f * (float3)(axis.y * v.z - axis.z * v.y, axis.z * v.x - axis.x * v.z, axis.x * v.y - axis.y * v.x);
+  return v + w * t + (float3)(axis.y * t.z - axis.z * t.y, axis.z * t.x - axis.x * t.z, axis.x * t.y - axis.y * t.x);
+}
+inline bool env_is_rotated(Light light) {
+  return light.position.x != 0.0f || light.position.y != 0.0f || light.position.z != 0.0f || light.position.w != 0.0f;
+}
+inline float3 env_to_map(Light light, float3 world) {
+  return env_is_rotated(light) ? env_rotated(-light.position.xyz, light.position.w, world) : world;
+}
+inline float3 env_to_world(Light light, float3 map) {
+  return env_is_rotated(light) ? env_rotated(light.position.xyz, light.position.w, map) : map;
+}
+
 inline uint2 env_texel(Texture t, float2 uv) {
   return (uint2)(min((uint)(uv.x * (float)t.width), t.width - 1u), min((uint)(uv.y * (float)t.height), t.height - 1u));
 }
@@ -44,7 +61,8 @@ inline float3 env_map_radiance(Light light, Texture t, __global const uint* texe
 
 inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
-  if (light.texture != PC_INVALID) return env_map_radiance(light, textures[light.texture], texels, env_uv(d));
+  if (light.texture != PC_INVALID)
+    return env_map_radiance(light, textures[light.texture], texels, env_uv(env_to_map(light, d)));
 #endif
   return light.emission.xyz;
 }
@@ -54,8 +72,9 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
-    float2 uv = env_uv(d);
-    float sin_theta = env_sin_theta(d);
+    float3 m = env_to_map(light, d);
+    float2 uv = env_uv(m);
+    float sin_theta = env_sin_theta(m);
     if (sin_theta <= 0.0f) return 0.0f;
     uint2 c = env_texel(t, uv);
     __global const float* row = dist + t.height + 1 + c.y * (t.width + 1);
@@ -89,7 +108,7 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
     float sin_theta = env_sin_theta(d); /* as env_pdf computes it, so that MIS sees one density */
     *pdf = sin_theta > 0.0f ? dr * dc * (float)(t.width * t.height) / (2.0f * PC_PI * PC_PI * sin_theta) : 0.0f;
     *le = env_map_radiance(light, t, texels, (float2)(uu, v));
-    return d;
+    return env_to_world(light, d);
   }
 #endif
   *pdf = 0.25f * PC_INV_PI;

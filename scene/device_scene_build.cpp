@@ -10,6 +10,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
 #include <glm/matrix.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -59,11 +60,20 @@ uint32_t opacity_format(const TextureImage& t) {
   return PC_TEXELS_OPACITY8_RED;
 }
 
+// An environment's rotation as kernels/environment.cl takes it: the unit quaternion (x, y, z, w), or all
+// 0 for none (the identity), which leaves the map's lookups as they were bit for bit.
+pc_float4 environment_rotation(const glm::dmat3& rotation) {
+  if (rotation == glm::dmat3(1.0)) return pc_float4{};
+  glm::dquat q = glm::normalize(glm::quat_cast(rotation));
+  return f4(glm::vec3(q.x, q.y, q.z), float(q.w));
+}
+
 SceneHeader camera_header(const CameraDesc& c, const glm::dvec3& origin) {
   SceneHeader h{};
   glm::dvec3 forward = glm::normalize(c.look_at - c.position);
   glm::dvec3 right = glm::normalize(glm::cross(forward, c.up));
   glm::dvec3 up = glm::cross(right, forward);
+  if (c.left_handed) right = -right;  // the mirrored image of a left-handed camera frame
   double tan_half = std::tan(glm::radians(double(c.fov_y_degrees)) * 0.5);
   double aspect = double(c.width) / double(c.height);
   h.cam_position = f4(glm::vec3(c.position - origin));  // 0 for DeviceOrigin::camera
@@ -460,6 +470,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       light.type = l.type;
       light.emission = f4(l.emission);
       light.position = f4(glm::vec3(l.position - out.origin));  // camera-relative, like the geometry
+      if (l.type == PC_LIGHT_ENVIRONMENT) light.position = environment_rotation(l.rotation);
       light.direction = f4(l.direction);
       light.prim = light.slot = PC_INVALID;
       light.cos_inner = l.cos_inner;

@@ -26,6 +26,7 @@ struct CameraDesc {
   float filter_radius = 0.5f; // pixels
   float filter_sigma = 0.5f;  // pixels (Gaussian)
   bool aimed = true;          // look_at is what the camera looks at (false: a glTF camera, one unit ahead)
+  bool left_handed = false;   // image x is cross(up, forward), as in pbrt's camera frame (camera.handedness)
 };
 
 // A material with its parameters as the kernels take them (kernels/shared/types.h, Material); which
@@ -77,6 +78,7 @@ struct LightDesc {
   glm::vec3 direction{0, -1, 0};
   float cos_inner = 1, cos_outer = 0;
   uint32_t texture = 0xffffffffu; // environment map in SceneDescription::textures
+  glm::dmat3 rotation{1.0};        // environment: takes the map's directions to the world's (its transform)
 };
 
 struct RenderSettings {

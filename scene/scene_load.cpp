@@ -26,6 +26,7 @@
 #include "scene/ply_stl_off_load.h"
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
+#include "scene/scene_import.h"
 #include "scene/scene_limits.h"
 #include "scene/texture_load.h"
 
@@ -41,14 +42,33 @@ struct Node {
   const std::string& file;
   const json& value;
   std::string path;
+  // An imported scene's entries and their places in the source file (ImportedScene::origins).
+  const std::vector<std::pair<std::string, std::string>>* origins = nullptr;
 
-  // "FILE: JSON.PATH", the start of every message about this value.
-  std::string place() const { return file + ": " + (path.empty() ? "(top level)" : path); }
+  // "FILE: JSON.PATH", the start of every message about this value; in an imported scene, the source
+  // place of the entry that holds it first ("cbox.xml:34: shape \"obj\": shapes[3].radius").
+  std::string place() const {
+    if (const std::string* origin = source_place()) return *origin + ": " + path;
+    return file + ": " + (path.empty() ? "(top level)" : path);
+  }
+  const std::string* source_place() const {
+    const std::string* best = nullptr;
+    size_t best_length = 0;
+    for (const auto& [prefix, origin] : origins ? *origins : std::vector<std::pair<std::string, std::string>>{}) {
+      bool holds = path.compare(0, prefix.size(), prefix) == 0 &&
+                   (path.size() == prefix.size() || path[prefix.size()] == '.' || path[prefix.size()] == '[');
+      if (holds && (!best || prefix.size() > best_length)) {
+        best = &origin;
+        best_length = prefix.size();
+      }
+    }
+    return best;
+  }
   [[noreturn]] void fail(const std::string& what) const { throw SceneError(place() + ": " + what); }
   Node at(const std::string& key) const {
-    return {file, value.at(key), path.empty() ? key : path + "." + key};
+    return {file, value.at(key), path.empty() ? key : path + "." + key, origins};
   }
-  Node at(size_t i) const { return {file, value.at(i), path + "[" + std::to_string(i) + "]"}; }
+  Node at(size_t i) const { return {file, value.at(i), path + "[" + std::to_string(i) + "]", origins}; }
   bool has(const std::string& key) const { return value.contains(key); }
 
   // Requires an object whose keys are all in `allowed` and that has every key in `required`.
@@ -169,7 +189,7 @@ uint32_t read_filter(const Node& n, CameraDesc& c) {
 
 CameraDesc read_camera(const Node& n) {
   n.expect_object({"type", "position", "look_at", "up", "fov_y_degrees", "width", "height", "aperture_radius",
-                   "focus_distance", "filter"},
+                   "focus_distance", "filter", "handedness"},
                   {"position", "look_at", "width", "height"});
   std::string type = n.has("type") ? n.at("type").string() : "perspective";
   if (type != "perspective" && type != "thin_lens")
@@ -178,6 +198,11 @@ CameraDesc read_camera(const Node& n) {
   c.position = n.at("position").dvec3();
   c.look_at = n.at("look_at").dvec3();
   if (n.has("up")) c.up = n.at("up").dvec3();
+  if (n.has("handedness")) {
+    const std::string h = n.at("handedness").string();
+    if (h != "right" && h != "left") n.at("handedness").fail("expected \"right\" or \"left\", got \"" + h + "\"");
+    c.left_handed = h == "left";
+  }
   if (n.has("fov_y_degrees")) {
     c.fov_y_degrees = n.at("fov_y_degrees").positive_setting();
     if (c.fov_y_degrees >= 180) n.at("fov_y_degrees").fail("expected a field of view below 180 degrees");
@@ -396,6 +421,22 @@ glm::vec3 read_unit_direction(const Node& n) {
   return glm::vec3(glm::normalize(d));
 }
 
+glm::dmat4 read_transform(const Node& n);
+
+// An environment's transform: a rotation only (orthonormal within 1e-5, not mirroring, no translation),
+// which places the map: a world direction looks it up at the direction the rotation takes there.
+glm::dmat3 read_rotation(const Node& n) {
+  const glm::dmat4 m = read_transform(n);
+  const glm::dmat3 r(m);
+  const glm::dmat3 error = glm::transpose(r) * r - glm::dmat3(1.0);
+  double largest = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) largest = std::max(largest, std::abs(error[i][j]));
+  if (m[3] != glm::dvec4(0, 0, 0, 1) || largest > 1e-5 || glm::determinant(r) < 0)
+    n.fail("an environment's transform may only rotate (no translation, scale, shear or mirroring)");
+  return r;
+}
+
 LightDesc read_light(const Node& n) {
   if (!n.value.is_object() || !n.has("type")) n.fail("expected an object with a \"type\"");
   std::string type = n.at("type").string();
@@ -427,8 +468,9 @@ LightDesc read_light(const Node& n) {
     l.direction = read_unit_direction(n.at("direction"));
     l.emission = n.at("irradiance").light_color();
   } else if (type == "environment") {
-    n.expect_object({"type", "radiance", "file", "scale"});
+    n.expect_object({"type", "radiance", "file", "scale", "transform"});
     l.type = PC_LIGHT_ENVIRONMENT;
+    if (n.has("transform")) l.rotation = read_rotation(n.at("transform"));
     if (n.has("radiance") == n.has("file")) n.fail("an environment light needs either radiance or file");
     if (n.has("radiance")) {
       if (n.has("scale")) n.at("scale").fail("scale goes with file");
@@ -1026,12 +1068,20 @@ bool sampler_from_name(const std::string& name, uint32_t* sampler) {
 
 const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[sampler] : "unknown"; }
 
-SceneDescription load_scene(const std::string& path) {
+namespace {
+
+// The JSON document of a scene file: parsed and scanned (a JSON file), or translated (ImportedScene).
+ImportedScene scene_document(const std::string& path) {
   const std::string text = read_input_file(path, kSceneInput);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
-    throw SceneError(path + ": the file is empty, expected a JSON scene");
+    throw SceneError(path + ": the file is empty, expected a JSON scene (or a Mitsuba XML or pbrt scene)");
   if (text.rfind("\xff\xfe", 0) == 0 || text.rfind("\xfe\xff", 0) == 0)
     throw SceneError(path + ": the file is UTF-16, expected UTF-8 JSON");
+  switch (scene_file_format(text)) {
+    case SceneFileFormat::mitsuba_xml: return import_mitsuba_xml(path, text);
+    case SceneFileFormat::pbrt: return import_pbrt(path, text);
+    case SceneFileFormat::json: break;
+  }
   json root;
   try {
     root = json::parse(text);  // skips a UTF-8 byte order mark
@@ -1043,9 +1093,20 @@ SceneDescription load_scene(const std::string& path) {
     throw SceneError(path + ": malformed JSON: a number is beyond the range of a double");
   }
   check_json_text(path, text);
+  return ImportedScene{std::move(root), {}, {}};
+}
+
+}  // namespace
+
+ImportedScene load_scene_document(const std::string& path) { return scene_document(path); }
+
+SceneDescription load_scene(const std::string& path) {
+  const ImportedScene document = scene_document(path);
+  const json& root = document.scene;
   SceneDescription scene;
   scene.path = path;
-  Node top{path, root, ""};
+  scene.warnings = document.warnings;
+  Node top{path, root, "", &document.origins};
   if (!root.is_object())
     top.fail(std::string("expected an object with camera, materials and shapes, got ") + (root.is_array() ? "an " : "a ") +
              root.type_name());

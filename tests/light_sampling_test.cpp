@@ -10,11 +10,13 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/vec2.hpp>
 #include <gtest/gtest.h>
 
 #include "chi2.h"
 #include "runtime/image_io.h"
+#include "scene/scene_error.h"
 #include "test_support.h"
 
 namespace {
@@ -285,15 +287,15 @@ glm::dvec3 env_bilinear_at(const Image& img, glm::dvec2 p) {
 // How far a device lookup at texel coordinates p may be from env_bilinear_at: the float texel
 // coordinates, the kernel's and those of the float direction the host reads back, are each good to
 // about 2^-24 x the image's size in texels, and the lookup changes by at most the largest texel around
-// p per texel moved.
-double env_lookup_tolerance(const Image& img, glm::dvec2 p) {
+// p per texel moved. `moved`: further texels the direction may have moved (a rotated map's float rotation).
+double env_lookup_tolerance(const Image& img, glm::dvec2 p, double moved = 0) {
   double m = 0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
       const float* t = env_texel_at(img, int64_t(std::floor(p.y)) + dy, int64_t(std::floor(p.x)) + dx);
       m = std::max({m, double(t[0]), double(t[1]), double(t[2])});
     }
-  return 8 * std::ldexp(1.0, -24) * std::max(img.width, img.height) * m;
+  return (8 * std::ldexp(1.0, -24) * std::max(img.width, img.height) + moved) * m;
 }
 
 // The sampling weight each texel's cell should have: sin(theta at the row's centre) times the largest
@@ -314,28 +316,31 @@ std::vector<double> env_cell_weights(const Image& img) {
   return weights;
 }
 
-DeviceScene env_scene(const Image& img, double scale) {
+// `transform`: the environment's, e.g. R"(, "transform": {...})", or empty.
+DeviceScene env_scene(const Image& img, double scale, const std::string& transform = "") {
   write_exr(temp_dir() + "/env.exr", img);
   return load_world_scene(write_temp_file(
-      "env.json", scene_json("", R"({"type": "environment", "file": "env.exr", "scale": )" + std::to_string(scale) + "}")));
+      "env.json", scene_json("", R"({"type": "environment", "file": "env.exr", "scale": )" + std::to_string(scale) +
+                                     transform + "}")));
 }
 
-}  // namespace
-
-TEST(LightChi2, EnvironmentMap) {
+// The map sampled and looked up in its own frame, which `rotation` takes to the world's: the map placed as
+// it is, and rotated by the environment's transform.
+void check_environment_map(const glm::dmat3& rotation, const std::string& transform) {
   const Image img = synthetic_env_map();
   const double scale = 2;
-  DeviceScene scene = env_scene(img, scale);
+  DeviceScene scene = env_scene(img, scale, transform);
   ASSERT_EQ(scene.lights.size(), 1u);
   ASSERT_EQ(scene.header.env_light, 0u);
+  const glm::dmat3 to_map = glm::transpose(rotation);
   // Binned in the map's own frame (polar axis +y, phi from +x towards +z), 5 x 5 bins per texel, so the
   // piecewise-constant density has no edge inside a bin and its 1 / sin(theta) peak at the poles is
   // cancelled by the bins' own Jacobian. (About any other axis the quadrature of that integrable
   // singularity converges too slowly for a million samples.)
   SphereBinning aligned;
-  aligned.x = {1, 0, 0};
-  aligned.y = {0, 0, 1};
-  aligned.z = {0, 1, 0};
+  aligned.x = rotation * glm::dvec3(1, 0, 0);
+  aligned.y = rotation * glm::dvec3(0, 0, 1);
+  aligned.z = rotation * glm::dvec3(0, 1, 0);
   std::vector<LightCase> cases = {{"environment map, texel-aligned bins", scene, {0, 0, 0}, aligned, 0}};
   Chi2Family family(cases.size());
 
@@ -344,7 +349,8 @@ TEST(LightChi2, EnvironmentMap) {
   const std::vector<double> weights = env_cell_weights(img);
   double total = 0;
   for (double w : weights) total += w;
-  auto expected_pdf = [&](const glm::dvec3& d) {
+  auto expected_pdf = [&](const glm::dvec3& world) {
+    const glm::dvec3 d = to_map * world;
     uint32_t r, c;
     env_texel(img, d, &r, &c);
     double p_uv = weights[r * img.width + c] / total * img.width * img.height;
@@ -360,38 +366,45 @@ TEST(LightChi2, EnvironmentMap) {
     size_t dark_hits = 0, mismatches = 0, failed = 0;
     std::string first;
     for (size_t i = 0; i < s.n; ++i) {
-      glm::dvec3 wi = s.wi(i);
+      const glm::dvec3 world = s.wi(i), wi = to_map * world;  // wi: in the map's frame
       if (s.status(i) == 0) {
         // Drawn where the bilinear radiance is 0 (a cell's weight is its largest radiance; part of a cell
         // next to a dark one can be black), which is no failure of the sampling: binned with the others.
         glm::dvec2 p = env_texel_coordinates(img, wi);
         bool black = glm::length(wi) > 0 && glm::length(env_bilinear_at(img, p)) <= env_lookup_tolerance(img, p);
         if (!black) ++failed;
-        observed[black ? c.binning.bin_of(wi) : c.binning.count()] += 1;
+        observed[black ? c.binning.bin_of(world) : c.binning.count()] += 1;
         continue;
       }
-      observed[c.binning.bin_of(wi)] += 1;
+      observed[c.binning.bin_of(world)] += 1;
       uint32_t r, col;
       env_texel(img, wi, &r, &col);
       const glm::dvec2 p = env_texel_coordinates(img, wi);
       // At a cell edge the sample's cell is ambiguous (the test below checks those samples).
       if (near_texel_edge(img, wi)) continue;
+      // A rotated map: within 1e-3 of a pole (one sample in 10^5 or so), the float rotation's error of
+      // about 1e-7 in x and z is a fraction of sin(theta) that the density's 1e-3 would not cover.
+      if (rotation != glm::dmat3(1.0) && std::hypot(wi.x, wi.z) < 1e-3) continue;
       dark_hits += weights[r * img.width + col] == 0;
       // Radiance = scale x the bilinear lookup under the documented convention, within the rounding of
       // the float direction; the pdf as sampled = env_pdf = the density computed here from the cells.
       glm::dvec3 want = scale * env_bilinear_at(img, p);
-      double tol = scale * env_lookup_tolerance(img, p);
+      // A rotated map: the kernel's float rotation moves the direction by up to about 8 float ulps (2^-21),
+      // which moves u by that over 2 pi sin(theta) and v by that over pi.
+      const double moved = rotation == glm::dmat3(1.0) ? 0.0
+          : std::ldexp(1.0, -21) * (img.width / (2 * M_PI * std::max(std::hypot(wi.x, wi.z), 1e-6)) + img.height / M_PI);
+      double tol = scale * env_lookup_tolerance(img, p, moved);
       bool ok = s.status(i) == 1 && std::isinf(s.distance(i)) && std::isinf(s.hit_t(i)) &&
                 std::abs(s.le(i).x - want.x) <= tol && std::abs(s.le(i).y - want.y) <= tol &&
                 std::abs(s.le(i).z - want.z) <= tol && close_rel(s.pdf(i), s.pdf_eval(i), 1e-3) &&
-                close_rel(s.pdf(i), expected_pdf(wi), 1e-3);
+                close_rel(s.pdf(i), expected_pdf(world), 1e-3);
       if (!ok && !mismatches++) {
         char buf[300];
         std::snprintf(buf, sizeof buf,
                       "sample %zu: wi (%g %g %g) cell row %u col %u: Le (%g %g %g), bilinear x scale (%g %g %g), pdf %.7g, "
                       "env_pdf %.7g, from the cells %.7g",
                       i, wi.x, wi.y, wi.z, r, col, s.le(i).x, s.le(i).y, s.le(i).z, want.x, want.y, want.z, s.pdf(i),
-                      s.pdf_eval(i), expected_pdf(wi));
+                      s.pdf_eval(i), expected_pdf(world));
         first = buf;
       }
     }
@@ -405,6 +418,34 @@ TEST(LightChi2, EnvironmentMap) {
     EXPECT_EQ(dark_hits, 0u) << "samples in cells where nothing is emitted";
     EXPECT_EQ(mismatches, 0u) << first;
     EXPECT_NEAR(pdf_total, 1, 5e-4);
+  }
+}
+
+}  // namespace
+
+TEST(LightChi2, EnvironmentMap) { check_environment_map(glm::dmat3(1.0), ""); }
+
+// The map placed by a rotation (as Mitsuba's envmap to_world imports): sampled, looked up and its density
+// evaluated in its own frame.
+TEST(LightChi2, RotatedEnvironmentMap) {
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(1, 2, 3));
+  const glm::dmat3 rotation(glm::rotate(glm::dmat4(1.0), glm::radians(70.0), axis));
+  check_environment_map(rotation, R"(, "transform": {"rotate": {"axis": [1, 2, 3], "degrees": 70}})");
+}
+
+TEST(LightSampling, EnvironmentTransformMayOnlyRotate) {
+  const Image img = synthetic_env_map();
+  for (const char* transform : {R"(, "transform": {"scale": 2})", R"(, "transform": {"translate": [0, 1, 0]})",
+                                R"(, "transform": {"scale": [1, 1, -1]})"}) {
+    SCOPED_TRACE(transform);
+    try {
+      env_scene(img, 1, transform);
+      ADD_FAILURE() << "loaded";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("lights[0].transform: an environment's transform may only rotate"),
+                std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -165,6 +165,28 @@ TEST(SceneLoad, CameraLookingAlongTheDefaultUpIsAClearError) {
   EXPECT_NE(load_error(path).find("camera: up is parallel to the view direction"), std::string::npos) << load_error(path);
 }
 
+TEST(SceneLoad, LeftHandedCameraMirrorsTheImageOnly) {
+  // pbrt's camera frame: the image's x axis is cross(up, forward), where pathcl's is cross(forward, up).
+  auto header = [](const std::string& handedness) {
+    return load_device_scene(write_temp_file("hand.json", R"({"camera": {"position": [1,2,3], "look_at": [0,0.5,0],
+        "up": [0.1,1,0], "fov_y_degrees": 50, "width": 16, "height": 8)" + handedness + R"(}, "materials": {},
+        "shapes": [], "lights": [{"type": "point", "position": [0,1,0], "intensity": [1,1,1]}]})")).header;
+  };
+  const SceneHeader right = header(""), also_right = header(R"(, "handedness": "right")"),
+                    left = header(R"(, "handedness": "left")");
+  EXPECT_EQ(std::memcmp(&right, &also_right, sizeof right), 0);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ((&left.cam_right.x)[k], -(&right.cam_right.x)[k]);
+    EXPECT_EQ((&left.cam_up.x)[k], (&right.cam_up.x)[k]);
+    EXPECT_EQ((&left.cam_forward.x)[k], (&right.cam_forward.x)[k]);
+  }
+  EXPECT_GT(std::abs(right.cam_right.x) + std::abs(right.cam_right.z), 0.1f);
+  EXPECT_NE(load_error(write_temp_file("hand.json", R"({"camera": {"position": [0,0,5], "look_at": [0,0,0], "width": 8,
+      "height": 8, "handedness": "up"}, "materials": {}, "shapes": []})")).find(
+                "camera.handedness: expected \"right\" or \"left\", got \"up\""),
+            std::string::npos);
+}
+
 TEST(SceneLoad, TransformsMoveGeometryAndMirrorsKeepTheFrontSide) {
   std::string tri = R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m")";
   SceneDescription moved = load_scene(write_temp_file(

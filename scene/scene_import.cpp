@@ -1,0 +1,66 @@
+// What scene/scene_import.h shares between the importers and the loader: telling the formats apart and
+// moving a document's file references to another directory.
+#include "scene/scene_import.h"
+
+#include <cctype>
+#include <filesystem>
+
+namespace {
+
+// The words that can start a pbrt file (its directives; a file of only an Include also starts so).
+bool is_pbrt_directive(const std::string& word) {
+  static const char* const kDirectives[] = {
+      "LookAt", "Camera", "Film", "Sampler", "Integrator", "PixelFilter", "ColorSpace", "Option", "WorldBegin",
+      "AttributeBegin", "TransformBegin", "Identity", "Translate", "Scale", "Rotate", "Transform",
+      "ConcatTransform", "CoordinateSystem", "CoordSysTransform", "ReverseOrientation", "Material",
+      "MakeNamedMaterial", "NamedMaterial", "Texture", "LightSource", "AreaLightSource", "Shape", "ObjectBegin",
+      "ObjectInstance", "Include", "Import", "Attribute", "MakeNamedMedium", "MediumInterface", "ActiveTransform",
+      "TransformTimes", "Accelerator"};
+  for (const char* d : kDirectives)
+    if (word == d) return true;
+  return false;
+}
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+}  // namespace
+
+SceneFileFormat scene_file_format(const std::string& text) {
+  size_t i = text.rfind("\xef\xbb\xbf", 0) == 0 ? 3 : 0;
+  for (;;) {
+    while (i < text.size() && is_space(text[i])) ++i;
+    if (i < text.size() && text[i] == '#') {  // a pbrt comment: pbrt if a directive follows
+      i = text.find('\n', i);
+      if (i == std::string::npos) return SceneFileFormat::json;
+      continue;
+    }
+    break;
+  }
+  if (i < text.size() && text[i] == '<') return SceneFileFormat::mitsuba_xml;
+  size_t end = i;
+  while (end < text.size() && std::isalpha(static_cast<unsigned char>(text[end]))) ++end;
+  return is_pbrt_directive(text.substr(i, end - i)) ? SceneFileFormat::pbrt : SceneFileFormat::json;
+}
+
+void rebase_scene_paths(nlohmann::json& scene, const std::string& from_dir, const std::string& to_dir) {
+  namespace fs = std::filesystem;
+  const fs::path from = fs::absolute(from_dir.empty() ? "." : from_dir);
+  const fs::path to = fs::absolute(to_dir.empty() ? "." : to_dir);
+  auto rebase = [&](nlohmann::json& value) {
+    if (!value.is_string()) return;  // the loader names what is wrong with it
+    fs::path p = value.get<std::string>();
+    if (p.is_absolute()) return;
+    value = (from / p).lexically_normal().lexically_relative(to).generic_string();
+  };
+  auto rebase_key = [&](nlohmann::json& object, const char* key) {
+    if (object.is_object() && object.contains(key)) rebase(object[key]);
+  };
+  if (scene.contains("camera")) rebase_key(scene["camera"], "from_gltf");
+  if (scene.contains("materials") && scene["materials"].is_object())
+    for (auto& [name, material] : scene["materials"].items())
+      if (material.is_object())
+        for (auto& [key, value] : material.items()) rebase_key(value, "texture");
+  for (const char* list : {"shapes", "lights"})
+    if (scene.contains(list) && scene[list].is_array())
+      for (auto& entry : scene[list]) rebase_key(entry, "file");
+}

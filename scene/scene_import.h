@@ -1,0 +1,41 @@
+// Scene files of other renderers (Mitsuba 0.6 and 3 XML, pbrt-v4) translated into a pathcl scene: the JSON
+// document of docs/scene-format.md, which load_scene then checks and loads like any JSON scene. One
+// loader, one set of checks; `pathcl convert` writes the document out.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+struct ImportedScene {
+  // The pathcl scene. Mesh and image paths in it are as the source file wrote them, resolved against
+  // the source file's directory (absolute paths stay absolute).
+  nlohmann::json scene;
+  // Where each entry came from, for messages about it: a JSON path ("camera", "materials.gray",
+  // "shapes[3]", "lights[0]", "render") and the source place ("cbox.xml:34: shape \"obj\""). An error
+  // that the JSON checks find at "shapes[3].radius" is reported at the longest such prefix.
+  std::vector<std::pair<std::string, std::string>> origins;
+  // What the translation approximated or left out, each naming its place ("cbox.xml:12: ...").
+  std::vector<std::string> warnings;
+};
+
+enum class SceneFileFormat { json, mitsuba_xml, pbrt };
+
+// Told by content, not by name: '<' first (after a byte order mark, white space and XML comments) is
+// Mitsuba XML; a first word that is a pbrt directive (or a '#' comment followed by one) is pbrt; anything
+// else is read as JSON.
+SceneFileFormat scene_file_format(const std::string& text);
+
+// The document of any scene file: a JSON file parsed (and scanned for keys given twice), a Mitsuba or
+// pbrt file translated. Throws SceneError naming the file and place.
+ImportedScene load_scene_document(const std::string& path);
+
+// Mesh, image and glTF paths of a document (shapes' `file`, textures, environment maps, `from_gltf`)
+// written relative to `to_dir` instead of `from_dir` (absolute paths stay): a converted scene written to
+// another directory still names the source's files.
+void rebase_scene_paths(nlohmann::json& scene, const std::string& from_dir, const std::string& to_dir);
+
+// Each throws SceneError naming the file and line ("cbox.xml:12: ...") on bad or unsupported input.
+ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text);
+ImportedScene import_pbrt(const std::string& path, const std::string& text);
