@@ -16,6 +16,7 @@
 
 #include "apps/bench_command.h"
 #include "apps/compare_command.h"
+#include "apps/convert_command.h"
 #include "apps/denoise_command.h"
 #include "runtime/checkpoint.h"
 #include "runtime/denoise.h"
@@ -649,7 +650,7 @@ int main(int argc, char** argv) {
 
   RenderArgs ra;
   CLI::App* render_cmd = app.add_subcommand("render", "render a scene to EXR (and PNG)");
-  render_cmd->add_option("scene", ra.scene, "scene file (JSON)")->required();
+  render_cmd->add_option("scene", ra.scene, "scene file (JSON, Mitsuba XML or pbrt)")->required();
   render_cmd->add_option("-o,--output", ra.out, "output EXR (default: SCENE-NAME.exr)");
   render_cmd->add_option("--png", ra.png, "also write an sRGB PNG preview");
   render_cmd->add_option("--spp", ra.spp, "samples per pixel (overrides the scene)");
@@ -699,13 +700,13 @@ int main(int argc, char** argv) {
 
   std::string info_scene;
   CLI::App* info_cmd = app.add_subcommand("info", "show what preprocessing did and the BVH, without rendering");
-  info_cmd->add_option("scene", info_scene, "scene file (JSON)")->required();
+  info_cmd->add_option("scene", info_scene, "scene file (JSON, Mitsuba XML or pbrt)")->required();
   std::string info_dump_obj;
   info_cmd->add_option("--dump-obj", info_dump_obj, "write the cleaned world-space triangles as OBJ, one object per shape");
 
   RaysArgs ya;
   CLI::App* rays_cmd = app.add_subcommand("rays", "trace a ray file with the renderer's traversal and time it");
-  rays_cmd->add_option("scene", ya.scene, "scene file (JSON)")->required();
+  rays_cmd->add_option("scene", ya.scene, "scene file (JSON, Mitsuba XML or pbrt)")->required();
   rays_cmd->add_option("--rays", ya.rays, "ray file: 32-byte records (origin, tmin, direction, tmax)")->required();
   rays_cmd->add_option("--hits", ya.hits, "write 16-byte hit records (t, primitive, u, v)");
   rays_cmd->add_option("--device", ya.device, "device index or name substring");
@@ -718,6 +719,7 @@ int main(int argc, char** argv) {
   add_compare_command(app);
   add_denoise_command(app);
   add_bench_command(app);
+  add_convert_command(app);
 
   try {
     app.parse(argc, argv);
@@ -737,6 +739,7 @@ int main(int argc, char** argv) {
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();
     if (denoise_command_parsed()) return run_denoise_command();
+    if (convert_command_parsed()) return run_convert_command();
     if (bench_command_parsed()) return run_bench_command(std::string(PATHCL_VERSION) + " (git " + PATHCL_GIT_REVISION + ")");
     return run_devices();
   } catch (const SceneError& e) {

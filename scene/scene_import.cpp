@@ -64,3 +64,43 @@ void rebase_scene_paths(nlohmann::json& scene, const std::string& from_dir, cons
     if (scene.contains(list) && scene[list].is_array())
       for (auto& entry : scene[list]) rebase_key(entry, "file");
 }
+
+namespace {
+
+bool all_numbers(const nlohmann::json& array) {
+  for (const auto& v : array)
+    if (!v.is_number()) return false;
+  return true;
+}
+
+void write_json(const nlohmann::json& v, int indent, std::string& out) {
+  const std::string pad(size_t(indent + 2), ' '), close(size_t(indent), ' ');
+  if (v.is_object() && !v.empty()) {
+    out += "{\n";
+    size_t i = 0;
+    for (auto& [key, value] : v.items()) {
+      out += pad + nlohmann::json(key).dump() + ": ";
+      write_json(value, indent + 2, out);
+      out += ++i < v.size() ? ",\n" : "\n";
+    }
+    out += close + "}";
+  } else if (v.is_array() && !v.empty() && !all_numbers(v)) {
+    out += "[\n";
+    for (size_t i = 0; i < v.size(); ++i) {
+      out += pad;
+      write_json(v[i], indent + 2, out);
+      out += i + 1 < v.size() ? ",\n" : "\n";
+    }
+    out += close + "]";
+  } else {
+    out += v.dump();  // a number, string, empty container or an array of numbers, on one line
+  }
+}
+
+}  // namespace
+
+std::string scene_json_text(const nlohmann::json& scene) {
+  std::string out;
+  write_json(scene, 0, out);
+  return out + "\n";
+}

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+enum class SceneFileFormat { json, mitsuba_xml, pbrt };
+
 struct ImportedScene {
   // The pathcl scene. Mesh and image paths in it are as the source file wrote them, resolved against
   // the source file's directory (absolute paths stay absolute).
@@ -18,9 +20,8 @@ struct ImportedScene {
   std::vector<std::pair<std::string, std::string>> origins;
   // What the translation approximated or left out, each naming its place ("cbox.xml:12: ...").
   std::vector<std::string> warnings;
+  SceneFileFormat format = SceneFileFormat::json;  // what the file was (set by load_scene_document)
 };
-
-enum class SceneFileFormat { json, mitsuba_xml, pbrt };
 
 // Told by content, not by name: '<' first (after a byte order mark, white space and XML comments) is
 // Mitsuba XML; a first word that is a pbrt directive (or a '#' comment followed by one) is pbrt; anything
@@ -35,6 +36,10 @@ ImportedScene load_scene_document(const std::string& path);
 // written relative to `to_dir` instead of `from_dir` (absolute paths stay): a converted scene written to
 // another directory still names the source's files.
 void rebase_scene_paths(nlohmann::json& scene, const std::string& from_dir, const std::string& to_dir);
+
+// The document as a scene file: JSON, two spaces a level, arrays of numbers on one line (a converted
+// mesh's positions one vertex a line), numbers as the shortest text that reads back as the same double.
+std::string scene_json_text(const nlohmann::json& scene);
 
 // Each throws SceneError naming the file and line ("cbox.xml:12: ...") on bad or unsupported input.
 ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text);

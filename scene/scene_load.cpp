@@ -1078,8 +1078,16 @@ ImportedScene scene_document(const std::string& path) {
   if (text.rfind("\xff\xfe", 0) == 0 || text.rfind("\xfe\xff", 0) == 0)
     throw SceneError(path + ": the file is UTF-16, expected UTF-8 JSON");
   switch (scene_file_format(text)) {
-    case SceneFileFormat::mitsuba_xml: return import_mitsuba_xml(path, text);
-    case SceneFileFormat::pbrt: return import_pbrt(path, text);
+    case SceneFileFormat::mitsuba_xml: {
+      ImportedScene imported = import_mitsuba_xml(path, text);
+      imported.format = SceneFileFormat::mitsuba_xml;
+      return imported;
+    }
+    case SceneFileFormat::pbrt: {
+      ImportedScene imported = import_pbrt(path, text);
+      imported.format = SceneFileFormat::pbrt;
+      return imported;
+    }
     case SceneFileFormat::json: break;
   }
   json root;
@@ -1093,7 +1101,7 @@ ImportedScene scene_document(const std::string& path) {
     throw SceneError(path + ": malformed JSON: a number is beyond the range of a double");
   }
   check_json_text(path, text);
-  return ImportedScene{std::move(root), {}, {}};
+  return ImportedScene{std::move(root), {}, {}, SceneFileFormat::json};
 }
 
 }  // namespace
