@@ -160,6 +160,11 @@ inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF
 #ifdef PC_HAS_MIRROR
   if (pc_any_(is = mask & (m->type == PC_MAT_MIRROR))) {
     valid = mirror_sample_lanes(m->color, wo, &wi, &pdf, &weight);
+    /* A metal mirror (eta and k given, not both 0): its reflectance times the conductor's Fresnel term;
+     * a plain mirror's weight stays its reflectance, bit for bit. */
+    LaneI metal = is & ((m->specular.x != 0.0f) | (m->specular.y != 0.0f) | (m->specular.z != 0.0f) |
+                        (m->k.x != 0.0f) | (m->k.y != 0.0f) | (m->k.z != 0.0f));
+    if (pc_any_(metal)) weight = lane3_select(weight, lane3_mul(weight, fresnel_conductor(wo.z, m->specular, m->k)), metal);
     PC_TAKE_SAMPLE(is, valid)
     s->delta |= is;
   }

@@ -378,10 +378,15 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
       n.fail(std::string(textured ? "the diffuse texture's largest value" : "diffuse") +
              " + specular exceeds 1 (the surface would create energy)");
   } else if (m.type == "mirror") {
-    n.expect_object({"type", "opacity", "reflectance"});
+    n.expect_object({"type", "opacity", "reflectance", "eta", "k"});
     m.type_id = PC_MAT_MIRROR;
     m.color = glm::vec3(1);
     if (n.has("reflectance")) read_albedo_or_texture(n.at("reflectance"), scene, dir, m);
+    if (n.has("eta") || n.has("k")) {  // a smooth metal: the reflectance times its Fresnel term
+      if (!n.has("eta") || !n.has("k")) n.fail("a metal mirror needs both eta and k");
+      m.specular = n.at("eta").color();
+      m.k = n.at("k").color();
+    }
   } else if (m.type == "dielectric") {
     n.expect_object({"type", "opacity", "ior", "transmittance"}, {"ior"});
     m.type_id = PC_MAT_DIELECTRIC;

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "chi2.h"
+#include "scene/scene_error.h"
 #include "test_support.h"
 
 namespace {
@@ -540,6 +541,43 @@ TEST(BsdfExact, MirrorReflectsExactly) {
       EXPECT_EQ(s.pdf_eval(i), 0.0);  // a delta lobe has no density for bsdf_pdf
       EXPECT_EQ(s.f(i), glm::dvec3(0.0));
     }
+  }
+}
+
+TEST(BsdfExact, MetalMirrorReflectsItsFresnelTerm) {
+  // A mirror with eta and k (Mitsuba's and pbrt's smooth conductor): the mirror direction, weight the
+  // reflectance times the complex Fresnel equations at the incident angle, the conductor_reference.
+  const double eta[3] = {0.18, 0.42, 1.37}, k[3] = {3.42, 2.35, 1.77}, rho[3] = {0.9, 0.8, 1.0};
+  Material m = mirror(f4(rho[0], rho[1], rho[2]));
+  m.specular = f4(eta[0], eta[1], eta[2]);
+  m.k = f4(k[0], k[1], k[2]);
+  std::vector<pc_float4> u = lobe_choice_grid(4);
+  for (double theta : {0.0, 35.0, 70.0, 89.0}) {
+    const glm::dvec3 wo = direction(theta, 20);
+    Samples s = sample_bsdf(m, wo, 0, u.size(), u);
+    const glm::vec3 wof(wo);
+    for (size_t i = 0; i < s.n; ++i) {
+      ASSERT_EQ(s.status(i), 2) << "a mirror sample is a delta sample";
+      EXPECT_EQ(s.wi(i), glm::dvec3(-wof.x, -wof.y, wof.z));
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(s.weight(i)[c], rho[c] * conductor_reference(wof.z, eta[c], k[c]), 2e-5) << theta;
+    }
+  }
+  // Loaded from a scene: eta and k go to the material; both are needed.
+  const std::string scene = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "width": 4, "height": 4},
+    "materials": {"gold": {"type": "mirror", "eta": [0.18, 0.42, 1.37], "k": [3.42, 2.35, 1.77)";
+  DeviceScene d = load_device_scene(write_temp_file("metal-mirror.json", scene + R"(]}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "gold"}]})"));
+  EXPECT_EQ(d.materials[0].type, PC_MAT_MIRROR);
+  EXPECT_FLOAT_EQ(d.materials[0].specular.z, 1.37f);
+  EXPECT_FLOAT_EQ(d.materials[0].k.x, 3.42f);
+  try {
+    load_scene(write_temp_file("metal-mirror.json", R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0],
+      "width": 4, "height": 4}, "materials": {"gold": {"type": "mirror", "eta": [1, 1, 1]}}, "shapes": []})"));
+    ADD_FAILURE() << "loaded";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("materials.gold: a metal mirror needs both eta and k"), std::string::npos)
+        << e.what();
   }
 }
 
