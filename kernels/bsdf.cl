@@ -59,7 +59,9 @@ typedef struct {
   LaneI delta;
 } BsdfSampleLanes;
 
-inline LaneI bsdf_is_delta_lanes(LaneU type) { return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC); }
+inline LaneI bsdf_is_delta_lanes(LaneU type) {
+  return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC) | (type == PC_MAT_THIN_DIELECTRIC);
+}
 
 /* Where wo is on the back of a two-sided material: the lanes whose directions are mirrored to the front. */
 inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
@@ -175,6 +177,11 @@ inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF
     valid = dielectric_sample_lanes(m->color, m->ior, wo, u2, &wi, &pdf, &weight, &eta2);
     PC_TAKE_SAMPLE(is, valid)
     s->eta2 = select(s->eta2, eta2, is);
+    s->delta |= is;
+  }
+  if (pc_any_(is = mask & (m->type == PC_MAT_THIN_DIELECTRIC))) {
+    valid = thin_dielectric_sample_lanes(m->color, m->ior, wo, u2, &wi, &pdf, &weight);
+    PC_TAKE_SAMPLE(is, valid)
     s->delta |= is;
   }
 #endif

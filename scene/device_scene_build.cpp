@@ -31,7 +31,8 @@ float bits_to_float(uint32_t u) {
 double luminance(const glm::vec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
 
 constexpr uint32_t kMaterialFeature[] = {kFeatureDiffuse, kFeatureOrenNayar, kFeaturePhong, kFeatureMirror,
-                                         kFeatureDielectric, kFeatureRoughConductor, kFeaturePlastic};  // by PC_MAT_*
+                                         kFeatureDielectric, kFeatureRoughConductor, kFeaturePlastic,
+                                         kFeatureDielectric};  // by PC_MAT_*
 
 Material device_material(const MaterialDesc& m) {
   Material mat{};

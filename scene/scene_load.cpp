@@ -27,6 +27,7 @@
 #include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_import.h"
+#include "scene/serialized_load.h"
 #include "scene/scene_limits.h"
 #include "scene/texture_load.h"
 
@@ -393,6 +394,12 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
     m.ior = read_ior(n.at("ior"));
     m.color = glm::vec3(1);
     if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
+  } else if (m.type == "thin_dielectric") {
+    n.expect_object({"type", "opacity", "ior", "transmittance"}, {"ior"});
+    m.type_id = PC_MAT_THIN_DIELECTRIC;
+    m.ior = read_ior(n.at("ior"));
+    m.color = glm::vec3(1);
+    if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
   } else if (m.type == "rough_conductor") {
     n.expect_object({"type", "opacity", "roughness", "eta", "k", "specular"}, {"roughness"});
     m.type_id = PC_MAT_ROUGH_CONDUCTOR;
@@ -414,7 +421,7 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
     if (n.has("roughness")) m.alpha = read_roughness(n.at("roughness"), true);
   } else {
     n.at("type").fail("unknown material type \"" + m.type +
-                      "\" (expected diffuse, oren_nayar, phong, mirror, dielectric, rough_conductor or plastic)");
+                      "\" (expected diffuse, oren_nayar, phong, mirror, dielectric, thin_dielectric, rough_conductor or plastic)");
   }
   return m;
 }
@@ -701,7 +708,7 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
   ShapeDesc s;
   if (type == "mesh")
     n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth",
-                     "smooth_angle_degrees", "instance", "vertex_colors"},
+                     "smooth_angle_degrees", "instance", "vertex_colors", "shape_index"},
                     {"file", "material"});
   else if (type == "triangles")
     n.expect_object({"type", "positions", "indices", "uvs", "colors", "material", "emission", "two_sided",
@@ -764,7 +771,14 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
   if (type == "mesh") {
     std::filesystem::path file = dir / n.at("file").string();
     s.label += " (" + n.at("file").string() + ")";
-    if (is_ply_stl_off_file(file.string())) {
+    const bool serialized = is_serialized_file(file.string());
+    if (n.has("shape_index") && !serialized)
+      n.at("shape_index").fail("shape_index goes with a Mitsuba .serialized file (which holds several shapes)");
+    if (serialized) {
+      if (from_mtl) n.at("material").fail("\"from_mtl\" needs an OBJ file with mtllib (a .serialized file has none)");
+      soup = load_serialized(file.string(), n.has("shape_index") ? n.at("shape_index").count(0, 0xffffffffu) : 0,
+                             scene.warnings);
+    } else if (is_ply_stl_off_file(file.string())) {
       if (from_mtl) n.at("material").fail("\"from_mtl\" needs an OBJ file with mtllib (PLY, STL and OFF have no MTL files)");
       soup = load_ply_stl_off(file.string(), scene.warnings);
     } else {

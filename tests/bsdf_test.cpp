@@ -68,6 +68,11 @@ Material dielectric(float ior, pc_float4 transmittance) {
   m.color = transmittance;
   return m;
 }
+Material thin_dielectric(float ior, pc_float4 transmittance) {
+  Material m = dielectric(ior, transmittance);
+  m.type = PC_MAT_THIN_DIELECTRIC;
+  return m;
+}
 // Gold-like complex index; alpha = roughness^2 as the scene loader sets it.
 Material conductor(double roughness, pc_float4 eta = f4(0.18, 0.42, 1.37), pc_float4 k = f4(3.42, 2.35, 1.77)) {
   Material m = material(PC_MAT_ROUGH_CONDUCTOR);
@@ -702,6 +707,39 @@ constexpr size_t kFurnaceSamples = 40000;
 
 }  // namespace
 
+TEST(BsdfExact, ThinDielectricReflectsItsBouncesAndPassesStraightThrough) {
+  // Mitsuba's and pbrt's thin dielectric: reflected with R' = 2R / (1 + R) (the sheet's inner bounces
+  // summed), else straight through, tinted; alike from both sides.
+  const size_t grid = 4096;
+  std::vector<pc_float4> u = lobe_choice_grid(grid);
+  const glm::dvec3 tint(0.9, 0.8, 0.7);
+  const Material m = thin_dielectric(1.5f, f4(tint.x, tint.y, tint.z));
+  for (double theta : {0.0, 30.0, 60.0, 85.0, 120.0, 170.0}) {
+    SCOPED_TRACE("theta " + std::to_string(theta));
+    const glm::dvec3 wo = direction(theta, 25);
+    const glm::vec3 wof(wo);
+    const double cos_i = std::abs(double(wof.z));
+    const double r = fresnel_reference(cos_i, 1, 1.5), want = 2 * r / (1 + r);
+    Samples s = sample_bsdf(m, wo, 0, grid, u);
+    size_t reflected = 0;
+    for (size_t i = 0; i < s.n; ++i) {
+      ASSERT_EQ(s.status(i), 2);
+      const glm::dvec3 wi = s.wi(i);
+      if (wi.z * wo.z > 0) {
+        ++reflected;
+        EXPECT_EQ(wi, glm::dvec3(-wof.x, -wof.y, wof.z));
+        EXPECT_NEAR(s.pdf(i), want, 1e-5);
+        EXPECT_EQ(s.weight(i), glm::dvec3(1.0));
+      } else {
+        EXPECT_EQ(wi, glm::dvec3(-wof.x, -wof.y, -wof.z));
+        EXPECT_NEAR(s.pdf(i), 1 - want, 1e-5);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight(i)[c], tint[c], 1e-7);
+      }
+    }
+    EXPECT_NEAR(double(reflected) / grid, want, 1.0 / grid);
+  }
+}
+
 TEST(BsdfEnergy, LosslessMaterialsReflectEverything) {
   struct Case {
     const char* name;
@@ -713,6 +751,7 @@ TEST(BsdfEnergy, LosslessMaterialsReflectEverything) {
       {"mirror rho 1", mirror(grey(1)), false},
       {"dielectric ior 1.5", dielectric(1.5f, grey(1)), true},
       {"dielectric ior 1.33", dielectric(1.33f, grey(1)), true},
+      {"thin dielectric ior 1.5", thin_dielectric(1.5f, grey(1)), false},
   };
   for (const Case& c : cases)
     for (const glm::dvec3& wo : furnace_directions()) {

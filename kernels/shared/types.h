@@ -35,6 +35,7 @@ typedef uint32_t pc_uint;
 #define PC_MAT_DIELECTRIC 4u
 #define PC_MAT_ROUGH_CONDUCTOR 5u
 #define PC_MAT_PLASTIC 6u
+#define PC_MAT_THIN_DIELECTRIC 7u /* compiled with PC_HAS_DIELECTRIC */
 
 /* Light types (Light.type). */
 #define PC_LIGHT_AREA 0u

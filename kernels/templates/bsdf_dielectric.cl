@@ -18,4 +18,18 @@ inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf
   return reflected | refracted; /* not refracted: unreachable, f == 1 there */
 }
 
+/* A thin sheet of glass (a window pane): the light reflected inside the sheet summed over its bounces,
+ * R' = R + T^2 R / (1 - R^2) = 2 R / (1 + R) with R the Fresnel reflectance of one face and T = 1 - R;
+ * what is not reflected passes straight through (no offset, no bending, no radiance scaling), tinted by c.
+ * Both sides alike (the caller flips wo to +z). */
+inline PC_OVL I thin_dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight) {
+  F r = fresnel_dielectric(fabs(wo.z), ior);
+  r = 2.0f * r / (1.0f + r);
+  I reflected = u2 < r;
+  *wi = lane3(-wo.x, -wo.y, select(-wo.z, wo.z, reflected));
+  *weight = lane3(select(c.x, (F)(1.0f), reflected), select(c.y, (F)(1.0f), reflected), select(c.z, (F)(1.0f), reflected));
+  *pdf = select(1.0f - r, r, reflected);
+  return wo.z != 0.0f;
+}
+
 #include "templates/lane_width_end.h"
