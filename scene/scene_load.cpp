@@ -53,9 +53,10 @@ struct Node {
     return file + ": " + (path.empty() ? "(top level)" : path);
   }
   const std::string* source_place() const {
+    if (!origins) return nullptr;
     const std::string* best = nullptr;
     size_t best_length = 0;
-    for (const auto& [prefix, origin] : origins ? *origins : std::vector<std::pair<std::string, std::string>>{}) {
+    for (const auto& [prefix, origin] : *origins) {
       bool holds = path.compare(0, prefix.size(), prefix) == 0 &&
                    (path.size() == prefix.size() || path[prefix.size()] == '.' || path[prefix.size()] == '[');
       if (holds && (!best || prefix.size() > best_length)) {
