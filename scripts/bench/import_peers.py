@@ -3,6 +3,7 @@ import argparse
 import glob
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -12,13 +13,28 @@ BUILD = os.environ.get("PATHCL_BUILD", os.path.join(ROOT, "build"))
 PATHCL = os.path.join(ROOT, BUILD, "pathcl") if not os.path.isabs(BUILD) else os.path.join(BUILD, "pathcl")
 OUT = os.path.join(ROOT, "bench", "out", "import-peers")
 
-# name: (the file pathcl renders, the Mitsuba file of the same scene). MITSUBA_DATA is mitsuba-data's
-# checkout, TESTS tests/scenes.
+# Each case: the file pathcl renders and its reference, a Mitsuba file of the same scene that Mitsuba 3
+# renders here ("mitsuba") or an image another renderer made ("exr"); "defaults" overrides the Mitsuba
+# files' <default> values (resolution, depth) in copies beside them. {MITSUBA_DATA}: mitsuba-data's
+# checkout; {BITTERLI}: Bitterli's scenes as converted for Mitsuba 3 and pbrt-v4 (github.com/gonsolo/bitterli);
+# {TESTS}: tests/scenes.
 CASES = {
-    "mitsuba-data-cbox": ("{MITSUBA_DATA}/scenes/cbox/cbox.xml", "{MITSUBA_DATA}/scenes/cbox/cbox.xml"),
-    "mitsuba-data-cbox-rgb": ("{MITSUBA_DATA}/scenes/cbox/cbox-rgb.xml", "{MITSUBA_DATA}/scenes/cbox/cbox-rgb.xml"),
-    "tests-mitsuba-cbox": ("{TESTS}/mitsuba/cbox.xml", "{TESTS}/mitsuba/cbox.xml"),
-    "tests-pbrt-cornell-box": ("{TESTS}/pbrt/cornell-box.pbrt", "{TESTS}/pbrt/cornell-box-twin.xml"),
+    "mitsuba-data-cbox": {"pathcl": "{MITSUBA_DATA}/scenes/cbox/cbox.xml", "mitsuba": "{MITSUBA_DATA}/scenes/cbox/cbox.xml"},
+    "mitsuba-data-cbox-rgb": {"pathcl": "{MITSUBA_DATA}/scenes/cbox/cbox-rgb.xml",
+                              "mitsuba": "{MITSUBA_DATA}/scenes/cbox/cbox-rgb.xml"},
+    "tests-mitsuba-cbox": {"pathcl": "{TESTS}/mitsuba/cbox.xml", "mitsuba": "{TESTS}/mitsuba/cbox.xml"},
+    "tests-pbrt-cornell-box": {"pathcl": "{TESTS}/pbrt/cornell-box.pbrt", "mitsuba": "{TESTS}/pbrt/cornell-box-twin.xml"},
+    "bitterli-cornell-box-xml": {"pathcl": "{BITTERLI}/cornell-box/mitsuba/scene_v3.xml",
+                                 "mitsuba": "{BITTERLI}/cornell-box/mitsuba/scene_v3.xml",
+                                 "defaults": {"resx": "256", "resy": "256"}},
+    # The pbrt-v4 file (64 x 64, maxdepth 4 as that repository leaves it) against the Mitsuba file of the
+    # same scene at pbrt's depth (Mitsuba counts the emitter's vertex: 5).
+    "bitterli-cornell-box-pbrt": {"pathcl": "{BITTERLI}/cornell-box/pbrt/scene-v4.pbrt",
+                                  "mitsuba": "{BITTERLI}/cornell-box/mitsuba/scene_v3.xml",
+                                  "defaults": {"resx": "64", "resy": "64", "max_depth": "5"}},
+    # Veach's multiple-importance-sampling scene as pbrt-v4 file (maxdepth 3) against Tungsten's render.
+    "bitterli-veach-mis-pbrt": {"pathcl": "{BITTERLI}/veach-mis/pbrt/scene-v4.pbrt",
+                                "exr": "{BITTERLI}/veach-mis/pbrt/TungstenRender.exr"},
 }
 
 MITSUBA_RENDER = r"""
@@ -45,6 +61,22 @@ def mitsuba_env():
     return env, ("llvm_ad_rgb" if found else "scalar_rgb")
 
 
+def with_defaults(path, defaults):
+    """The Mitsuba file with its <default> values replaced, written beside it (its relative paths hold);
+    the file itself when there is nothing to replace."""
+    if not defaults or not path.endswith(".xml"):
+        return path
+    text = open(path).read()
+    for key, value in defaults.items():
+        text, n = re.subn(r'(<default\s+name="%s"\s+value=")[^"]*(")' % re.escape(key), r"\g<1>%s\g<2>" % value, text)
+        if n == 0:
+            raise RuntimeError("%s has no <default name=\"%s\">" % (path, key))
+    copy = path[:-4] + ".import-peers.xml"
+    with open(copy, "w") as f:
+        f.write(text)
+    return copy
+
+
 def run(cmd, **kw):
     r = subprocess.run(cmd, capture_output=True, text=True, **kw)
     if r.returncode != 0:
@@ -58,36 +90,43 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--mitsuba-data", default=os.path.join(ROOT, "build", "mitsuba-data"))
+    ap.add_argument("--bitterli", default=os.path.join(ROOT, "build", "bitterli"))
     args = ap.parse_args()
-    data = os.path.abspath(args.mitsuba_data)
+    data, bitterli = os.path.abspath(args.mitsuba_data), os.path.abspath(args.bitterli)
     names = args.cases.split(",")
     if any(n.startswith("mitsuba-data") for n in names) and not os.path.isdir(os.path.join(data, "scenes")):
         run(["git", "clone", "-q", "--depth", "1", "https://github.com/mitsuba-renderer/mitsuba-data", data])
+    if any(n.startswith("bitterli") for n in names) and not os.path.isdir(os.path.join(bitterli, "cornell-box")):
+        run(["git", "clone", "-q", "--depth", "1", "https://github.com/gonsolo/bitterli", bitterli])
     os.makedirs(OUT, exist_ok=True)
     env, variant = mitsuba_env()
     results = []
     for name in names:
-        ours, theirs = (p.format(MITSUBA_DATA=data, TESTS=os.path.join(ROOT, "tests", "scenes")) for p in CASES[name])
-        ref = os.path.join(OUT, name + "-mitsuba.exr")
+        case = {k: (v.format(MITSUBA_DATA=data, BITTERLI=bitterli, TESTS=os.path.join(ROOT, "tests", "scenes"))
+                    if isinstance(v, str) else v) for k, v in CASES[name].items()}
+        ours = with_defaults(case["pathcl"], case.get("defaults", {}))
         test = os.path.join(OUT, name + "-pathcl.exr")
-        m = json.loads(run([sys.executable, "-c", MITSUBA_RENDER, variant, theirs, str(args.spp), str(args.seed), ref],
-                           env=env).stdout.strip().splitlines()[-1])
+        if "mitsuba" in case:
+            theirs = with_defaults(case["mitsuba"], case.get("defaults", {}))
+            ref = os.path.join(OUT, name + "-mitsuba.exr")
+            m = json.loads(run([sys.executable, "-c", MITSUBA_RENDER, variant, theirs, str(args.spp), str(args.seed), ref],
+                               env=env).stdout.strip().splitlines()[-1])
+            reference = {"renderer": "Mitsuba %s %s" % (m["version"], variant), "file": theirs, "seconds": m["seconds"]}
+        else:
+            theirs = ref = case["exr"]
+            reference = {"renderer": "the image beside the scene file", "file": theirs}
         t = time.time()
         r = run([PATHCL, "render", ours, "--spp", str(args.spp), "--seed", str(args.seed), "-o", test, "-q"])
         pathcl_seconds = time.time() - t
-        warnings = [l for l in (r.stderr or "").splitlines() if l.startswith("warning:")]
-        info = run([PATHCL, "info", ours]).stdout
-        warnings += [l for l in info.splitlines() if l.startswith("warning:")]
+        warnings = [l for l in run([PATHCL, "info", ours]).stdout.splitlines() if l.startswith("warning:")]
         c = json.loads(run([PATHCL, "compare", ref, test, "--json"]).stdout)
         ratio = [t_ / r_ if r_ else float("nan") for t_, r_ in zip(c["mean_test"], c["mean_reference"])]
-        results.append({"case": name, "pathcl_file": os.path.relpath(ours, ROOT) if ours.startswith(ROOT) else ours,
-                        "mitsuba_file": os.path.relpath(theirs, ROOT) if theirs.startswith(ROOT) else theirs,
-                        "spp": args.spp, "mitsuba_variant": variant, "mitsuba_version": m["version"],
-                        "mitsuba_seconds": m["seconds"], "pathcl_seconds": pathcl_seconds,
-                        "mean_mitsuba": c["mean_reference"], "mean_pathcl": c["mean_test"], "mean_ratio": ratio,
+        results.append({"case": name, "pathcl_file": os.path.relpath(ours, ROOT), "reference": reference,
+                        "spp": args.spp, "pathcl_seconds": pathcl_seconds,
+                        "mean_reference": c["mean_reference"], "mean_pathcl": c["mean_test"], "mean_ratio": ratio,
                         "relmse": c["relmse"], "within_3_percent": all(abs(x - 1) <= 0.03 for x in ratio),
                         "warnings": sorted(set(warnings))})
-        print("%-24s means pathcl/Mitsuba %s  relMSE %.4g  %s" % (
+        print("%-26s means pathcl/reference %s  relMSE %.4g  %s" % (
             name, " ".join("%.4f" % x for x in ratio), c["relmse"], "ok" if results[-1]["within_3_percent"] else "OFF"),
             flush=True)
     with open(os.path.join(ROOT, "bench", "out", "import-peers.json"), "w") as f:
