@@ -1297,6 +1297,12 @@ void build_conductor(Importer& im, const Object& b, BsdfBuild& out) {
 
 void build_rough_conductor(Importer& im, const Object& b, BsdfBuild& out) {
   out.material = {{"type", "rough_conductor"}, {"roughness", roughness(im, b, "beckmann")}};
+  // Mitsuba 3's microfacet masking-shadowing is the separable G1(wi) G1(wo) (mitsuba/render/microfacet.h),
+  // pathcl's (and pbrt-v4's) the height-correlated 1 / (1 + Lambda(wi) + Lambda(wo)): at least as large,
+  // equal where either direction is normal, larger towards grazing angles.
+  im.warn(b.place, b.label() +
+                       ": pathcl's masking-shadowing is the height-correlated Smith term where Mitsuba's is separable: "
+                       "the same at normal incidence, slightly brighter towards grazing angles");
   ConductorIndex index = conductor_index(im, b);
   Color specular = reflectance(im, b, "specular_reflectance", 1);
   if (specular.textured()) {
