@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -16,6 +17,7 @@ namespace {
 
 struct ConvertArgs {
   std::string input, output;
+  std::vector<std::string> defines;
   bool quiet = false;
   CLI::App* command = nullptr;
 };
@@ -31,6 +33,7 @@ void add_convert_command(CLI::App& app) {
   ConvertArgs& a = args();
   a.command = app.add_subcommand("convert", "write a Mitsuba XML or pbrt-v4 scene as a pathcl JSON scene");
   a.command->add_option("scene", a.input, "scene file (Mitsuba 0.6 or 3 XML, pbrt-v4)")->required();
+  a.command->add_option("-D,--define", a.defines, "NAME=VALUE: a Mitsuba scene's <default> value (repeatable)");
   a.command->add_option("-o,--output", a.output, "the JSON scene to write (default: SCENE-NAME.json beside it)");
   a.command->add_flag("-q,--quiet", a.quiet, "no warnings or summary on stderr");
 }
@@ -41,7 +44,8 @@ int run_convert_command() {
   namespace fs = std::filesystem;
   const ConvertArgs& a = args();
   const std::string output = a.output.empty() ? fs::path(a.input).replace_extension(".json").string() : a.output;
-  ImportedScene document = load_scene_document(a.input);
+  const SceneDefines defines = parse_scene_defines(a.defines);
+  ImportedScene document = load_scene_document(a.input, defines);
   if (document.format == SceneFileFormat::json)
     throw UsageError(a.input + ": is a pathcl JSON scene already (convert reads Mitsuba XML and pbrt scenes)");
   std::error_code ignored;
@@ -49,7 +53,7 @@ int run_convert_command() {
     throw UsageError("-o " + output + ": is the scene being converted (choose another file)");
   check_output_files({{"-o", output}});
   // Every check a render makes (meshes, images, ranges): what convert writes is a scene pathcl renders.
-  const SceneDescription scene = load_scene(a.input);
+  const SceneDescription scene = load_scene(a.input, defines);
   rebase_scene_paths(document.scene, fs::path(a.input).parent_path().string(), fs::path(output).parent_path().string());
   write_text_file(output, scene_json_text(document.scene));
   if (!a.quiet) {

@@ -34,6 +34,7 @@
 #include "runtime/technique.h"
 #include "scene/device_scene_build.h"
 #include "scene/scene_error.h"
+#include "scene/scene_import.h"
 #include "scene/scene_limits.h"
 #include "git_revision.h"
 
@@ -55,10 +56,11 @@ struct LoadedScene {
   double load_ms = 0;  // reading, mesh loading and cleaning
 };
 
-LoadedScene load(const std::string& path, DeviceOrigin origin = DeviceOrigin::camera) {
+LoadedScene load(const std::string& path, const std::vector<std::string>& defines = {},
+                 DeviceOrigin origin = DeviceOrigin::camera) {
   LoadedScene s;
   auto start = std::chrono::steady_clock::now();
-  s.description = load_scene(path);
+  s.description = load_scene(path, parse_scene_defines(defines));
   s.load_ms = ms_since(start);
   // Ray files are traced as one flat triangle list (and read so by other tracers): instances flattened.
   s.device = build_device_scene_taking_texels(s.description, origin,
@@ -107,6 +109,7 @@ void print_progress(uint64_t done, uint64_t total, double seconds, size_t pixels
 
 struct RenderArgs {
   std::string scene, out, png, stats, device, sampler, integrator, reference, convergence, checkpoint, resume;
+  std::vector<std::string> defines;  // -D NAME=VALUE: a Mitsuba scene's <default>s
   std::optional<std::string> aovs;
   double checkpoint_every = 60;
   double rank_timeout = 30;         // MPI: seconds beside a unit's expected time before a rank is lost
@@ -312,7 +315,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
   check_output_files({{"-o", out, true}, {"--png", a.png, true}, {"--stats", a.stats},
                       {"--convergence", a.convergence}, {"--checkpoint", a.checkpoint}});
 
-  LoadedScene s = load(a.scene);
+  LoadedScene s = load(a.scene, a.defines);
   warn_about_clean_up(s);
   // A time or error budget without --spp renders until the budget ends.
   if (!a.spp) opt.spp = budgeted ? kMaxSpp : s.description.render.spp;
@@ -524,9 +527,9 @@ std::string cleaned_obj(const SceneDescription& d) {
   return text;
 }
 
-int run_info(const std::string& path, const std::string& dump_obj) {
+int run_info(const std::string& path, const std::vector<std::string>& defines, const std::string& dump_obj) {
   check_output_files({{"--dump-obj", dump_obj}});
-  LoadedScene s = load(path);
+  LoadedScene s = load(path, defines);
   if (!dump_obj.empty()) write_text_file(dump_obj, cleaned_obj(s.description));
   const SceneDescription& d = s.description;
   std::printf("scene: %s\ncamera: %ux%u, fov_y %.1f degrees\nmaterials: %zu\n", path.c_str(), d.camera.width,
@@ -586,7 +589,7 @@ struct RaysArgs {
 int run_rays(const RaysArgs& a) {
   count_option("--repeat", a.repeat, 1, 1000000);
   check_output_files({{"--hits", a.hits}, {"--stats", a.stats}});
-  LoadedScene s = load(a.scene, DeviceOrigin::world);  // ray files are in world coordinates
+  LoadedScene s = load(a.scene, {}, DeviceOrigin::world);  // ray files are in world coordinates
   std::vector<RayRecord> rays = read_ray_file(a.rays);
   std::vector<DeviceInfo> devices = select_devices(a.device);
   if (devices.size() > 1) throw UsageError("--device " + a.device + ": rays traces on one device, this selects " +
@@ -651,6 +654,7 @@ int main(int argc, char** argv) {
   RenderArgs ra;
   CLI::App* render_cmd = app.add_subcommand("render", "render a scene to EXR (and PNG)");
   render_cmd->add_option("scene", ra.scene, "scene file (JSON, Mitsuba XML or pbrt)")->required();
+  render_cmd->add_option("-D,--define", ra.defines, "NAME=VALUE: a Mitsuba scene's <default> value, as Mitsuba's -D (repeatable)");
   render_cmd->add_option("-o,--output", ra.out, "output EXR (default: SCENE-NAME.exr)");
   render_cmd->add_option("--png", ra.png, "also write an sRGB PNG preview");
   render_cmd->add_option("--spp", ra.spp, "samples per pixel (overrides the scene)");
@@ -701,6 +705,8 @@ int main(int argc, char** argv) {
   std::string info_scene;
   CLI::App* info_cmd = app.add_subcommand("info", "show what preprocessing did and the BVH, without rendering");
   info_cmd->add_option("scene", info_scene, "scene file (JSON, Mitsuba XML or pbrt)")->required();
+  std::vector<std::string> info_defines;
+  info_cmd->add_option("-D,--define", info_defines, "NAME=VALUE: a Mitsuba scene's <default> value (repeatable)");
   std::string info_dump_obj;
   info_cmd->add_option("--dump-obj", info_dump_obj, "write the cleaned world-space triangles as OBJ, one object per shape");
 
@@ -735,7 +741,7 @@ int main(int argc, char** argv) {
       if (job.rank() > 0) return job.serve(ra.device, ra.rank_faults);
       return run_render(ra, job);
     }
-    if (info_cmd->parsed()) return run_info(info_scene, info_dump_obj);
+    if (info_cmd->parsed()) return run_info(info_scene, info_defines, info_dump_obj);
     if (rays_cmd->parsed()) return run_rays(ya);
     if (compare_command_parsed()) return run_compare_command();
     if (denoise_command_parsed()) return run_denoise_command();

@@ -2101,9 +2101,16 @@ void convert_sensor(Importer& im, const Object& s, json& camera, json& render) {
 
 }  // namespace
 
-ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text) {
+ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text, const SceneDefines& defines) {
   Importer im;
+  // Given values win over the file's <default>s, which then leave them as they are.
+  for (const auto& [name, value] : defines) {
+    if (name.empty() || name.find_first_of("$\"<>= ") != std::string::npos)
+      throw SceneError("-D " + name + "=" + value + ": expected NAME=VALUE with a parameter name");
+    im.doc.defaults.emplace_back("$" + name, value);
+  }
   im.scene_dir = fs::path(path).parent_path();
+  if (im.scene_dir.empty()) im.scene_dir = ".";  // a file in the current directory
   im.doc.include_chain.push_back(path);
   std::error_code error;
   fs::path key = fs::weakly_canonical(path, error);

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/common.hpp>
@@ -185,8 +186,11 @@ struct SceneDescription {
   std::vector<std::string> warnings;  // things loading changed or ignored, each naming its place
 };
 
-// Reads and validates a scene file; throws SceneError naming the file and JSON path on bad input.
-SceneDescription load_scene(const std::string& path);
+// Reads and validates a scene file (JSON, or Mitsuba XML or pbrt translated, scene/scene_import.h); throws
+// SceneError naming the file and JSON path (or source line) on bad input. `defines`: values for a Mitsuba
+// file's <default>s (Mitsuba's -D NAME=VALUE).
+SceneDescription load_scene(const std::string& path,
+                            const std::vector<std::pair<std::string, std::string>>& defines = {});
 
 // Loads an OBJ file into a polygon soup (all groups together), validating indices and coordinates;
 // throws SceneError naming the file and line.

@@ -2,6 +2,8 @@
 // moving a document's file references to another directory.
 #include "scene/scene_import.h"
 
+#include "scene/scene_error.h"
+
 #include <cctype>
 #include <filesystem>
 
@@ -24,6 +26,17 @@ bool is_pbrt_directive(const std::string& word) {
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
 }  // namespace
+
+SceneDefines parse_scene_defines(const std::vector<std::string>& words) {
+  SceneDefines defines;
+  for (const std::string& word : words) {
+    const size_t equals = word.find('=');
+    if (equals == std::string::npos || equals == 0)
+      throw SceneError("-D " + word + ": expected NAME=VALUE (a Mitsuba scene's <default name=\"NAME\">)");
+    defines.emplace_back(word.substr(0, equals), word.substr(equals + 1));
+  }
+  return defines;
+}
 
 SceneFileFormat scene_file_format(const std::string& text) {
   size_t i = text.rfind("\xef\xbb\xbf", 0) == 0 ? 3 : 0;

@@ -10,6 +10,11 @@
 
 enum class SceneFileFormat { json, mitsuba_xml, pbrt };
 
+// Values for a Mitsuba scene's <default>s, as Mitsuba's `-D NAME=VALUE` sets them: they win over the file's.
+using SceneDefines = std::vector<std::pair<std::string, std::string>>;
+// "NAME=VALUE" words (the command line's -D) as defines; SceneError naming a word without '=' or a name.
+SceneDefines parse_scene_defines(const std::vector<std::string>& words);
+
 struct ImportedScene {
   // The pathcl scene. Mesh and image paths in it are as the source file wrote them, resolved against
   // the source file's directory (absolute paths stay absolute).
@@ -30,7 +35,8 @@ SceneFileFormat scene_file_format(const std::string& text);
 
 // The document of any scene file: a JSON file parsed (and scanned for keys given twice), a Mitsuba or
 // pbrt file translated. Throws SceneError naming the file and place.
-ImportedScene load_scene_document(const std::string& path);
+// `defines` are for Mitsuba files only: SceneError for a JSON or pbrt file given any.
+ImportedScene load_scene_document(const std::string& path, const SceneDefines& defines = {});
 
 // Mesh, image and glTF paths of a document (shapes' `file`, textures, environment maps, `from_gltf`)
 // written relative to `to_dir` instead of `from_dir` (absolute paths stay): a converted scene written to
@@ -42,5 +48,5 @@ void rebase_scene_paths(nlohmann::json& scene, const std::string& from_dir, cons
 std::string scene_json_text(const nlohmann::json& scene);
 
 // Each throws SceneError naming the file and line ("cbox.xml:12: ...") on bad or unsupported input.
-ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text);
+ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text, const SceneDefines& defines = {});
 ImportedScene import_pbrt(const std::string& path, const std::string& text);

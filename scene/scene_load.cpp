@@ -1091,15 +1091,19 @@ const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[
 namespace {
 
 // The JSON document of a scene file: parsed and scanned (a JSON file), or translated (ImportedScene).
-ImportedScene scene_document(const std::string& path) {
+ImportedScene scene_document(const std::string& path, const SceneDefines& defines) {
   const std::string text = read_input_file(path, kSceneInput);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
     throw SceneError(path + ": the file is empty, expected a JSON scene (or a Mitsuba XML or pbrt scene)");
   if (text.rfind("\xff\xfe", 0) == 0 || text.rfind("\xfe\xff", 0) == 0)
     throw SceneError(path + ": the file is UTF-16, expected UTF-8 JSON");
-  switch (scene_file_format(text)) {
+  const SceneFileFormat format = scene_file_format(text);
+  if (!defines.empty() && format != SceneFileFormat::mitsuba_xml)
+    throw SceneError(path + ": -D " + defines[0].first + "=" + defines[0].second + " sets a Mitsuba <default>, and this is " +
+                     (format == SceneFileFormat::pbrt ? "a pbrt" : "a JSON") + " scene");
+  switch (format) {
     case SceneFileFormat::mitsuba_xml: {
-      ImportedScene imported = import_mitsuba_xml(path, text);
+      ImportedScene imported = import_mitsuba_xml(path, text, defines);
       imported.format = SceneFileFormat::mitsuba_xml;
       return imported;
     }
@@ -1126,10 +1130,12 @@ ImportedScene scene_document(const std::string& path) {
 
 }  // namespace
 
-ImportedScene load_scene_document(const std::string& path) { return scene_document(path); }
+ImportedScene load_scene_document(const std::string& path, const SceneDefines& defines) {
+  return scene_document(path, defines);
+}
 
-SceneDescription load_scene(const std::string& path) {
-  const ImportedScene document = scene_document(path);
+SceneDescription load_scene(const std::string& path, const SceneDefines& defines) {
+  const ImportedScene document = scene_document(path, defines);
   const json& root = document.scene;
   SceneDescription scene;
   scene.path = path;

@@ -118,3 +118,25 @@ TEST(ImportRender, BadInputIsPlacedAtItsSourceLine) {
   EXPECT_NE(err.find("is a pathcl JSON scene already"), std::string::npos) << err;
   EXPECT_EQ(run_pathcl("convert " + pbrt + " -o " + pbrt, &err), 2);
 }
+
+TEST(ImportRender, DefinesSetAMitsubaScenesDefaults) {
+  // -D NAME=VALUE wins over the file's <default>, as Mitsuba's; a $name without either is an error at its line.
+  std::string scene = kMitsubaSpheres;
+  scene.replace(scene.find("<sensor"), 0, "<default name=\"w\" value=\"32\"/>\n  ");
+  scene.replace(scene.find("value=\"32\"/><integer name=\"height\""), 10, "value=\"$w\"/>");
+  const std::string xml = write_temp_file("defaults.xml", scene);
+  std::string err, out;
+  ASSERT_EQ(run_pathcl("info " + xml, &err, &out), 0) << err;
+  EXPECT_NE(out.find("camera: 32x16"), std::string::npos) << out;
+  ASSERT_EQ(run_pathcl("info " + xml + " -D w=8", &err, &out), 0) << err;
+  EXPECT_NE(out.find("camera: 8x16"), std::string::npos) << out;
+  EXPECT_EQ(run_pathcl("info " + xml + " -D w", &err), 2);
+  EXPECT_NE(err.find("-D w: expected NAME=VALUE"), std::string::npos) << err;
+  EXPECT_EQ(run_pathcl("info " + write_temp_file("d.pbrt", kPbrtSpheres) + " -D w=8", &err), 2);
+  EXPECT_NE(err.find("sets a Mitsuba <default>, and this is a pbrt scene"), std::string::npos) << err;
+  const std::string undefined = write_temp_file("undefined.xml", std::string(kMitsubaSpheres).replace(
+                                                                      std::string(kMitsubaSpheres).find("value=\"4\""), 9, "value=\"$spp\""));
+  EXPECT_EQ(run_pathcl("info " + undefined, &err), 2);
+  EXPECT_NE(err.find("undefined.xml:5: undefined parameter $spp"), std::string::npos) << err;
+  EXPECT_EQ(run_pathcl("info " + undefined + " -D spp=2", &err), 0) << err;
+}
