@@ -169,6 +169,26 @@ class Cycles(Renderer):
                     relmse=relmse(read_rgb(l["out"]), read_rgb(self.scene.reference)))
 
 
+def read_export_back(scene, xml, work, spp=64):
+    """pathcl's importer reading the Mitsuba export: pathcl renders the exported XML (the file Mitsuba
+    renders) and its image is compared with the reference of the pathcl scene. Where the two agree, the
+    export is the scene pathcl renders, and a disagreement of Mitsuba's image is Mitsuba's; where they do
+    not, the exporter or the importer is wrong, and the run stops before timing anything. Returns the
+    per-channel ratio of the image means and the relMSE."""
+    import numpy as np
+    out = os.path.join(work, "export-read-back.exr")
+    r, _ = run([PATHCL, "render", xml, "--spp", str(spp), "--seed", "7", "-q", "-o", out])
+    if r.returncode != 0:
+        raise RuntimeError("pathcl cannot read the export %s: %s" % (xml, error_tail(r)))
+    image, ref = read_rgb(out), read_rgb(scene.reference)
+    ratio = [float(image[c].mean() / ref[c].mean()) for c in range(3)]
+    result = dict(spp=spp, mean_ratio=ratio, relmse=relmse(image, ref))
+    if any(abs(x - 1) > 0.02 for x in ratio):
+        raise RuntimeError("the export is another scene: pathcl renders it with channel means %s of the scene's "
+                           "(%s)" % (" ".join("%.4f" % x for x in ratio), xml))
+    return result
+
+
 class PeerProcess(Renderer):
     """Mitsuba and LuxCore through peer_runners.py in a subprocess."""
 
@@ -176,8 +196,10 @@ class PeerProcess(Renderer):
         super().__init__(name, scene, work)
         self.peer, self.variant = name.split("-", 1)
         export_dir = os.path.join(work, "export")
+        self.read_back = None
         if self.peer == "mitsuba":
             self.target = export_mitsuba.export(scene.model, export_dir)
+            self.read_back = read_export_back(scene, self.target, work)
         else:
             export_luxcore.export(scene.model, export_dir, self.variant)
             self.target = export_dir
@@ -593,6 +615,8 @@ def main():
                 continue
             res = summarize(series[name], budget[name], noise)
             res["agreement"] = agreement([s["image"] for s in series[name]], ref, noise)
+            if getattr(active[name], "read_back", None):
+                res["pathcl_reads_export"] = active[name].read_back
             entry["renderers"][name] = res
         if scene_name in ray_scenes:
             log("[%s] traversal: pathcl rays vs Embree" % scene_name)
