@@ -320,21 +320,55 @@ uint32_t read_wrap(const Node& n) {
   return PC_WRAP_REPEAT;
 }
 
-// A material colour: [r, g, b] in [0, 1], or {"texture": FILE, "wrap": "repeat" | "clamp" | "mirror"}.
-// Sets m.color (1 for a texture, which the colour then is) and m.color_texture.
+// [a, b], each a number > 0 (positive) or any finite number.
+glm::vec2 read_pair(const Node& n, bool positive) {
+  if (!n.value.is_array() || n.value.size() != 2) n.fail("expected an array of 2 numbers");
+  glm::vec2 v;
+  for (size_t i = 0; i < 2; ++i) v[int(i)] = float(positive ? n.at(i).positive_setting() : n.at(i).number());
+  return v;
+}
+
+// {"checkerboard": {"color0": [r, g, b], "color1": [r, g, b], "tiles": [nu, nv], "offset": [ou, ov]}}:
+// Mitsuba's checkerboard (its colours 0.4 and 0.2 by default, 2 tiles per unit of u and v), evaluated at the
+// point (scene/texture_load.h). Its colours are in [0, 1], as a material colour's or an opacity's.
+uint32_t add_checkerboard(SceneDescription& scene, const Node& n) {
+  n.expect_object({"checkerboard"}, {"checkerboard"});
+  const Node c = n.at("checkerboard");
+  c.expect_object({"color0", "color1", "tiles", "offset"});
+  glm::vec3 color0 = c.has("color0") ? read_albedo(c.at("color0")) : glm::vec3(0.4f);
+  glm::vec3 color1 = c.has("color1") ? read_albedo(c.at("color1")) : glm::vec3(0.2f);
+  glm::vec2 tiles = c.has("tiles") ? read_pair(c.at("tiles"), true) : glm::vec2(2);
+  glm::vec2 offset = c.has("offset") ? read_pair(c.at("offset"), false) : glm::vec2(0);
+  TextureImage image = checkerboard_texture(color0, color1, tiles, offset);
+  const std::string name = image.file;
+  return add_texture_image(scene, name, [&] { return std::move(image); }, c.place(), PC_WRAP_REPEAT, true);
+}
+
+// An image ({"texture": FILE, "wrap": ...}) or a checkerboard ({"checkerboard": {...}}) where a material
+// takes a texture; `expected` says what else the value may be, for messages.
+uint32_t add_material_texture(const Node& n, SceneDescription& scene, const std::filesystem::path& dir,
+                              const std::string& expected) {
+  if (!n.value.is_object())
+    n.fail("expected " + expected + " or {\"texture\": FILE} or {\"checkerboard\": {...}}");
+  if (n.has("checkerboard")) return add_checkerboard(scene, n);
+  n.expect_object({"texture", "wrap"}, {"texture"});
+  return add_texture(scene, n.at("texture"), dir, read_wrap(n), true);
+}
+
+// A material colour: [r, g, b] in [0, 1], {"texture": FILE, "wrap": "repeat" | "clamp" | "mirror"} or
+// {"checkerboard": {...}}. Sets m.color (1 for a texture, which the colour then is) and m.color_texture.
 void read_albedo_or_texture(const Node& n, SceneDescription& scene, const std::filesystem::path& dir,
                             MaterialDesc& m) {
   if (n.value.is_array()) {
     m.color = read_albedo(n);
     return;
   }
-  if (!n.value.is_object()) n.fail("expected an array of 3 numbers or {\"texture\": FILE}");
-  n.expect_object({"texture", "wrap"}, {"texture"});
+  m.color_texture = add_material_texture(n, scene, dir, "an array of 3 numbers");
   m.color = glm::vec3(1);
-  m.color_texture = add_texture(scene, n.at("texture"), dir, read_wrap(n), true);
 }
 
-// A material's opacity (cut-outs): a number in [0, 1], or {"texture": FILE, "wrap": ...} (an opacity map).
+// A material's opacity (cut-outs): a number in [0, 1], or {"texture": FILE, "wrap": ...} (an opacity map), or
+// {"checkerboard": {...}} (its red channel).
 void read_opacity(const Node& n, SceneDescription& scene, const std::filesystem::path& dir, MaterialDesc& m) {
   if (n.value.is_number()) {
     double o = n.number();
@@ -342,9 +376,7 @@ void read_opacity(const Node& n, SceneDescription& scene, const std::filesystem:
     m.opacity = float(o);
     return;
   }
-  if (!n.value.is_object()) n.fail("expected a number in [0, 1] or {\"texture\": FILE}");
-  n.expect_object({"texture", "wrap"}, {"texture"});
-  m.opacity_texture = add_texture(scene, n.at("texture"), dir, read_wrap(n), true);
+  m.opacity_texture = add_material_texture(n, scene, dir, "a number in [0, 1]");
 }
 
 MaterialDesc read_material(const Node& n, const std::string& name, SceneDescription& scene,
@@ -1090,6 +1122,41 @@ const char* sampler_name(uint32_t sampler) { return sampler < 4 ? kSamplerNames[
 
 namespace {
 
+// Whether the bytes are UTF-8 (as JSON text must be; an imported file's strings are not checked by a
+// JSON parser): no stray continuation byte, truncated or overlong sequence, surrogate or code point
+// beyond U+10FFFF.
+bool is_utf8(const std::string& s) {
+  for (size_t i = 0; i < s.size();) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    const size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
+    if (n == 0 || i + n > s.size()) return false;
+    uint32_t code = n == 1 ? c : c & (0x7f >> n);
+    for (size_t k = 1; k < n; ++k) {
+      const unsigned char d = static_cast<unsigned char>(s[i + k]);
+      if ((d >> 6) != 0x2) return false;
+      code = (code << 6) | (d & 0x3f);
+    }
+    const uint32_t smallest[] = {0, 0, 0x80, 0x800, 0x10000};
+    if (code < smallest[n] || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff)) return false;
+    i += n;
+  }
+  return true;
+}
+
+// Every string of an imported document is UTF-8 (a mesh file name, a material name), or the file is
+// refused at the entry that holds the string (nlohmann's dump would throw on it later).
+void check_strings_are_utf8(const Node& n) {
+  if (n.value.is_string() && !is_utf8(n.value.get_ref<const std::string&>()))
+    n.fail("a string that is not valid UTF-8");
+  if (n.value.is_object())
+    for (auto& [key, _] : n.value.items()) {
+      if (!is_utf8(key)) n.fail("a name that is not valid UTF-8");
+      check_strings_are_utf8(n.at(key));
+    }
+  if (n.value.is_array())
+    for (size_t i = 0; i < n.value.size(); ++i) check_strings_are_utf8(n.at(i));
+}
+
 // The JSON document of a scene file: parsed and scanned (a JSON file), or translated (ImportedScene).
 ImportedScene scene_document(const std::string& path, const SceneDefines& defines) {
   const std::string text = read_input_file(path, kSceneInput);
@@ -1105,11 +1172,13 @@ ImportedScene scene_document(const std::string& path, const SceneDefines& define
     case SceneFileFormat::mitsuba_xml: {
       ImportedScene imported = import_mitsuba_xml(path, text, defines);
       imported.format = SceneFileFormat::mitsuba_xml;
+      check_strings_are_utf8(Node{path, imported.scene, "", &imported.origins});
       return imported;
     }
     case SceneFileFormat::pbrt: {
       ImportedScene imported = import_pbrt(path, text);
       imported.format = SceneFileFormat::pbrt;
+      check_strings_are_utf8(Node{path, imported.scene, "", &imported.origins});
       return imported;
     }
     case SceneFileFormat::json: break;
@@ -1207,6 +1276,8 @@ SceneDescription load_scene(const std::string& path, const SceneDefines& defines
       if (light.type == PC_LIGHT_ENVIRONMENT) {
         if (environment) l.fail("a scene has at most one environment light");
         environment = true;
+        if (l.has("file") && l.at("file").value.is_object() && l.at("file").has("checkerboard"))
+          l.at("file").fail("a checkerboard cannot be an environment map (an environment takes a lat-long image file)");
         if (l.has("file")) light.texture = add_texture(scene, l.at("file"), dir, PC_WRAP_REPEAT, false);
       }
       scene.lights.push_back(light);

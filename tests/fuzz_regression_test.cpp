@@ -1,6 +1,6 @@
 // Inputs that the fuzzers (fuzz/, scripts/fuzz) found to crash or to trip a sanitizer, kept in
 // tests/scenes/fuzz-regressions/: each must load or be rejected with SceneError, never anything else.
-// Scenes go through load_scene and build_device_scene; meshes through load_obj and clean_mesh with every
+// Scenes (JSON, and the importers' Mitsuba XML and pbrt files) go through load_scene and build_device_scene; meshes through load_obj and clean_mesh with every
 // combination of orient and smooth normals (the fuzzer's leading option byte is stripped from them).
 // fuzz_render's findings (*.scene, in its input format: fuzz/render_input.h) are also rendered, tiny as
 // the fuzzer renders them, on the test device ($PATHCL_TEST_DEVICE). fuzz_gltf's (*.gltf, *.glb) go through
@@ -203,8 +203,11 @@ TEST(FuzzRegression, TexelNearestOfNanIsTexelZero) {
 }
 
 TEST(FuzzRegression, ScenesLoadOrFailWithSceneError) {
-  const std::vector<std::string> scenes = files_ending(".json");
+  // JSON scenes, and fuzz_mitsuba's and fuzz_pbrt's Mitsuba XML and pbrt files (load_scene tells them apart).
+  std::vector<std::string> scenes = files_ending(".json");
   ASSERT_FALSE(scenes.empty());
+  for (const char* imported : {".xml", ".pbrt"})
+    for (const std::string& path : files_ending(imported)) scenes.push_back(path);
   for (const std::string& path : scenes) {
     SCOPED_TRACE(path);
     scene_outcome(path);
