@@ -1,6 +1,7 @@
 /* Image textures: texels at the precision of their file (8-bit sRGB, half or float; PC_TEXELS_* of
  * shared/types.h), decoded to linear RGB here, bilinear filtering, repeat / clamp / mirror wrapping.
- * v = 0 is the bottom row of the image, as in OBJ files. */
+ * v = 0 is the bottom row of the image, as in OBJ files. Checkerboards (PC_TEXELS_CHECKER) are evaluated
+ * exactly at the point. */
 #ifndef PATHCL_TEXTURE_CL
 #define PATHCL_TEXTURE_CL
 
@@ -61,9 +62,22 @@ inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float 
   return (1.0f - u - v) * a.xy + u * a.zw + v * b.xy;
 }
 
+/* A checkerboard (PC_TEXELS_CHECKER) at (u, v), evaluated at the point: with x = u tiles_u + offset_u and
+ * y = (1 - v) tiles_v + offset_v (the axes of an image's columns and rows, so that row 0 is at the top),
+ * color1 where floor(x) + floor(y) is odd, else color0. It is tested as Mitsuba's checkerboard tests its
+ * (src/textures/checkerboard.cpp: frac(s) > 0.5 along each axis, s = x / 2), so that on a tile's edge the
+ * same side wins; halving, floor and the subtraction are exact. */
+inline float3 checker_lookup(__global const uint* texels, Texture t, float2 uv) {
+  __global const float* w = (__global const float*)(texels + t.offset);
+  float2 s = 0.5f * ((float2)(uv.x, 1.0f - uv.y) * vload2(3, w) + vload2(4, w));
+  int2 upper = isgreater(s - floor(s), (float2)(0.5f));
+  return upper.x == upper.y ? vload3(0, w) : vload3(1, w);
+}
+
 /* Bilinear lookup at (u, v) under the texture's wrap mode; texel centres at half-integer coordinates. */
 inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
   Texture t = textures[index];
+  if (t.format == PC_TEXELS_CHECKER) return checker_lookup(texels, t, uv);
   return texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, (1.0f - uv.y) * (float)t.height - 0.5f, t.wrap,
                           t.wrap);
 }

@@ -906,12 +906,36 @@ enum class Role {
   emission,     // radiance, intensity, irradiance: not weighted; a uniform spectrum is xyz_to_srgb(1, 1, 1) v
 };
 
-// A colour parameter as pathcl takes it: an RGB value, or an image ({"texture": FILE, "wrap": MODE}).
+// Mitsuba's checkerboard as pathcl's {"checkerboard": {...}} (docs/scene-format.md, Textures): its colours,
+// and along each axis the tiles per unit of uv and the offset in tiles (checkerboard() below).
+struct Checker {
+  glm::dvec3 color0{0.4}, color1{0.2};  // Mitsuba's defaults
+  glm::dvec2 tiles{2, 2}, offset{0, 0};
+  json to_json() const {
+    json c = {{"color0", vec_json(color0)}, {"color1", vec_json(color1)}, {"tiles", {tiles.x, tiles.y}}};
+    if (offset != glm::dvec2(0)) c["offset"] = {offset.x, offset.y};
+    return {{"checkerboard", c}};
+  }
+};
+
+// A colour parameter as pathcl takes it: an RGB value, an image ({"texture": FILE, "wrap": MODE}) or a
+// checkerboard.
 struct Color {
   glm::dvec3 rgb{0};
-  json texture;
-  bool textured() const { return !texture.is_null(); }
-  json to_json() const { return textured() ? texture : vec_json(rgb); }
+  json texture;  // an image
+  std::optional<Checker> checker;
+  bool textured() const { return !texture.is_null() || checker.has_value(); }
+  json to_json() const { return checker ? checker->to_json() : textured() ? texture : vec_json(rgb); }
+  // f on each constant colour: the colour, or a checkerboard's two (an image's texels are not reached).
+  template <class F>
+  void each_constant(F f) {
+    if (checker) {
+      f(checker->color0);
+      f(checker->color1);
+    } else if (texture.is_null()) {
+      f(rgb);
+    }
+  }
 };
 
 glm::dvec3 spectrum_rgb(Importer& im, const Place& at, const Spectrum& s, Role role) {
@@ -1000,6 +1024,66 @@ json bitmap_json(Importer& im, const Object& t, TextureUse use) {
 
 Color read_color(Importer& im, const Object& owner, const Property& p, Role role);
 
+// One axis of a checkerboard: Mitsuba's s = a w + b along it (w the texture coordinate it runs along) as pathcl's
+// tiles per unit and offset in tiles, of x = 2 s (Mitsuba's pattern has two tiles per unit of s). A mirrored axis
+// (a < 0) counts the tiles the other way: off the tiles' edges floor(-x) = -floor(x) - 1, one tile more of
+// offset. Offsets are reduced modulo 2 tiles, the pattern's period.
+void checker_axis(double a, double b, double& tiles, double& offset) {
+  tiles = 2 * std::abs(a);
+  const double o = a > 0 ? 2 * b : 1 - 2 * b;
+  offset = o - 2 * std::floor(o / 2);
+}
+
+// Mitsuba's checkerboard (src/textures/checkerboard.cpp): at s = to_uv (u, v), color0 where frac(s) > 0.5 along
+// both axes or along neither, else color1 (0.4 and 0.2 by default), evaluated at the point. pathcl's checkerboard
+// (kernels/texture.cl) counts x = u tiles_u + offset_u and y = (1 - v) tiles_v + offset_v, and its v is Mitsuba's
+// 1 - v (the shapes' uvs are written flipped, triangles_json, and mesh files are read as Mitsuba reads them), so
+// y runs along Mitsuba's v. to_uv is read as Mitsuba reads a 4 x 4 transform for a 2-D one (Transform::extract):
+// the upper-left 2 x 2 block and the first two entries of the translation column; 0.6's uoffset, voffset, uscale
+// and vscale as Mitsuba 3 upgrades them (scale times translate). A to_uv that scales, mirrors and translates the
+// axes is exact, and so is one that also swaps them (a rotation by a multiple of 90 degrees): the parity of
+// floor(x) + floor(y) does not depend on their order. Other rotations and shears are dropped with a warning.
+Checker checkerboard(Importer& im, const Object& t) {
+  Checker c;
+  for (const char* name : {"color0", "color1"}) {
+    const Property* p = find(t, name);
+    if (!p) continue;
+    Color v = read_color(im, t, *p, Role::reflectance);
+    if (v.textured())
+      fail(p->place, t.label() + ": " + name + " is a texture (pathcl's checkerboard takes two constant colours)");
+    (std::string(name) == "color0" ? c.color0 : c.color1) = v.rgb;
+  }
+  glm::dmat4 m = transform(t, "to_uv");
+  std::optional<double> uoffset = optional_number(t, "uoffset"), voffset = optional_number(t, "voffset"),
+                        uscale = optional_number(t, "uscale"), vscale = optional_number(t, "vscale");
+  if (uoffset || voffset || uscale || vscale)  // 0.6
+    m = glm::scale(glm::dmat4(1.0), glm::dvec3(uscale.value_or(1), vscale.value_or(1), 1)) *
+        glm::translate(glm::dmat4(1.0), glm::dvec3(uoffset.value_or(0), voffset.value_or(0), 0));
+  // s.x = a[0][0] u + a[0][1] v + b[0], s.y = a[1][0] u + a[1][1] v + b[1] (glm's m[column][row]).
+  const double a[2][2] = {{m[0][0], m[1][0]}, {m[0][1], m[1][1]}}, b[2] = {m[3][0], m[3][1]};
+  const Place at = place_of(t, "to_uv");
+  const double largest = std::max({std::abs(a[0][0]), std::abs(a[0][1]), std::abs(a[1][0]), std::abs(a[1][1])});
+  auto zero = [&](double v) { return std::abs(v) <= 1e-12 * largest; };  // a rotation's cos 90 degrees is 6e-17
+  if (!zero(a[0][0]) && !zero(a[1][1]) && zero(a[0][1]) && zero(a[1][0])) {
+    checker_axis(a[0][0], b[0], c.tiles.x, c.offset.x);
+    checker_axis(a[1][1], b[1], c.tiles.y, c.offset.y);
+  } else if (zero(a[0][0]) && zero(a[1][1]) && !zero(a[0][1]) && !zero(a[1][0])) {  // u and v swapped
+    checker_axis(a[1][0], b[1], c.tiles.x, c.offset.x);
+    checker_axis(a[0][1], b[0], c.tiles.y, c.offset.y);
+  } else {
+    const double row0 = std::hypot(a[0][0], a[0][1]), row1 = std::hypot(a[1][0], a[1][1]);
+    if (zero(row0) || zero(row1) || largest == 0)
+      fail(at, t.label() + ": to_uv maps the texture coordinates onto a line or a point (a zero scale): not supported");
+    im.warn(at, t.label() +
+                    ": to_uv rotates or shears the pattern, which pathcl's checkerboard cannot (its tiles are aligned "
+                    "with u and v): the tiles keep their size, the rotation is dropped");
+    checker_axis(row0, b[0], c.tiles.x, c.offset.x);
+    checker_axis(row1, b[1], c.tiles.y, c.offset.y);
+  }
+  warn_unused(im, t);
+  return c;
+}
+
 // A texture or typed spectrum object (<texture type="bitmap">, <spectrum type="blackbody">, ...).
 Color color_object(Importer& im, const Object& owner, const Property& p, const Object& t, Role role) {
   NestingGuard guard(im, t);
@@ -1009,6 +1093,11 @@ Color color_object(Importer& im, const Object& owner, const Property& p, const O
   if (t.type == "bitmap") {
     if (role != Role::reflectance) fail(t.place, what + " takes a constant in pathcl, not a texture");
     c.texture = bitmap_json(im, t, TextureUse::color);
+    return c;
+  }
+  if (t.type == "checkerboard") {
+    if (role != Role::reflectance) fail(t.place, what + " takes a constant in pathcl, not a texture");
+    c.checker = checkerboard(im, t);
     return c;
   }
   if (t.type == "uniform") {
@@ -1047,8 +1136,8 @@ Color color_object(Importer& im, const Object& owner, const Property& p, const O
     c.rgb = spectrum_rgb(im, t.place, s, role);
   } else {
     fail(t.place, t.label() +
-                      " is not supported (supported: bitmap textures, and the spectra uniform, srgb, d65, blackbody, "
-                      "regular and irregular)");
+                      " is not supported (supported: bitmap and checkerboard textures, and the spectra uniform, srgb, "
+                      "d65, blackbody, regular and irregular)");
   }
   warn_unused(im, t);
   return c;
@@ -1084,15 +1173,15 @@ Color read_color(Importer& im, const Object& owner, const Property& p, Role role
 // A reflectance parameter: a texture, or a colour clamped into [0, 1], which pathcl's materials need.
 Color reflectance(Importer& im, const Object& o, const std::string& name, double fallback) {
   const Property* p = find(o, name);
-  if (!p) return Color{glm::dvec3(fallback), nullptr};
+  if (!p) return Color{glm::dvec3(fallback), nullptr, std::nullopt};
   Color c = read_color(im, o, *p, Role::reflectance);
-  if (!c.textured()) {
-    glm::dvec3 clamped = glm::clamp(c.rgb, 0.0, 1.0);
-    if (clamped != c.rgb)
-      im.warn(p->place, o.label() + ": " + name + " " + format_color(c.rgb) +
+  c.each_constant([&](glm::dvec3& rgb) {  // a constant, or a checkerboard's colours
+    glm::dvec3 clamped = glm::clamp(rgb, 0.0, 1.0);
+    if (clamped != rgb)
+      im.warn(p->place, o.label() + ": " + name + " " + format_color(rgb) +
                             " is clamped into [0, 1] (pathcl's materials cannot reflect more than they receive)");
-    c.rgb = clamped;
-  }
+    rgb = clamped;
+  });
   return c;
 }
 
@@ -1248,6 +1337,16 @@ void build_mask(Importer& im, const Object& b, BsdfBuild& out) {
     out.material["opacity"] = bitmap_json(im, t, TextureUse::opacity);
     return;
   }
+  if (p && is_object(*p) && resolve(im, *p).type == "checkerboard") {
+    // Mitsuba reads an opacity by the texture's eval_1, which its checkerboard (3.9) answers with the colours
+    // the other way round (color0 where the axes differ: src/textures/checkerboard.cpp), each colour by its
+    // mean, clipped to [0, 1]. pathcl reads the red channel: grey colours, swapped.
+    Checker c = checkerboard(im, resolve(im, *p));
+    auto opacity = [](glm::dvec3 v) { return glm::dvec3(std::clamp((v.x + v.y + v.z) / 3, 0.0, 1.0)); };
+    std::tie(c.color0, c.color1) = std::make_pair(opacity(c.color1), opacity(c.color0));
+    out.material["opacity"] = c.to_json();
+    return;
+  }
   glm::dvec3 c = p ? read_color(im, b, *p, Role::reflectance).rgb : glm::dvec3(0.5);
   out.material["opacity"] = std::clamp((c.x + c.y + c.z) / 3, 0.0, 1.0);  // Mitsuba reads a colour's mean
 }
@@ -1336,22 +1435,22 @@ void build_plastic(Importer& im, const Object& b, BsdfBuild& out) {
   bool nonlinear = boolean(b, "nonlinear", false);
   Color diffuse = reflectance(im, b, "diffuse_reflectance", 0.5);
   double fdr = fresnel_diffuse_reflectance(1 / eta);
-  if (diffuse.textured()) {
+  if (!diffuse.texture.is_null()) {
     im.warn(place_of(b, "diffuse_reflectance"),
             b.label() +
                 ": the diffuse texture is used unscaled: Mitsuba's plastic scales it by 1 / (eta^2 (1 - F_dr)) = " +
                 format_number(1 / (eta * eta * (1 - fdr))) + (nonlinear ? " (nonlinear: per texel)" : "") +
                 ", and pathcl's textures take no factor");
-  } else {
-    glm::dvec3 c = diffuse.rgb;
+  }
+  diffuse.each_constant([&](glm::dvec3& c) {  // a constant, or a checkerboard's colours: scaled exactly
     glm::dvec3 scaled = c / (eta * eta * (1.0 - (nonlinear ? c * fdr : glm::dvec3(fdr))));
     glm::dvec3 clamped = glm::min(scaled, glm::dvec3(1));
     if (clamped != scaled)
       im.warn(b.place,
               b.label() + ": Mitsuba's diffuse lobe, " + format_color(scaled) +
                   " (diffuse_reflectance / (eta^2 (1 - F_dr))), exceeds 1 and is clamped to 1 for pathcl's plastic");
-    diffuse.rgb = clamped;
-  }
+    c = clamped;
+  });
   Color specular = reflectance(im, b, "specular_reflectance", 1);
   if (specular.textured() || specular.rgb != glm::dvec3(1))
     im.warn(
@@ -1375,14 +1474,16 @@ void build_phong(Importer& im, const Object& b, BsdfBuild& out) {
   if (specular.textured())
     fail(place_of(b, "specular_reflectance"),
          b.label() + ": a specular_reflectance texture is not supported (pathcl's phong takes a constant specular)");
-  if (!diffuse.textured()) {
-    double sum =
-        std::max({diffuse.rgb.x + specular.rgb.x, diffuse.rgb.y + specular.rgb.y, diffuse.rgb.z + specular.rgb.z});
+  if (diffuse.texture.is_null()) {  // a constant, or a checkerboard's colours
+    double sum = 0;
+    diffuse.each_constant([&](glm::dvec3& c) {
+      sum = std::max({sum, c.x + specular.rgb.x, c.y + specular.rgb.y, c.z + specular.rgb.z});
+    });
     if (sum > 1) {
       im.warn(b.place, b.label() + ": diffuse + specular reflectance reaches " + format_number(sum) +
                            "; both are scaled by 1/" + format_number(sum) +
                            " so that energy is conserved (pathcl requires it)");
-      diffuse.rgb /= sum;
+      diffuse.each_constant([&](glm::dvec3& c) { c /= sum; });
       specular.rgb /= sum;
     }
   }
@@ -1425,7 +1526,7 @@ void build_bsdf(Importer& im, const Object& b, BsdfBuild& out) {
 
 bool has_texture(const json& material) {
   for (const auto& [key, value] : material.items())
-    if (value.is_object() && value.contains("texture")) return true;
+    if (value.is_object() && (value.contains("texture") || value.contains("checkerboard"))) return true;
   return false;
 }
 
@@ -1482,12 +1583,13 @@ const MaterialInfo& default_material(Importer& im, bool emitter, const Object& s
 // ---------------------------------------------------------------------------------------------------
 // Shapes
 
-// An inline triangle mesh (pathcl's "triangles") for Mitsuba's rectangle, cube and disk, faces counter-
-// clockwise seen from the side Mitsuba's normals point to.
+// An inline triangle mesh (pathcl's "triangles") for Mitsuba's rectangle, cube, disk and cylinder, faces
+// counter-clockwise seen from the side Mitsuba's normals point to.
 struct Triangles {
   std::vector<glm::dvec3> positions;
   std::vector<glm::dvec2> uvs;  // Mitsuba's (v = 0 at an image's top row)
   std::vector<glm::ivec3> faces;
+  double ring_scale = 1;  // a tessellated round shape: its ring's radius over the round one's
 };
 
 // [-1, 1]^2 in z = 0, normal +z, uv = ((x + 1) / 2, (y + 1) / 2) (src/shapes/rectangle.cpp).
@@ -1519,24 +1621,55 @@ Triangles cube_mesh() {
 }
 
 constexpr int kDiskSegments = 256;
+constexpr int kCylinderSegments = 128;
+
+// Vertex i of a ring of n segments around the z axis at height z, counter-clockwise seen from +z, from the
+// +x axis on: n + 1 vertices, the last (the seam, where Mitsuba's angle reaches 2 pi) at the first's position.
+glm::dvec3 ring_vertex(int i, int n, double radius, double z) {
+  const double angle = i == n ? 0 : i * (2 * M_PI / n);
+  return {radius * std::cos(angle), radius * std::sin(angle), z};
+}
 
 // The unit disk in z = 0, normal +z, uv = (radius, angle / 2 pi) (src/shapes/disk.cpp), as a fan of
 // kDiskSegments triangles whose ring is scaled to give the fan the disk's area. Each triangle has a centre
 // vertex of its own, at the middle of its angle, since the angle is undefined there.
 Triangles disk_mesh() {
   const int n = kDiskSegments;
-  const double step = 2 * M_PI / n;
-  const double radius = std::sqrt(2 * M_PI / (n * std::sin(step)));
   Triangles t;
+  t.ring_scale = std::sqrt(2 * M_PI / (n * std::sin(2 * M_PI / n)));  // n sin(2 pi / n) r^2 / 2 = pi
   for (int i = 0; i <= n; ++i) {
-    double angle = i == n ? 0 : i * step;  // the seam's two vertices at the same position
-    t.positions.push_back({radius * std::cos(angle), radius * std::sin(angle), 0});
+    t.positions.push_back(ring_vertex(i, n, t.ring_scale, 0));
     t.uvs.push_back({1, double(i) / n});
   }
   for (int i = 0; i < n; ++i) {
     t.positions.push_back({0, 0, 0});
     t.uvs.push_back({0, (i + 0.5) / n});
     t.faces.push_back({n + 1 + i, i, i + 1});
+  }
+  return t;
+}
+
+// Mitsuba's cylinder (src/shapes/cylinder.cpp): the open tube (no caps) of radius 1 around the z axis from
+// z = 0 to 1, normals outward, uv = (angle / 2 pi, z), as kCylinderSegments quads (two triangles each) between
+// two rings whose radius is scaled to give the tube the cylinder's area (a perimeter of 2 pi). Mitsuba's
+// radius, p0 and p1 place it: translate(p0) to_frame(p1 - p0) scale(radius, radius, |p1 - p0|), the frame's
+// first two axes Mitsuba's coordinate_system of the direction (basis_first_vector).
+Triangles cylinder_mesh(double radius, glm::dvec3 p0, glm::dvec3 p1) {
+  const int n = kCylinderSegments;
+  const double length = glm::length(p1 - p0);
+  const glm::dvec3 axis = (p1 - p0) / length, first = basis_first_vector(axis), second = glm::cross(axis, first);
+  Triangles t;
+  t.ring_scale = M_PI / (n * std::sin(M_PI / n));  // n 2 r sin(pi / n) = 2 pi
+  for (int z = 0; z < 2; ++z)
+    for (int i = 0; i <= n; ++i) {
+      const glm::dvec3 local = ring_vertex(i, n, t.ring_scale, z);
+      t.positions.push_back(p0 + radius * (local.x * first + local.y * second) + length * local.z * axis);
+      t.uvs.push_back({double(i) / n, double(z)});
+    }
+  for (int i = 0; i < n; ++i) {  // counter-clockwise seen from outside: along the angle, then up
+    const int bottom = i, top = n + 1 + i;
+    t.faces.push_back({bottom, bottom + 1, top + 1});
+    t.faces.push_back({bottom, top + 1, top});
   }
   return t;
 }
@@ -1630,9 +1763,11 @@ void convert_shape(Importer& im, const Object& s, const glm::dmat4& placement) {
   const std::string& type = s.type;
   if (type == "shapegroup") return;  // placed by its instances
   if (type == "instance") return convert_instance(im, s, placement);
-  if (type != "obj" && type != "ply" && type != "serialized" && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere")
+  if (type != "obj" && type != "ply" && type != "serialized" && type != "rectangle" && type != "cube" &&
+      type != "disk" && type != "cylinder" && type != "sphere")
     fail(s.place, "shape " + quote(type) +
-                      " is not supported (supported: obj, ply, serialized, rectangle, cube, disk, sphere, shapegroup, instance)");
+                      " is not supported (supported: obj, ply, serialized, rectangle, cube, disk, cylinder, sphere, "
+                      "shapegroup, instance)");
   for (const Object* medium : nested(im, s, "medium"))
     fail(medium->place, s.label() + ": media are not supported (pathcl renders surfaces in a vacuum)");
   for (const Object* sensor : nested(im, s, "sensor"))
@@ -1669,12 +1804,29 @@ void convert_shape(Importer& im, const Object& s, const glm::dmat4& placement) {
       im.warn(s.place, s.label() +
                            ": pathcl's sphere has texture coordinates of its own (+y at v = 1), not Mitsuba's (+z at v "
                            "= 0): the texture is placed differently");
+  } else if (type == "cylinder") {
+    const double radius = number(s, "radius", 1);
+    const glm::dvec3 p0 = optional_vector(s, "p0").value_or(glm::dvec3(0)),
+                     p1 = optional_vector(s, "p1").value_or(glm::dvec3(0, 0, 1));
+    // A negative radius is the same tube turned by 180 degrees about its axis, as in Mitsuba.
+    if (!(radius != 0 && std::isfinite(radius)))
+      fail(place_of(s, "radius"), s.label() + ": expected a radius other than 0");
+    if (!(glm::length(p1 - p0) > 0)) fail(s.place, s.label() + ": p0 and p1 coincide (a cylinder of length 0)");
+    const Triangles t = cylinder_mesh(radius, p0, p1);
+    j = triangles_json(t, boolean(s, "flip_normals", false));
+    // Smooth shading makes the facets a round tube: adjacent ones differ by 360 / 128 = 2.8 degrees.
+    j["smooth"] = true;
+    j["smooth_angle_degrees"] = 30;
+    im.warn(s.place, s.label() + ": tessellated into " + std::to_string(2 * kCylinderSegments) + " triangles (" +
+                         std::to_string(kCylinderSegments) +
+                         " segments, shaded smooth), their rings' radius scaled by " + format_number(t.ring_scale, 6) +
+                         " so that the area is the cylinder's");
   } else {
     const Triangles t = type == "rectangle" ? rectangle_mesh() : type == "cube" ? cube_mesh() : disk_mesh();
     j = triangles_json(t, boolean(s, "flip_normals", false));
     if (type == "disk")
       im.warn(s.place, s.label() + ": tessellated into " + std::to_string(kDiskSegments) +
-                           " triangles, their ring's radius scaled by " + format_number(t.positions[0].x, 6) +
+                           " triangles, their ring's radius scaled by " + format_number(t.ring_scale, 6) +
                            " so that the area is the disk's");
   }
   j["material"] = material.name;

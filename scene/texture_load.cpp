@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <vector>
 
 #include <ImfArray.h>
@@ -335,6 +336,31 @@ TextureImage decode_texture_image(const std::string& name, const std::string& by
   return image;
 }
 
+TextureImage checkerboard_texture(glm::vec3 color0, glm::vec3 color1, glm::vec2 tiles, glm::vec2 offset) {
+  // An offset of 2 tiles gives the same pattern; reduced modulo 2 exactly, in double.
+  for (int a = 0; a < 2; ++a) offset[a] = float(double(offset[a]) - 2.0 * std::floor(double(offset[a]) / 2.0));
+  const float values[10] = {color0.x, color0.y, color0.z, color1.x, color1.y, color1.z,
+                            tiles.x,  tiles.y,  offset.x, offset.y};
+  TextureImage image;
+  image.width = 2;
+  image.height = 1;
+  image.format = PC_TEXELS_CHECKER;
+  image.words.resize(10);
+  std::memcpy(image.words.data(), values, sizeof values);
+  std::ostringstream name;  // the exact floats: equal checkerboards share one texture
+  name.precision(9);
+  name << "checkerboard (color0";
+  for (int k = 0; k < 10; ++k) {
+    if (k == 3) name << "; color1";
+    if (k == 6) name << "; tiles";
+    if (k == 8) name << "; offset";
+    name << ' ' << values[k];
+  }
+  name << ')';
+  image.file = name.str();
+  return image;
+}
+
 glm::vec3 texel_linear(const TextureImage& image, size_t i) {
   const char* bytes = reinterpret_cast<const char*>(image.words.data());
   if (image.format == PC_TEXELS_SRGB8) {
@@ -350,12 +376,19 @@ glm::vec3 texel_linear(const TextureImage& image, size_t i) {
     b.setBits(h[2]);
     return {float(r), float(g), float(b)};
   }
-  float f[3];
+  float f[3];  // FLOAT, and a checkerboard's two colours
   std::memcpy(f, bytes + 12 * i, 12);
   return {f[0], f[1], f[2]};
 }
 
 glm::vec3 texel_nearest(const TextureImage& image, glm::vec2 uv) {
+  if (image.format == PC_TEXELS_CHECKER) {  // as kernels/texture.cl's checker_lookup, in the same float steps
+    float w[10];
+    std::memcpy(w, image.words.data(), sizeof w);
+    const float s[2] = {0.5f * (uv.x * w[6] + w[8]), 0.5f * ((1.0f - uv.y) * w[7] + w[9])};
+    const bool upper_u = s[0] - std::floor(s[0]) > 0.5f, upper_v = s[1] - std::floor(s[1]) > 0.5f;
+    return texel_linear(image, upper_u == upper_v ? 0 : 1);
+  }
   // Texel coordinates with the texel centres at half-integers, as kernels/texture.cl places them.
   auto index = [&](float t, uint32_t n) {
     double x = std::floor(double(t) * n);

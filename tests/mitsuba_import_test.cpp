@@ -1,16 +1,20 @@
 // Mitsuba 0.6 and 3 XML scenes (scene/mitsuba_import.cpp): small files this test writes give the pathcl
 // JSON that docs/scene-format.md ("Mitsuba XML scenes") describes, plugin by plugin (numbers compared with Mitsuba 3.9's where
 // it computes them: fields of view, the plastic's diffuse lobe, shape layouts); 0.6 names are upgraded;
-// defaults, includes, references and instances resolve; bad input names its file and line; the Cornell
-// box of tests/scenes/mitsuba imports and loads.
+// defaults, includes, references and instances resolve; bad input names its file and line; checkerboards
+// give Mitsuba's tiles on the same points; cylinders are tessellated to their area; the Cornell box of
+// tests/scenes/mitsuba imports and loads.
 #include <cmath>
 #include <filesystem>
+#include <random>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include "kernels/shared/types.h"
 #include "scene/scene_description.h"
 #include "scene/scene_error.h"
 #include "scene/scene_import.h"
@@ -631,6 +635,272 @@ TEST(MitsubaImport, MaskBumpmapPhongAndNull) {
 }
 
 // ---------------------------------------------------------------------------------------------------
+// Checkerboard textures
+
+// The checkerboard of a diffuse material's JSON.
+const json& checker_of(const ImportedScene& s, const std::string& material, const std::string& key = "reflectance") {
+  return s.scene.at("materials").at(material).at(key).at("checkerboard");
+}
+
+glm::dvec2 pair_of(const json& j, const std::string& key, glm::dvec2 fallback) {
+  if (!j.contains(key)) return fallback;
+  return {j.at(key).at(0).get<double>(), j.at(key).at(1).get<double>()};
+}
+
+TEST(MitsubaImport, CheckerboardBecomesPathclsCheckerboard) {
+  ImportedScene s = import_file("checker.xml", scene3(R"(<texture type="checkerboard" id="planetex">
+  <rgb name="color0" value="0.2"/><rgb name="color1" value="0.4"/>
+  <transform name="to_uv"><matrix value="8 0 0 0 0 8 0 0 0 0 8 0 0 0 0 1"/></transform></texture>
+<bsdf type="twosided" id="plane"><bsdf type="diffuse"><ref name="reflectance" id="planetex"/></bsdf></bsdf>
+<bsdf type="twosided" id="defaults"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></bsdf>
+<bsdf type="twosided" id="moved"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <spectrum name="color0" value="0.7"/><float name="color1" value="0.1"/>
+  <transform name="to_uv"><scale x="1.5" y="2.5"/><translate x="0.1" y="-0.35"/></transform></texture></bsdf></bsdf>
+<bsdf type="twosided" id="bright"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <rgb name="color0" value="1.5 0.5 0.25"/><string name="colour" value="x"/></texture></bsdf></bsdf>
+<bsdf type="twosided" id="rotated"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <transform name="to_uv"><rotate z="1" angle="30"/><scale x="3"/></transform></texture></bsdf></bsdf>
+<bsdf type="twosided" id="glass"><bsdf type="dielectric"><texture type="checkerboard" name="specular_transmittance"/></bsdf></bsdf>
+<bsdf type="twosided" id="plastic"><bsdf type="plastic"><texture type="checkerboard" name="diffuse_reflectance">
+  <float name="color0" value="0.5"/><float name="color1" value="0.9"/></texture></bsdf></bsdf>
+<bsdf type="twosided" id="nonlinear"><bsdf type="plastic"><boolean name="nonlinear" value="true"/>
+  <texture type="checkerboard" name="diffuse_reflectance"><float name="color0" value="0.5"/><float name="color1" value="0.9"/></texture></bsdf></bsdf>
+<bsdf type="twosided" id="phong"><bsdf type="phong"><float name="specular_reflectance" value="0.5"/>
+  <texture type="checkerboard" name="diffuse_reflectance"><float name="color0" value="0.3"/><float name="color1" value="0.75"/></texture></bsdf></bsdf>
+<bsdf type="mask" id="leaf"><texture type="checkerboard" name="opacity"><rgb name="color0" value="0.9 0.6 0.3"/><float name="color1" value="1.5"/></texture>
+  <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>
+<shape type="rectangle"><ref id="plane"/></shape>)"));
+  // matpreview.xml's plane: a 4 x 4 to_uv of scale 8 gives 16 tiles a unit.
+  EXPECT_EQ(checker_of(s, "plane"),
+            (json{{"color0", {0.2, 0.2, 0.2}}, {"color1", {0.4, 0.4, 0.4}}, {"tiles", {16.0, 16.0}}}));
+  EXPECT_EQ(checker_of(s, "defaults"),
+            (json{{"color0", {0.4, 0.4, 0.4}}, {"color1", {0.2, 0.2, 0.2}}, {"tiles", {2.0, 2.0}}}));
+  // Scale then translate: s = 1.5 u + 0.1, 2.5 v - 0.35: tiles 3 and 5, offsets 0.2 and -0.7 + 2 tiles.
+  const json& moved = checker_of(s, "moved");
+  expect_vec(moved.at("color0"), glm::dvec3(0.7));  // a uniform reflectance spectrum is grey
+  expect_vec(moved.at("color1"), glm::dvec3(0.1));
+  EXPECT_EQ(moved.at("tiles"), (json{3.0, 5.0}));
+  EXPECT_NEAR(moved.at("offset")[0].get<double>(), 0.2, 1e-12);
+  EXPECT_NEAR(moved.at("offset")[1].get<double>(), 1.3, 1e-12);
+  expect_vec(checker_of(s, "bright").at("color0"), {1, 0.5, 0.25});
+  EXPECT_TRUE(has_warning(s, "reflectance (1.5, 0.5, 0.25) is clamped into [0, 1]")) << warnings_of(s);
+  EXPECT_TRUE(has_warning(s, "texture \"checkerboard\": parameter \"colour\" is not supported; ignored"))
+      << warnings_of(s);
+  // Rotated by 30 degrees, then scaled: the tiles keep their size (the rows' lengths, 3 and 1), with a warning.
+  EXPECT_NEAR(checker_of(s, "rotated").at("tiles")[0].get<double>(), 6, 1e-12);
+  EXPECT_NEAR(checker_of(s, "rotated").at("tiles")[1].get<double>(), 2, 1e-12);
+  EXPECT_TRUE(
+      has_warning(s, path_of("checker.xml") + ":14: texture \"checkerboard\": to_uv rotates or shears the pattern"))
+      << warnings_of(s);
+  EXPECT_TRUE(checker_of(s, "glass", "transmittance").is_object());
+  // A plastic's colours are scaled as its constant diffuse is (PlasticDiffuseIsScaledToMitsubasLobe), and no
+  // warning says the texture is used unscaled.
+  expect_vec(checker_of(s, "plastic", "diffuse").at("color0"), glm::dvec3(0.5502521611), 1e-6);
+  expect_vec(checker_of(s, "plastic", "diffuse").at("color1"), glm::dvec3(0.9904537988), 1e-6);
+  expect_vec(checker_of(s, "nonlinear", "diffuse").at("color0"), glm::dvec3(0.3197396140), 1e-6);
+  expect_vec(checker_of(s, "nonlinear", "diffuse").at("color1"), glm::dvec3(0.8656393946), 1e-6);
+  EXPECT_FALSE(has_warning(s, "used unscaled")) << warnings_of(s);
+  // A phong's larger colour plus specular reaches 1.25: both scaled by 1 / 1.25.
+  expect_vec(checker_of(s, "phong", "diffuse").at("color0"), glm::dvec3(0.24), 1e-12);
+  expect_vec(checker_of(s, "phong", "diffuse").at("color1"), glm::dvec3(0.6), 1e-12);
+  expect_vec(s.scene.at("materials").at("phong").at("specular"), glm::dvec3(0.4), 1e-12);
+  EXPECT_TRUE(has_warning(s, "diffuse + specular reflectance reaches 1.25")) << warnings_of(s);
+  // A mask reads Mitsuba's eval_1, whose colours are the other way round: color0 becomes the mean of color1
+  // (1.5, clipped to 1), color1 that of color0.
+  const json& leaf = checker_of(s, "leaf", "opacity");
+  expect_vec(leaf.at("color0"), glm::dvec3(1));
+  expect_vec(leaf.at("color1"), glm::dvec3(0.6), 1e-12);
+  EXPECT_EQ(s.warnings.size(), 5u) << warnings_of(s);  // clamped, colour, rotated, phong, no integrator
+
+  // The translation loads as a pathcl scene.
+  SceneDescription scene = load_scene(path_of("checker.xml"));
+  EXPECT_EQ(scene.textures.size(), 9u);
+  EXPECT_EQ(scene.textures[scene.materials[0].color_texture].format, PC_TEXELS_CHECKER);
+
+  // 0.6's names: to_uv = scale(uscale, vscale) translate(uoffset, voffset).
+  ImportedScene old = import_file("checker06.xml", R"(<scene version="0.6.0"><sensor type="perspective"/>
+<bsdf type="diffuse" id="c"><texture type="checkerboard" name="reflectance"><float name="uscale" value="4"/>
+  <float name="uoffset" value="0.25"/><float name="vscale" value="-2"/></texture></bsdf></scene>)");
+  const json& c06 = checker_of(old, "c");
+  EXPECT_EQ(c06.at("tiles"), (json{8.0, 4.0}));
+  EXPECT_EQ(c06.at("offset"), (json{0.0, 1.0}));  // 2 x 4 x 0.25 = 2 = 0 modulo 2; the mirrored v: 1 tile
+
+  // Refused: a zero scale, a texture as a colour, a checkerboard where pathcl takes a constant.
+  EXPECT_TRUE(error_is(import_error("flat.xml", scene3(R"(<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <transform name="to_uv"><scale x="0" y="1"/></transform></texture></bsdf>)")),
+                       path_of("flat.xml") + ":4: ", "to_uv maps the texture coordinates onto a line or a point"));
+  EXPECT_TRUE(error_is(import_error("nested.xml", scene3(R"(<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <texture type="checkerboard" name="color0"/></texture></bsdf>)")),
+                       path_of("nested.xml") + ":4: ",
+                       "color0 is a texture (pathcl's checkerboard takes two constant colours)"));
+  EXPECT_TRUE(error_is(import_error("glow.xml", scene3(R"(<shape type="rectangle"><emitter type="area">
+  <texture type="checkerboard" name="radiance"/></emitter></shape>)")),
+                       path_of("glow.xml") + ":4: ",
+                       "parameter \"radiance\" takes a constant in pathcl, not a texture"));
+  EXPECT_TRUE(error_is(
+      import_error("carbon.xml",
+                   scene3(R"(<bsdf type="roughconductor"><texture type="checkerboard" name="alpha"/></bsdf>)")),
+                       path_of("carbon.xml") + ":3: ", "alpha must be a number"));
+}
+
+// Mitsuba's rule (color0 where frac(s) > 0.5 along both axes of s = to_uv (u, v) or neither) and pathcl's (color1
+// where floor(u tiles + offset) + floor((1 - v) tiles + offset) is odd), the latter read from the translation, at
+// pathcl's uv of the same point, (u, 1 - v): the same colour at random points away from the tiles' edges, for to_uv
+// of every kind the translation takes exactly.
+TEST(MitsubaImport, CheckerboardTilesAreMitsubasOnTheSamePoints) {
+  const char* to_uvs[] = {
+      "",
+      R"(<scale x="1.5" y="2.5"/><translate x="0.1" y="-0.35"/>)",
+      R"(<scale x="-1.5" y="2"/><translate x="0.2" y="0.35"/>)",
+      R"(<scale x="3" y="-0.75"/><translate x="-2.3" y="0.6"/>)",
+      R"(<scale x="1.5" y="3"/><rotate z="1" angle="90"/><translate x="0.1" y="0.2"/>)",
+      R"(<rotate z="1" angle="-90"/><scale x="0.7" y="1.3"/><translate x="0.45" y="0.05"/>)",
+      R"(<rotate z="1" angle="180"/><translate x="0.3" y="0.3"/>)",
+      R"(<matrix value="0 -2 0 0.125  5 0 0 -1.5  0 0 1 0  0 0 0 1"/>)",
+  };
+  for (const char* to_uv : to_uvs) {
+    const std::string xml = scene3(std::string(R"(<bsdf type="twosided" id="c"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+  <transform name="to_uv">)") + to_uv + "</transform></texture></bsdf></bsdf>");
+    ImportedScene s = import_file("checker-points.xml", xml);
+    EXPECT_EQ(s.warnings.size(), 1u) << to_uv << "\n" << warnings_of(s);  // no integrator: exact
+    const json& c = checker_of(s, "c");
+    const glm::dvec2 tiles = pair_of(c, "tiles", {2, 2}), offset = pair_of(c, "offset", {0, 0});
+    // Mitsuba's to_uv, read here by a reader of its own for these four operations, each applied after the ones
+    // before it as Mitsuba composes them.
+    glm::dmat4 m(1.0);
+    const std::string ops = to_uv;
+    for (size_t at = ops.find('<'); at != std::string::npos; at = ops.find('<', at + 1)) {
+      size_t end = ops.find("/>", at);
+      std::string op = ops.substr(at + 1, end - at - 1);
+      auto attr = [&](const std::string& name, double fallback) {
+        size_t k = op.find(" " + name + "=\"");
+        return k == std::string::npos ? fallback : std::stod(op.substr(k + name.size() + 3));
+      };
+      glm::dmat4 step(1.0);
+      if (op.rfind("scale", 0) == 0) step = glm::scale(glm::dmat4(1.0), {attr("x", 1), attr("y", 1), attr("z", 1)});
+      if (op.rfind("translate", 0) == 0)
+        step = glm::translate(glm::dmat4(1.0), {attr("x", 0), attr("y", 0), attr("z", 0)});
+      if (op.rfind("rotate", 0) == 0)
+        step = glm::rotate(glm::dmat4(1.0), glm::radians(attr("angle", 0)),
+                           glm::dvec3(attr("x", 0), attr("y", 0), attr("z", 0)));
+      if (op.rfind("matrix", 0) == 0) {
+        std::istringstream values(op.substr(op.find('"') + 1));
+        for (int r = 0; r < 4; ++r)
+          for (int col = 0; col < 4; ++col) values >> step[col][r];
+      }
+      m = step * m;
+    }
+    std::mt19937 gen(3);
+    std::uniform_real_distribution<double> coordinate(-2, 2);
+    int compared = 0;
+    for (int i = 0; i < 4000; ++i) {
+      const double u = coordinate(gen), v = coordinate(gen);  // Mitsuba's uv
+      const double su = m[0][0] * u + m[1][0] * v + m[3][0], sv = m[0][1] * u + m[1][1] * v + m[3][1];
+      const double x = u * tiles.x + offset.x, y = (1 - (1 - v)) * tiles.y + offset.y;  // pathcl's v is 1 - v
+      auto near_edge = [](double t) { return std::abs(t - std::round(t)) < 1e-6; };
+      if (near_edge(2 * su) || near_edge(2 * sv) || near_edge(x) || near_edge(y)) continue;
+      ++compared;
+      const bool mitsuba_color1 = (su - std::floor(su) > 0.5) != (sv - std::floor(sv) > 0.5);
+      const bool pathcl_color1 = (long long)(std::floor(x) + std::floor(y)) % 2 != 0;
+      ASSERT_EQ(pathcl_color1, mitsuba_color1) << to_uv << " at Mitsuba's uv (" << u << ", " << v << ")";
+    }
+    EXPECT_GT(compared, 3900) << to_uv;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Cylinders
+
+TEST(MitsubaImport, CylinderBecomesASmoothTubeOfTheCylindersArea) {
+  ImportedScene s = import_file("cylinders.xml", scene3(R"(<shape type="cylinder"/>
+<shape type="cylinder"><float name="radius" value="0.5"/><point name="p0" x="1" y="2" z="3"/><point name="p1" x="1.5" y="2.3" z="4.4"/>
+  <transform name="to_world"><translate x="10"/></transform></shape>
+<shape type="cylinder"><boolean name="flip_normals" value="true"/></shape>
+<shape type="cylinder"><float name="radius" value="-1"/></shape>)"));
+  const json& shapes = s.scene.at("shapes");
+  ASSERT_EQ(shapes.size(), 4u);
+  const double ring = M_PI / (128 * std::sin(M_PI / 128));  // the perimeter of 128 chords is 2 pi
+  struct Face {
+    glm::dvec3 normal, centroid;  // cross(b - a, c - a), the front side's
+  };
+  auto faces = [](const json& shape) {
+    std::vector<Face> out;
+    for (const json& f : shape.at("indices")) {
+      glm::dvec3 a = vec(shape.at("positions")[f[0].get<int>()]), b = vec(shape.at("positions")[f[1].get<int>()]),
+                 c = vec(shape.at("positions")[f[2].get<int>()]);
+      out.push_back({glm::cross(b - a, c - a), (a + b + c) / 3.0});
+    }
+    return out;
+  };
+
+  // The unit cylinder: 2 rings of 129 vertices (the seam twice), 256 triangles, facing outwards, area 2 pi.
+  const json& unit = shapes[0];
+  EXPECT_EQ(unit.at("type"), "triangles");
+  ASSERT_EQ(unit.at("positions").size(), 258u);
+  ASSERT_EQ(unit.at("indices").size(), 256u);
+  EXPECT_EQ(unit.at("smooth"), true);
+  EXPECT_EQ(unit.at("smooth_angle_degrees"), 30);
+  EXPECT_FALSE(unit.contains("transform"));
+  for (size_t i = 0; i < 258; ++i) {
+    glm::dvec3 p = vec(unit.at("positions")[i]);
+    const int k = int(i % 129), z = int(i / 129);
+    EXPECT_NEAR(std::hypot(p.x, p.y), ring, 1e-12) << i;
+    EXPECT_EQ(p.z, double(z)) << i;
+    EXPECT_NEAR(std::atan2(p.y, p.x), std::remainder(2 * M_PI * k / 128, 2 * M_PI), 1e-12) << i;
+    // Mitsuba's uv (angle / 2 pi, z), its v flipped into pathcl's.
+    EXPECT_EQ(unit.at("uvs")[i], (json{double(k) / 128, 1.0 - z})) << i;
+  }
+  double area = 0;
+  for (const Face& f : faces(unit)) {
+    EXPECT_GT(glm::dot(f.normal, glm::dvec3(f.centroid.x, f.centroid.y, 0)), 0);  // outward
+    area += glm::length(f.normal) / 2;
+  }
+  EXPECT_NEAR(area, 2 * M_PI, 1e-9);
+  EXPECT_TRUE(has_warning(s, path_of("cylinders.xml") +
+                                 ":3: shape \"cylinder\": tessellated into 256 triangles (128 segments, shaded smooth), "
+                                 "their rings' radius scaled by 1.0001 so that the area is the cylinder's"))
+      << warnings_of(s);
+
+  // Radius 0.5 from p0 to p1, then moved by to_world: Mitsuba's vertices at uv (0, 0), (0.25, 0) and (0.5, 1)
+  // (its to_world applied to (cos 2 pi u, sin 2 pi u, v), from Mitsuba 3.9.1), the ring scaled by 1.0001.
+  const json& placed = shapes[1];
+  expect_matrix(placed.at("transform"), glm::translate(glm::dmat4(1.0), {10, 0, 0}));
+  const glm::dvec3 p0(1, 2, 3), p1(1.5, 2.3, 4.4), axis = glm::normalize(p1 - p0);
+  auto mitsuba_vertex = [&](glm::dvec3 at_ring_1, glm::dvec3 centre) { return centre + ring * (at_ring_1 - centre); };
+  expect_vec(placed.at("positions")[0], mitsuba_vertex({1.47174, 1.98304, 2.83515}, p0), 2e-5);
+  expect_vec(placed.at("positions")[32], mitsuba_vertex({0.983044, 2.48983, 2.90109}, p0), 2e-5);
+  expect_vec(placed.at("positions")[129 + 64], mitsuba_vertex({1.02826, 2.31696, 4.56485}, p1), 2e-5);
+  area = 0;
+  for (const Face& f : faces(placed)) {
+    glm::dvec3 radial = f.centroid - p0 - glm::dot(f.centroid - p0, axis) * axis;
+    EXPECT_GT(glm::dot(f.normal, radial), 0);
+    area += glm::length(f.normal) / 2;
+  }
+  EXPECT_NEAR(area, 2 * M_PI * 0.5 * glm::length(p1 - p0), 1e-9);
+  for (size_t i = 0; i < 258; ++i) {
+    glm::dvec3 d = vec(placed.at("positions")[i]) - p0;
+    EXPECT_NEAR(glm::length(d - glm::dot(d, axis) * axis), 0.5 * ring, 1e-12) << i;
+  }
+
+  // flip_normals: every face inward.
+  for (const Face& f : faces(shapes[2])) EXPECT_LT(glm::dot(f.normal, glm::dvec3(f.centroid.x, f.centroid.y, 0)), 0);
+  // A negative radius: the same tube turned by 180 degrees (u = 0 at -x), still facing outwards.
+  expect_vec(shapes[3].at("positions")[0], {-ring, 0, 0}, 1e-12);
+  for (const Face& f : faces(shapes[3])) EXPECT_GT(glm::dot(f.normal, glm::dvec3(f.centroid.x, f.centroid.y, 0)), 0);
+
+  // It loads, as an emitter too.
+  const std::string path = write_temp_file("mitsuba/cylinder-load.xml", scene3(R"(<shape type="cylinder"><emitter type="area"/></shape>
+<shape type="cylinder"><float name="radius" value="2"/><bsdf type="twosided"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></bsdf></shape>)"));
+  SceneDescription scene = load_scene(path);
+  EXPECT_EQ(scene.shapes.size(), 2u);
+
+  EXPECT_TRUE(error_is(import_error("thin.xml", scene3(R"(<shape type="cylinder"><float name="radius" value="0"/></shape>)")),
+                       path_of("thin.xml") + ":3: ", "shape \"cylinder\": expected a radius other than 0"));
+  EXPECT_TRUE(error_is(import_error("short.xml", scene3(R"(<shape type="cylinder"><point name="p1" x="0" y="0" z="0"/></shape>)")),
+                       path_of("short.xml") + ":3: ", "p0 and p1 coincide"));
+}
+
+// ---------------------------------------------------------------------------------------------------
 // The file structure: 0.6 names, defaults, includes, references
 
 TEST(MitsubaImport, Version06NamesAreUpgraded) {
@@ -737,8 +1007,8 @@ TEST(MitsubaImport, BadInputNamesFileAndLine) {
   EXPECT_TRUE(
       error_is(import_error("kind.xml", scene3(R"(<shape type="sphere"><string name="radius" value="1"/></shape>)")),
                path_of("kind.xml") + ":3: ", "parameter \"radius\" is a <string>, expected a <float>"));
-  EXPECT_TRUE(error_is(import_error("shape.xml", scene3(R"(<shape type="cylinder"/>)")),
-                       path_of("shape.xml") + ":3: ", "shape \"cylinder\" is not supported (supported: obj, ply"));
+  EXPECT_TRUE(error_is(import_error("shape.xml", scene3(R"(<shape type="linearcurve"/>)")),
+                       path_of("shape.xml") + ":3: ", "shape \"linearcurve\" is not supported (supported: obj, ply"));
   EXPECT_TRUE(error_is(import_error("medium.xml", scene3(R"(<medium type="homogeneous" id="fog"/>)")),
                        path_of("medium.xml") + ":3: ", "media are not supported"));
   EXPECT_TRUE(error_is(import_error("cycle.xml", scene3(R"(<bsdf type="twosided" id="a"><ref id="a"/></bsdf>)")),

@@ -944,8 +944,8 @@ TEST(SceneLoad, FilesThatAreNoSceneObjectAreNamed) {
   struct Case {
     std::string json, expected;  // expected after "PATH"
   } cases[] = {
-      {"", ": the file is empty, expected a JSON scene"},
-      {" \n\t\r\n", ": the file is empty, expected a JSON scene"},
+      {"", ": the file is empty, expected a JSON scene (or a Mitsuba XML or pbrt scene)"},
+      {" \n\t\r\n", ": the file is empty, expected a JSON scene (or a Mitsuba XML or pbrt scene)"},
       {std::string("\xff\xfe{\0", 4), ": the file is UTF-16, expected UTF-8 JSON"},
       {"[1, 2, 3]", ": (top level): expected an object with camera, materials and shapes, got an array"},
       {"\"scene\"", ": (top level): expected an object with camera, materials and shapes, got a string"},

@@ -1,9 +1,11 @@
 // Image textures: bilinear lookup and wrap modes on the device, sRGB decoding, reflectance clamping, and
 // textured surfaces rendered under a uniform sky, where a diffuse surface that sees only the sky
-// reflects exactly its reflectance times the sky's radiance.
+// reflects exactly its reflectance times the sky's radiance. Checkerboards: the tile at each uv on the
+// device and the host, rendered tiles and cut-outs, and the JSON's checks.
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <sstream>
 
@@ -618,6 +620,246 @@ TEST(TextureRender, SphereLatLongUvsInItsOwnFrame) {
   expect_sphere_view(R"(, "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 90}})", 1, 0);
   // Scaled by -1 (a point reflection), it sees local direction (0.5, -0.707, -0.5): u = 0.125, v = 0.25.
   expect_sphere_view(R"(, "transform": {"scale": -1})", 0, 1);
+}
+
+
+// ---- Checkerboards ------------------------------------------------------------------------------------
+
+const glm::vec3 kColor0(0.75f, 0.25f, 0.125f), kColor1(0.0625f, 0.5f, 0.875f);
+
+// The colour the checkerboard rule gives at (u, v): tile (floor(u tiles + offset), floor((1 - v) tiles +
+// offset)), colour 1 where the tile's column plus row is odd. For points away from the tiles' edges.
+glm::vec3 checker_colour(glm::dvec2 uv, glm::dvec2 tiles, glm::dvec2 offset) {
+  const long long x = (long long)std::floor(uv.x * tiles.x + offset.x), y = (long long)std::floor((1 - uv.y) * tiles.y + offset.y);
+  return ((x + y) % 2 + 2) % 2 ? kColor1 : kColor0;
+}
+
+// Device lookups of checkerboards beside an image (so that texel offsets are exercised): tile (0, 0), at the
+// top left of the uv square (u from 0, v from 1 down, the rows of an image), is color0 and its neighbours along
+// u and v are color1; far from the square and at negative uvs the pattern goes on; tiles [3, 5] give 3 columns and
+// 5 rows a unit; an offset shifts it by whole and half tiles; the host's texel_nearest agrees everywhere.
+TEST(Checkerboard, DeviceLookupsGiveEachTilesColourWithImageOrientation) {
+  std::vector<TextureImage> textures = {float_image(grid_texture(PC_WRAP_REPEAT)),
+                                        checkerboard_texture(kColor0, kColor1, {2, 2}, {0, 0}),
+                                        checkerboard_texture(kColor0, kColor1, {3, 5}, {0, 0}),
+                                        checkerboard_texture(kColor0, kColor1, {3, 5}, {-7.5f, 1})};
+  EXPECT_EQ(textures[1].format, PC_TEXELS_CHECKER);
+  EXPECT_EQ(textures[1].width, 2u);
+  EXPECT_EQ(textures[1].height, 1u);
+  EXPECT_EQ(textures[1].words.size(), 10u);
+  EXPECT_EQ(texel_linear(textures[1], 0), kColor0);
+  EXPECT_EQ(texel_linear(textures[1], 1), kColor1);
+  // The offset is kept modulo 2 tiles: -7.5 becomes 0.5.
+  float offset[2];
+  std::memcpy(offset, &textures[3].words[8], 8);
+  EXPECT_EQ(offset[0], 0.5f);
+  EXPECT_EQ(offset[1], 1.0f);
+
+  // Mitsuba's default pattern, 2 tiles a unit: tile (0, 0) is u in [0, 0.5), v in (0.5, 1].
+  struct Case {
+    glm::vec2 uv;
+    glm::vec3 want;
+  } cases[] = {
+      {{0.25f, 0.75f}, kColor0},   // tile (0, 0)
+      {{0.75f, 0.75f}, kColor1},   // (1, 0): the next along u
+      {{0.25f, 0.25f}, kColor1},   // (0, 1): the next along v, downwards
+      {{0.75f, 0.25f}, kColor0},   // (1, 1)
+      {{0.1f, 0.99f}, kColor0},    // near the top left corner
+      {{-0.25f, 0.75f}, kColor1},  // (-1, 0)
+      {{0.25f, 1.25f}, kColor1},   // (0, -1)
+      {{-0.25f, 1.25f}, kColor0},  // (-1, -1)
+      {{10.25f, -20.75f}, kColor1},  // (20, 43): far away, v negative
+  };
+  std::vector<glm::vec2> uvs;
+  for (const Case& c : cases) uvs.push_back(c.uv);
+  std::vector<glm::vec3> got = device_lookups(textures, 1, uvs);
+  for (size_t i = 0; i < uvs.size(); ++i) {
+    EXPECT_EQ(got[i], cases[i].want) << "uv (" << uvs[i].x << ", " << uvs[i].y << ")";
+    EXPECT_EQ(texel_nearest(textures[1], uvs[i]), cases[i].want) << "host, uv (" << uvs[i].x << ", " << uvs[i].y << ")";
+  }
+
+  // Tiles [3, 5]: the centre of tile (column i, row j from the top) is at u = (i + 0.5) / 3, v = 1 - (j + 0.5) / 5.
+  uvs.clear();
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 3; ++i) uvs.push_back({(i + 0.5f) / 3, 1 - (j + 0.5f) / 5});
+  got = device_lookups(textures, 2, uvs);
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 3; ++i)
+      EXPECT_EQ(got[size_t(j * 3 + i)], (i + j) % 2 ? kColor1 : kColor0) << "tile " << i << ", " << j;
+  // Offset [0.5, 1] (given as -7.5, 1): half a tile along u, and one tile along v, which swaps the colours of rows.
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 3; ++i) uvs.push_back({(i + 0.1f) / 3, 1 - (j + 0.5f) / 5});  // x = i + 0.6, y = j + 1.5
+  got = device_lookups(textures, 3, uvs);
+  for (size_t k = 15; k < 30; ++k) {
+    int i = int(k - 15) % 3, j = int(k - 15) / 3;
+    EXPECT_EQ(got[k], (i + j + 1) % 2 ? kColor1 : kColor0) << "offset tile " << i << ", " << j;
+  }
+
+  // Many points: the device, the host and the rule agree away from the tiles' edges.
+  std::mt19937 gen(5);
+  std::uniform_real_distribution<float> coordinate(-3, 3);
+  uvs.clear();
+  for (int i = 0; i < 2000; ++i) uvs.push_back({coordinate(gen), coordinate(gen)});
+  for (uint32_t index : {1u, 2u, 3u}) {
+    const float* w = reinterpret_cast<const float*>(textures[index].words.data());
+    glm::dvec2 tiles(w[6], w[7]), off(w[8], w[9]);
+    got = device_lookups(textures, index, uvs);
+    int checked = 0;
+    for (size_t i = 0; i < uvs.size(); ++i) {
+      double x = uvs[i].x * tiles.x + off.x, y = (1 - double(uvs[i].y)) * tiles.y + off.y;
+      if (std::abs(x - std::round(x)) < 1e-4 || std::abs(y - std::round(y)) < 1e-4) continue;
+      ++checked;
+      ASSERT_EQ(got[i], checker_colour(uvs[i], tiles, off)) << "texture " << index << " uv " << uvs[i].x << ", " << uvs[i].y;
+      ASSERT_EQ(texel_nearest(textures[index], uvs[i]), got[i]) << "texture " << index << " uv " << uvs[i].x << ", " << uvs[i].y;
+    }
+    EXPECT_GT(checked, 1900);
+  }
+}
+
+// A scene of the square [-1, 1]^2 (uvs [0, 1]^2) seen head-on, filling a 15 x 15 film, under a sky of radiance 1
+// with one scattering event, its material given by `material_json`.
+RenderResult render_checker_square(const std::string& material_json, const std::string& name) {
+  const int width = 15;
+  const double distance = 1.0 / std::tan(20.0 * M_PI / 180.0);  // fov 40 degrees covers [-1, 1]
+  std::ostringstream scene;
+  scene.precision(17);
+  scene << R"({"camera": {"position": [0, 0, )" << distance << R"(], "look_at": [0, 0, 0], "fov_y_degrees": 40,
+    "width": )" << width << R"(, "height": )" << width << R"(}, "materials": {"m": )" << material_json << R"(},
+    "shapes": [)" << kQuad << R"(], "lights": [{"type": "environment", "radiance": [1, 1, 1]}]})";
+  DeviceScene d = load_device_scene(write_temp_file(name + ".json", scene.str()));
+  EXPECT_TRUE(d.features & kFeatureTextures);
+  RenderOptions opt;
+  opt.spp = 64;
+  opt.max_depth = 1;
+  opt.seed = 11;
+  RenderResult r = render(test_device(), d, opt);
+  EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
+  return r;
+}
+
+// Checks each pixel's mean against want(px, py) (row py from the top) within 5 standard errors, and all
+// together within 4.
+void expect_pixels(const RenderResult& r, int width, const std::function<glm::vec3(int, int)>& want,
+                   const std::string& name) {
+  double sum_diff = 0, sum_var = 0;
+  for (int py = 0; py < width; ++py)
+    for (int px = 0; px < width; ++px)
+      for (int c = 0; c < 3; ++c) {
+        size_t i = 3 * (size_t(py) * width + px) + c;
+        double got = r.film.mean[i], var = r.film.variance[i], w = want(px, py)[c];
+        EXPECT_LE(std::abs(got - w), 5 * std::sqrt(var) + 1e-6)
+            << name << " pixel " << px << "," << py << " channel " << c << ": " << got << " expected " << w;
+        sum_diff += got - w;
+        sum_var += var;
+      }
+  EXPECT_LE(std::abs(sum_diff), 4 * std::sqrt(sum_var) + 1e-5) << name;
+}
+
+// Tiles [3, 5] on the square seen head-on, 15 x 15 pixels: tile boundaries fall on pixel boundaries, pixel
+// column px in tile column px / 5 and row py (from the top) in tile row py / 3, so every pixel reflects one
+// tile's colour times the sky: color0 at the top left, alternating along both axes.
+TEST(Checkerboard, SquareSeenFromAboveShowsEachTilesColour) {
+  RenderResult r = render_checker_square(
+      R"({"type": "diffuse", "reflectance": {"checkerboard": {"color0": [0.75, 0.25, 0.125], "color1": [0.0625, 0.5, 0.875], "tiles": [3, 5]}}})",
+      "checker-square");
+  expect_pixels(r, 15, [](int px, int py) { return (px / 5 + py / 3) % 2 ? kColor1 : kColor0; }, "tiles [3, 5]");
+  // Mitsuba's defaults: colours 0.4 and 0.2, 2 tiles a unit; pixel column px in tile px * 2 / 15 (away from the
+  // middle column, 7, which straddles the edge).
+  RenderResult d = render_checker_square(R"({"type": "diffuse", "reflectance": {"checkerboard": {}}})", "checker-default");
+  expect_pixels(
+      d, 15,
+      [](int px, int py) {
+        if (px == 7 || py == 7) return glm::vec3(0.3f);  // half of each
+        return glm::vec3(((px > 7) + (py > 7)) % 2 ? 0.2f : 0.4f);
+      },
+      "defaults");
+}
+
+// A checkerboard as an opacity map (its red channel): where it is 1 the square reflects 0.5 of the sky, where it
+// is 0 the camera sees the sky through it.
+TEST(Checkerboard, OpacityTakesTheRedChannel) {
+  RenderResult r = render_checker_square(
+      R"({"type": "diffuse", "reflectance": [0.5, 0.5, 0.5],
+          "opacity": {"checkerboard": {"color0": [1, 0, 0], "color1": [0, 1, 1], "tiles": [3, 5]}}})",
+      "checker-opacity");
+  expect_pixels(r, 15, [](int px, int py) { return glm::vec3((px / 5 + py / 3) % 2 ? 1.0f : 0.5f); }, "opacity");
+}
+
+TEST(Checkerboard, JsonIsCheckedAndSharedAndPhongSeesItsLargestColour) {
+  const std::string shape = R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[1,1,0]], "indices": [[0,1,2]],
+      "uvs": [[0,0],[1,0],[1,1]], "material": "m"})";
+  auto scene_of = [&](const std::string& materials, const std::string& lights = "[]", const std::string& s = "") {
+    return R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "width": 4, "height": 4},
+      "materials": )" + materials + R"(, "shapes": [)" + (s.empty() ? shape : s) + R"(], "lights": )" + lights + "}";
+  };
+  // Two materials with the same checkerboard share one texture; a third differs; defaults are Mitsuba's.
+  SceneDescription scene = load_scene(write_temp_file("checker-shared.json", scene_of(R"({
+      "m": {"type": "diffuse", "reflectance": {"checkerboard": {"tiles": [4, 4], "offset": [1, 0]}}},
+      "n": {"type": "plastic", "diffuse": {"checkerboard": {"tiles": [4, 4], "offset": [3, 2], "color0": [0.4, 0.4, 0.4]}}},
+      "o": {"type": "diffuse", "reflectance": {"checkerboard": {}}, "opacity": {"checkerboard": {"tiles": [4, 4], "offset": [1, 0]}}}})")));
+  ASSERT_EQ(scene.materials.size(), 3u);
+  EXPECT_EQ(scene.materials[0].color_texture, scene.materials[1].color_texture);
+  EXPECT_NE(scene.materials[0].color_texture, scene.materials[2].color_texture);
+  EXPECT_EQ(scene.materials[2].opacity_texture, scene.materials[0].color_texture);
+  EXPECT_EQ(scene.materials[0].color, glm::vec3(1));
+  const TextureImage& shared = scene.textures[scene.materials[0].color_texture];
+  EXPECT_EQ(shared.format, PC_TEXELS_CHECKER);
+  EXPECT_EQ(texel_linear(shared, 0), glm::vec3(0.4f));
+  EXPECT_EQ(texel_linear(shared, 1), glm::vec3(0.2f));
+  const TextureImage& defaults = scene.textures[scene.materials[2].color_texture];
+  const float* w = reinterpret_cast<const float*>(defaults.words.data());
+  EXPECT_EQ(std::vector<float>(w, w + 10), (std::vector<float>{0.4f, 0.4f, 0.4f, 0.2f, 0.2f, 0.2f, 2, 2, 0, 0}));
+  for (const std::string& warning : scene.warnings)  // only that the scene has no light
+    EXPECT_NE(warning.find("light"), std::string::npos) << warning;
+  DeviceScene d = build_device_scene(scene);
+  EXPECT_EQ(d.textures[d.materials[2].opacity_texture].format, PC_TEXELS_CHECKER);  // read as it is: red
+  EXPECT_EQ(d.textures[d.materials[0].color_texture].offset, d.textures[d.materials[2].opacity_texture].offset);
+
+  // A phong's diffuse checkerboard: its larger colour plus specular must not exceed 1.
+  load_scene(write_temp_file("checker-phong-ok.json", scene_of(R"({"m": {"type": "phong", "exponent": 10,
+      "diffuse": {"checkerboard": {"color0": [0.2, 0.2, 0.2], "color1": [0.7, 0.1, 0.1]}}, "specular": [0.3, 0.3, 0.3]}})")));
+  std::string phong = write_temp_file("checker-phong.json", scene_of(R"({"m": {"type": "phong", "exponent": 10,
+      "diffuse": {"checkerboard": {"color0": [0.2, 0.2, 0.2], "color1": [0.8, 0.1, 0.1]}}, "specular": [0.3, 0.3, 0.3]}})"));
+  EXPECT_EQ(scene_load_error(phong), phong + ": materials.m: the diffuse texture's largest value + specular exceeds 1 (the surface would create energy)");
+
+  struct Case {
+    std::string materials, lights, shape, expected;
+  } cases[] = {
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"wrap": "repeat"}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard: unknown key \"wrap\""},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {}, "wrap": "repeat"}}})", "[]", "",
+       "materials.m.reflectance: unknown key \"wrap\""},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"color0": [1.5, 0, 0]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.color0: expected values in [0, 1]"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"color1": [0.5, 0.5]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.color1: expected an array of 3 numbers"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"tiles": [3, 0]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.tiles[1]: expected a number > 0, got 0"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"tiles": [3]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.tiles: expected an array of 2 numbers"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"tiles": [3, 1e39]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.tiles[1]: expected a finite number within float range, got"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {"offset": [0, "1"]}}}})", "[]", "",
+       "materials.m.reflectance.checkerboard.offset[1]: expected a number"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": [0.4, 0.2]}}})", "[]", "",
+       "materials.m.reflectance.checkerboard: expected an object"},
+      {R"({"m": {"type": "dielectric", "ior": 1.5, "transmittance": "checkerboard"}})", "[]", "",
+       "materials.m.transmittance: expected an array of 3 numbers or {\"texture\": FILE} or {\"checkerboard\": {...}}"},
+      {R"({"m": {"type": "diffuse", "opacity": {"checkerboard": {"color1": [2, 2, 2]}}}})", "[]", "",
+       "materials.m.opacity.checkerboard.color1: expected values in [0, 1]"},
+      {R"({"m": {"type": "diffuse", "opacity": "checkerboard"}})", "[]", "",
+       "materials.m.opacity: expected a number in [0, 1] or {\"texture\": FILE} or {\"checkerboard\": {...}}"},
+      {R"({"m": {"type": "diffuse"}})", R"([{"type": "environment", "file": {"checkerboard": {}}}])", "",
+       "lights[0].file: a checkerboard cannot be an environment map (an environment takes a lat-long image file)"},
+      {R"({"m": {"type": "diffuse", "reflectance": {"checkerboard": {}}}})", "[]",
+       R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[1,1,0]], "indices": [[0,1,2]], "material": "m"})",
+       "shapes[0]: material \"m\" has a texture, but the shape has no \"uvs\""},
+  };
+  for (const Case& c : cases) {
+    std::string path = write_temp_file("checker-error.json", scene_of(c.materials, c.lights, c.shape));
+    std::string error = scene_load_error(path);
+    EXPECT_EQ(error.rfind(path + ": " + c.expected, 0), 0u) << c.materials << "\n  gave: " << error;
+  }
 }
 
 }  // namespace

@@ -248,6 +248,10 @@ typedef struct {
  * are, red for opacity. */
 #define PC_TEXELS_OPACITY8_RED 3u
 #define PC_TEXELS_OPACITY8_ALPHA 4u
+/* A checkerboard (Mitsuba's), evaluated at the point: 10 words of floats, color0 (R G B), color1 (R G B),
+ * tiles (u, v: tiles per unit of uv) and offset (u, v, in tiles); width 2 and height 1, so that the host's
+ * texel loops see the two colours as a 2 x 1 FLOAT image (kernels/texture.cl, checker_lookup). */
+#define PC_TEXELS_CHECKER 5u
 
 /* An image in the texel words, rows top to bottom; each image starts at a word.
  * width (4) + height (4) + offset (4) + wrap (4) + format (4) + pad (12) = 32 bytes. */
