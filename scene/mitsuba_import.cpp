@@ -1556,7 +1556,10 @@ const MaterialInfo& material_for(Importer& im, const Object& b) {
   BsdfBuild build;
   build_bsdf(im, b, build);
   std::string name = unique_name(im, b.id.empty() ? "bsdf@" + std::to_string(b.place.line) : b.id, !b.id.empty());
-  if (!build.two_sided && !build.transmissive)
+  // A black diffuse bsdf (an emitter's) is black from behind in both.
+  const bool black = build.material.value("type", "") == "diffuse" && build.material.contains("reflectance") &&
+                     build.material["reflectance"] == json::array({0.0, 0.0, 0.0});
+  if (!build.two_sided && !build.transmissive && !black)
     im.warn(b.place,
             b.label() +
                 " is one-sided in Mitsuba (black seen from behind; a twosided bsdf around it reflects on both sides), "

@@ -32,6 +32,21 @@ CASES = {
     "bitterli-cornell-box-pbrt": {"pathcl": "{BITTERLI}/cornell-box/pbrt/scene-v4.pbrt",
                                   "mitsuba": "{BITTERLI}/cornell-box/mitsuba/scene_v3.xml",
                                   "defaults": {"resx": "64", "resy": "64", "max_depth": "5"}},
+    # Mitsuba's gallery (mitsuba-data's docs/scenes), which leaves $spp to the command line ("define").
+    "gallery-plastic": {"pathcl": "{MITSUBA_DATA}/docs/scenes/bsdf_plastic_default.xml",
+                        "mitsuba": "{MITSUBA_DATA}/docs/scenes/bsdf_plastic_default.xml", "define": {"spp": "16"}},
+    "gallery-conductor-gold": {"pathcl": "{MITSUBA_DATA}/docs/scenes/bsdf_conductor_gold.xml",
+                               "mitsuba": "{MITSUBA_DATA}/docs/scenes/bsdf_conductor_gold.xml", "define": {"spp": "16"}},
+    "gallery-dielectric-glass": {"pathcl": "{MITSUBA_DATA}/docs/scenes/bsdf_dielectric_glass.xml",
+                                 "mitsuba": "{MITSUBA_DATA}/docs/scenes/bsdf_dielectric_glass.xml", "define": {"spp": "16"}},
+    "gallery-thindielectric": {"pathcl": "{MITSUBA_DATA}/docs/scenes/bsdf_thindielectric_glass.xml",
+                               "mitsuba": "{MITSUBA_DATA}/docs/scenes/bsdf_thindielectric_glass.xml",
+                               "define": {"spp": "16"}},
+    # Veach's multiple-importance-sampling scene in Mitsuba's form (include/veach_mis.xml).
+    "gallery-veach-mis": {"pathcl": "{MITSUBA_DATA}/docs/scenes/integrator_direct_both.xml",
+                          "mitsuba": "{MITSUBA_DATA}/docs/scenes/integrator_direct_both.xml"},
+    "gallery-bunny": {"pathcl": "{MITSUBA_DATA}/docs/scenes/shape_ply_bunny.xml",
+                      "mitsuba": "{MITSUBA_DATA}/docs/scenes/shape_ply_bunny.xml", "define": {"spp": "16"}},
     # Veach's multiple-importance-sampling scene as pbrt-v4 file (maxdepth 3) against Tungsten's render.
     "bitterli-veach-mis-pbrt": {"pathcl": "{BITTERLI}/veach-mis/pbrt/scene-v4.pbrt",
                                 "exr": "{BITTERLI}/veach-mis/pbrt/TungstenRender.exr"},
@@ -43,7 +58,7 @@ import numpy as np, OpenEXR, mitsuba as mi
 mi.set_variant(sys.argv[1])
 import drjit as dr
 t = time.time()
-scene = mi.load_file(sys.argv[2])
+scene = mi.load_file(sys.argv[2], **json.loads(sys.argv[6]))
 image = mi.render(scene, spp=int(sys.argv[3]), seed=int(sys.argv[4]))
 dr.eval(image)
 rgb = np.asarray(image)[..., :3]
@@ -109,16 +124,17 @@ def main():
         if "mitsuba" in case:
             theirs = with_defaults(case["mitsuba"], case.get("defaults", {}))
             ref = os.path.join(OUT, name + "-mitsuba.exr")
-            m = json.loads(run([sys.executable, "-c", MITSUBA_RENDER, variant, theirs, str(args.spp), str(args.seed), ref],
-                               env=env).stdout.strip().splitlines()[-1])
+            m = json.loads(run([sys.executable, "-c", MITSUBA_RENDER, variant, theirs, str(args.spp), str(args.seed), ref,
+                                json.dumps(case.get("define", {}))], env=env).stdout.strip().splitlines()[-1])
             reference = {"renderer": "Mitsuba %s %s" % (m["version"], variant), "file": theirs, "seconds": m["seconds"]}
         else:
             theirs = ref = case["exr"]
             reference = {"renderer": "the image beside the scene file", "file": theirs}
         t = time.time()
-        r = run([PATHCL, "render", ours, "--spp", str(args.spp), "--seed", str(args.seed), "-o", test, "-q"])
+        defines = [w for k, v in case.get("define", {}).items() for w in ("-D", "%s=%s" % (k, v))]
+        r = run([PATHCL, "render", ours, "--spp", str(args.spp), "--seed", str(args.seed), "-o", test, "-q"] + defines)
         pathcl_seconds = time.time() - t
-        warnings = [l for l in run([PATHCL, "info", ours]).stdout.splitlines() if l.startswith("warning:")]
+        warnings = [l for l in run([PATHCL, "info", ours] + defines).stdout.splitlines() if l.startswith("warning:")]
         c = json.loads(run([PATHCL, "compare", ref, test, "--json"]).stdout)
         ratio = [t_ / r_ if r_ else float("nan") for t_, r_ in zip(c["mean_test"], c["mean_reference"])]
         results.append({"case": name, "pathcl_file": os.path.relpath(ours, ROOT), "reference": reference,
