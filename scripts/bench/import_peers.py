@@ -106,6 +106,7 @@ def main():
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--mitsuba-data", default=os.path.join(ROOT, "build", "mitsuba-data"))
     ap.add_argument("--bitterli", default=os.path.join(ROOT, "build", "bitterli"))
+    ap.add_argument("--json", default=os.path.join(ROOT, "bench", "out", "import-peers.json"), help="results file")
     args = ap.parse_args()
     data, bitterli = os.path.abspath(args.mitsuba_data), os.path.abspath(args.bitterli)
     names = args.cases.split(",")
@@ -145,7 +146,7 @@ def main():
         print("%-26s means pathcl/reference %s  relMSE %.4g  %s" % (
             name, " ".join("%.4f" % x for x in ratio), c["relmse"], "ok" if results[-1]["within_3_percent"] else "OFF"),
             flush=True)
-    with open(os.path.join(ROOT, "bench", "out", "import-peers.json"), "w") as f:
+    with open(args.json, "w") as f:
         json.dump({"spp": args.spp, "cases": results}, f, indent=1)
 
 
