@@ -474,6 +474,9 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       if (l.type == PC_LIGHT_ENVIRONMENT) light.position = environment_rotation(l.rotation);
       light.direction = f4(l.direction);
       light.prim = light.slot = PC_INVALID;
+      // An environment map's parameterisation in its slot (it has no primitive): PC_ENV_LAT_LONG is
+      // PC_INVALID, so a lat-long map's light is as it was.
+      if (l.type == PC_LIGHT_ENVIRONMENT && l.texture != PC_INVALID) light.slot = l.mapping;
       light.cos_inner = l.cos_inner;
       light.cos_outer = l.cos_outer;
       light.texture = l.texture;
@@ -499,7 +502,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
         double integral = 4 * M_PI;  // of the radiance (times emission) over the sphere
         features = kFeatureEnvironment;
         if (l.texture != PC_INVALID) {
-          integral = build_env_distribution(scene.textures[l.texture], out.env_dist);
+          integral = build_env_distribution(scene.textures[l.texture], out.env_dist, l.mapping);
           features |= kFeatureEnvironmentMap;
         }
         e = 0.25 * lum * integral;

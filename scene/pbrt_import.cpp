@@ -31,9 +31,14 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include <ImfChromaticitiesAttribute.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+
 #include "scene/scene_error.h"
 #include "scene/scene_import.h"
 #include "scene/spectrum.h"
+#include "scene/texture_load.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -2027,6 +2032,119 @@ void translate_shape(Translator& t, const ShapeContext& c) {
 
 // ----- Lights
 
+// Where the light pushed as lights[index] came from ("scene.pbrt:12: LightSource \"infinite\"").
+std::string origin_of(const Translator& t, int index) {
+  const std::string key = "lights[" + std::to_string(index) + "]";
+  for (const auto& [k, v] : t.origins)
+    if (k == key) return v;
+  return key;
+}
+
+// The rotation part of a light's CTM, which must be a rotation times a uniform scale (pbrt-v4 normalises
+// the light-space direction, so a uniform scale and a translation change nothing); the nearest rotation
+// (the polar factor, by Newton's iteration in double), so that the JSON holds an exact rotation.
+glm::dmat3 light_rotation(const glm::dmat4& ctm, const Place& at, const std::string& what) {
+  glm::dmat3 m(ctm);
+  if (!is_similarity(m))
+    fail(at, what + ": its transform scales unevenly or shears, which bends the image's directions (an environment "
+                    "map takes a rotation only)");
+  if (glm::determinant(m) < 0)
+    fail(at, what + ": its transform mirrors, which would mirror the image (an environment map takes a rotation only)");
+  glm::dmat3 r = m / std::cbrt(glm::determinant(m));
+  for (int i = 0; i < 8; ++i) r = 0.5 * (r + glm::transpose(glm::inverse(r)));
+  return r;
+}
+
+// pbrt-v4's image RGB colour space (Image::Read: an OpenEXR file's "chromaticities", looked up among the
+// colour spaces pbrt knows with a relative tolerance of 1e-3; sRGB otherwise): sRGB only, as pathcl renders
+// sRGB. A file that cannot be read here is left to the loader, which names the problem.
+void check_image_colour_space(Translator& t, const fs::path& file, const Place& at, const std::string& what) {
+  {
+    std::ifstream in(file, std::ios::binary);
+    char magic[4] = {};
+    if (!in.read(magic, 4) || std::memcmp(magic, "\x76\x2f\x31\x01", 4) != 0) return;  // not OpenEXR: sRGB
+  }
+  Imf::Chromaticities c;
+  try {
+    Imf::InputFile exr(file.string().c_str());
+    const auto* attribute = exr.header().findTypedAttribute<Imf::ChromaticitiesAttribute>("chromaticities");
+    if (!attribute) return;
+    c = attribute->value();
+  } catch (const std::exception&) {
+    return;
+  }
+  struct Space {
+    const char* name;
+    double r[2], g[2], b[2], w[2];
+  };
+  // pbrt-v4's RGBColorSpace::Init; the white points of D65 and ACES' D60 as pbrt computes them from the
+  // illuminants' spectra (x, y to 4 digits, well within the 1e-3 relative tolerance).
+  const Space spaces[] = {{"srgb", {0.64, 0.33}, {0.3, 0.6}, {0.15, 0.06}, {0.3127, 0.3290}},
+                          {"dci-p3", {0.68, 0.32}, {0.265, 0.690}, {0.15, 0.06}, {0.3127, 0.3290}},
+                          {"rec2020", {0.708, 0.292}, {0.170, 0.797}, {0.131, 0.046}, {0.3127, 0.3290}},
+                          {"aces2065-1", {0.7347, 0.2653}, {0.0, 1.0}, {0.0001, -0.077}, {0.32168, 0.33767}}};
+  auto close = [](float a, double b) { return a == b || std::abs((a - b) / b) < 1e-3; };
+  auto same = [&](const Imath::V2f& p, const double q[2]) { return close(p.x, q[0]) && close(p.y, q[1]); };
+  for (const Space& s : spaces) {
+    if (!(same(c.red, s.r) && same(c.green, s.g) && same(c.blue, s.b) && same(c.white, s.w))) continue;
+    if (std::string(s.name) == "srgb") return;
+    fail(at, what + ": " + in_quotes(file.generic_string()) + " is in the " + s.name + " colour space (its chromaticities): "
+             "pathcl renders sRGB and takes images in sRGB only");
+  }
+  warn(t, at, what + ": " + in_quotes(file.generic_string()) + ": its chromaticities are no colour space pbrt-v4 knows: "
+                     "taken as sRGB, as pbrt-v4 does");
+}
+
+// An image light: pbrt-v4's ImageInfiniteLight, an equal-area octahedral square map (lights.cpp) looked up
+// at the nearest texel (ImageLe), its directions in light space: the map's frame is the CTM's rotation.
+// "illuminance" E scales the map so that pbrt's estimate of the upper hemisphere's illuminance,
+// k = 2 pi / (w h) times the sum over texels whose centre lies above the horizon (light-space z > 0) of
+// luminance x cos theta at the centre, becomes E: scale x E / k (pbrt-v4's formula as it is; it counts
+// 2 pi, not 4 pi, per w h texels, so the map's true illuminance is then 2 E).
+json image_environment(Translator& t, const LightEntity& l, const std::string& filename, double scale) {
+  const Params& ps = l.entity.params;
+  const std::string what = l.entity.what();
+  const Place& at = l.entity.place;
+  const Param* f = lookup(ps, what, "filename", {"string"});
+  const std::string file = resolve_path(t.messages, t.main_dir, filename, f->place, what);
+  const fs::path openable_file = openable(t.main_dir, file);
+  check_image_colour_space(t, openable_file, f->place, what);
+  json light = {{"type", "environment"}, {"file", file}, {"mapping", "equal_area"}, {"filter", "nearest"}};
+  if (double e = get_float(ps, what, "illuminance", -1); e > 0) {
+    TextureImage image;
+    try {
+      image = load_texture_image(openable_file.string());
+    } catch (const SceneError& error) {
+      fail(f->place, what + ": " + error.what());
+    }
+    if (image.width != image.height)
+      fail(f->place, what + ": " + in_quotes(file) + " is " + std::to_string(image.width) + " x " +
+                         std::to_string(image.height) + " texels, not square (pbrt-v4's environment maps are "
+                         "equal-area octahedral squares)");
+    // The Y row of sRGB's RGB-to-XYZ matrix, pbrt's RGBColorSpace::LuminanceVector.
+    const glm::dvec3 y_row(0.2126390058715102, 0.7151686787677559, 0.0721923153607337);
+    double sum = 0;
+    for (uint32_t row = 0; row < image.height; ++row)
+      for (uint32_t col = 0; col < image.width; ++col) {
+        // pbrt-v4's EqualAreaSquareToSphere: z at the texel's centre (its sign and its value).
+        double u = 2 * (col + 0.5) / image.width - 1, v = 2 * (row + 0.5) / image.height - 1;
+        double signed_distance = 1 - (std::abs(u) + std::abs(v)), r = 1 - std::abs(signed_distance);
+        double z = std::copysign(1 - r * r, signed_distance);
+        if (z <= 0) continue;
+        sum += glm::dot(glm::dvec3(texel_linear(image, size_t(row) * image.width + col)), y_row) * z;
+      }
+    double k = sum * 2 * kPi / (double(image.width) * image.height);
+    if (!(k > 0))
+      fail(at, what + ": \"illuminance\" " + num(e) + ": the image is black above the horizon (light-space z > 0), "
+                      "which pbrt-v4 would divide by");
+    scale *= e / k;
+  }
+  light["scale"] = scale;
+  glm::dmat3 r = light_rotation(l.ctm, at, what);
+  if (r != glm::dmat3(1.0)) light["transform"] = {{"matrix", matrix_json(glm::dmat4(r))}};
+  return light;
+}
+
 void check_light_medium(const LightEntity& l) {
   if (!l.medium.empty())
     fail(l.entity.place, l.entity.what() + ": participating media are not supported (the light is in medium " +
@@ -2088,26 +2206,37 @@ void translate_light(Translator& t, const LightEntity& l) {
                    {"irradiance", vec_json(irradiance)}},
                at, what);
   } else {  // infinite
-    if (const Param* f = lookup(ps, what, "filename", {"string"}))
-      fail(f->place, what + ": an environment image is not supported: pbrt-v4's are equal-area octahedral square maps, "
-                            "pathcl's environment maps are latitude-longitude images (convert " +
-                            in_quotes(one_value(f)->strings[0]) + " to one and use pathcl's environment light)");
+    std::string filename = get_string(ps, what, "filename", "");
     const Param* L = lookup(ps, what, "L", kSpectrumTypes);
+    if (!filename.empty() && L)
+      fail(L->place, what + ": \"L\" and \"filename\" together (pbrt-v4 refuses them: an image light takes its "
+                            "radiance from the image)");
     if (L && (L->type == "rgb" ? L->numbers.size() != 3 : L->type == "spectrum" && L->strings.size() > 1))
       fail(L->place, what + ": expected one value of " + L->decl() + " (an image is not supported)");
-    glm::dvec3 radiance = light_colour(t, L, what) * scale;
-    // "illuminance": that of an upward-facing surface under the whole uniform sky, pi L.
-    if (double e = get_float(ps, what, "illuminance", -1); e > 0) radiance *= e / kPi;
     if (const Param* portal = lookup(ps, what, "portal", {"point3"}))
       warn(t, portal->place, what + ": the portal is dropped: pathcl samples the whole sky (the same image where the "
                                      "portal is the only opening, with more noise)");
-    if (t.environment >= 0) {
-      // One environment light in pathcl: uniform skies add up.
-      json& env = t.lights[t.environment];
-      env["radiance"] = vec_json(glm::dvec3(env["radiance"][0], env["radiance"][1], env["radiance"][2]) + radiance);
-    } else {
+    if (!filename.empty()) {
+      if (t.environment >= 0)
+        fail(at, what + ": a second environment light (pathcl has one; an image light cannot be added to the "
+                        "environment of " + origin_of(t, t.environment) + ")");
       t.environment = int(t.lights.size());
-      push_light(t, {{"type", "environment"}, {"radiance", vec_json(radiance)}}, at, what);
+      push_light(t, image_environment(t, l, filename, scale), at, what);
+    } else {
+      glm::dvec3 radiance = light_colour(t, L, what) * scale;
+      // "illuminance": that of an upward-facing surface under the whole uniform sky, pi L.
+      if (double e = get_float(ps, what, "illuminance", -1); e > 0) radiance *= e / kPi;
+      if (t.environment >= 0) {
+        // One environment light in pathcl: uniform skies add up.
+        json& env = t.lights[t.environment];
+        if (env.contains("file"))
+          fail(at, what + ": a second environment light (pathcl has one; a uniform light cannot be added to the "
+                          "image light of " + origin_of(t, t.environment) + ")");
+        env["radiance"] = vec_json(glm::dvec3(env["radiance"][0], env["radiance"][1], env["radiance"][2]) + radiance);
+      } else {
+        t.environment = int(t.lights.size());
+        push_light(t, {{"type", "environment"}, {"radiance", vec_json(radiance)}}, at, what);
+      }
     }
   }
   warn_unused(t.messages, ps, what);

@@ -80,6 +80,7 @@ struct LightDesc {
   float cos_inner = 1, cos_outer = 0;
   uint32_t texture = 0xffffffffu; // environment map in SceneDescription::textures
   glm::dmat3 rotation{1.0};        // environment: takes the map's directions to the world's (its transform)
+  uint32_t mapping = PC_ENV_LAT_LONG;  // environment map: its parameterisation and lookup, PC_ENV_*
 };
 
 struct RenderSettings {

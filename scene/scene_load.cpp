@@ -513,14 +513,26 @@ LightDesc read_light(const Node& n) {
     l.direction = read_unit_direction(n.at("direction"));
     l.emission = n.at("irradiance").light_color();
   } else if (type == "environment") {
-    n.expect_object({"type", "radiance", "file", "scale", "transform"});
+    n.expect_object({"type", "radiance", "file", "scale", "transform", "mapping", "filter"});
     l.type = PC_LIGHT_ENVIRONMENT;
     if (n.has("transform")) l.rotation = read_rotation(n.at("transform"));
     if (n.has("radiance") == n.has("file")) n.fail("an environment light needs either radiance or file");
     if (n.has("radiance")) {
-      if (n.has("scale")) n.at("scale").fail("scale goes with file");
+      for (const char* key : {"scale", "mapping", "filter"})
+        if (n.has(key)) n.at(key).fail(std::string(key) + " goes with file");
       l.emission = n.at("radiance").light_color();
     } else {
+      // The map's parameterisation: lat-long (the default), or pbrt-v4's equal-area octahedral square,
+      // looked up bilinearly (the default) or at the nearest texel as pbrt-v4 does (kernels/environment.cl).
+      std::string mapping = n.has("mapping") ? n.at("mapping").string() : "lat_long";
+      std::string filter = n.has("filter") ? n.at("filter").string() : "bilinear";
+      if (mapping != "lat_long" && mapping != "equal_area")
+        n.at("mapping").fail("unknown mapping \"" + mapping + "\" (expected lat_long or equal_area)");
+      if (filter != "bilinear" && filter != "nearest")
+        n.at("filter").fail("unknown filter \"" + filter + "\" (expected bilinear or nearest)");
+      if (mapping == "lat_long" && filter != "bilinear")
+        n.at("filter").fail("a lat_long map is looked up bilinearly (filter nearest is for equal_area maps)");
+      if (mapping == "equal_area") l.mapping = filter == "nearest" ? PC_ENV_EQUAL_AREA_NEAREST : PC_ENV_EQUAL_AREA;
       l.emission = glm::vec3(n.has("scale") ? float(n.at("scale").number()) : 1.0f);
       if (!(l.emission.x >= 0 && l.emission.x <= kMaxLightValue))
         n.at("scale").fail("expected a number in [0, 1e12]" + n.at("scale").got());
@@ -1279,6 +1291,12 @@ SceneDescription load_scene(const std::string& path, const SceneDefines& defines
         if (l.has("file") && l.at("file").value.is_object() && l.at("file").has("checkerboard"))
           l.at("file").fail("a checkerboard cannot be an environment map (an environment takes a lat-long image file)");
         if (l.has("file")) light.texture = add_texture(scene, l.at("file"), dir, PC_WRAP_REPEAT, false);
+        if (light.texture != PC_INVALID && light.mapping != PC_ENV_LAT_LONG) {
+          const TextureImage& map = scene.textures[light.texture];
+          if (map.width != map.height)
+            l.at("file").fail(map.file + " is " + std::to_string(map.width) + " x " + std::to_string(map.height) +
+                              " texels: an equal_area map is a square image (pbrt-v4's equal-area octahedral map)");
+        }
       }
       scene.lights.push_back(light);
     }

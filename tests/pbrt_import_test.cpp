@@ -4,6 +4,7 @@
 // names the file and line. The Cornell box in tests/scenes/pbrt imports whole.
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include <glm/mat4x4.hpp>
@@ -387,6 +388,198 @@ TEST(PbrtImport, LightSourcesMapOntoPathclLights) {
   EXPECT_EQ(origin_of(s, "lights[1]"), pbrt_path("lights.pbrt") + ":8: LightSource \"spot\"");
 }
 
+namespace {
+
+// A minimal uncompressed OpenEXR file of float R, G, B (grey: value(x, y) at column x of row y), with a
+// "chromaticities" attribute when `chromaticities` has 8 numbers (red, green, blue, white x and y): written
+// byte by byte, as pathcl's own EXR writer takes no chromaticities.
+std::string write_temp_exr(const std::string& name, int width, int height, const std::function<float(int, int)>& value,
+                           const std::vector<float>& chromaticities = {}) {
+  std::string out;
+  auto bytes = [&](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
+  auto i32 = [&](int32_t v) { bytes(&v, 4); };
+  auto f32 = [&](float v) { bytes(&v, 4); };
+  auto attribute = [&](const std::string& attr, const std::string& type, int32_t size) {
+    out += attr + '\0' + type + '\0';
+    i32(size);
+  };
+  out += "\x76\x2f\x31\x01";
+  i32(2);  // version 2, single-part scanlines
+  attribute("channels", "chlist", 3 * 18 + 1);
+  for (const char* c : {"B", "G", "R"}) {
+    out += std::string(c) + '\0';
+    i32(2);  // FLOAT
+    i32(0);  // pLinear and reserved
+    i32(1);
+    i32(1);
+  }
+  out += '\0';
+  attribute("compression", "compression", 1);
+  out += '\0';
+  for (const char* window : {"dataWindow", "displayWindow"}) {
+    attribute(window, "box2i", 16);
+    i32(0), i32(0), i32(width - 1), i32(height - 1);
+  }
+  attribute("lineOrder", "lineOrder", 1);
+  out += '\0';
+  attribute("pixelAspectRatio", "float", 4);
+  f32(1);
+  attribute("screenWindowCenter", "v2f", 8);
+  f32(0), f32(0);
+  attribute("screenWindowWidth", "float", 4);
+  f32(1);
+  if (chromaticities.size() == 8) {
+    attribute("chromaticities", "chromaticities", 32);
+    for (float c : chromaticities) f32(c);
+  }
+  out += '\0';
+  const uint64_t first = out.size() + 8 * size_t(height), line = 8 + 12 * size_t(width);
+  for (int y = 0; y < height; ++y) {
+    uint64_t offset = first + y * line;
+    bytes(&offset, 8);
+  }
+  for (int y = 0; y < height; ++y) {
+    i32(y);
+    i32(12 * width);
+    for (int c = 0; c < 3; ++c)
+      for (int x = 0; x < width; ++x) f32(value(x, y));
+  }
+  return write_temp_file("pbrt/" + name, out);
+}
+
+std::string write_temp_exr(const std::string& name, int width, int height, float value,
+                           const std::vector<float>& chromaticities = {}) {
+  return write_temp_exr(name, width, height, [value](int, int) { return value; }, chromaticities);
+}
+
+bool has_light_warning(const ImportedScene& s) {
+  for (const std::string& w : s.warnings)
+    if (w.find("LightSource") != std::string::npos) return true;
+  return false;
+}
+
+// The 3 x 3 part of an environment's transform, identity without one.
+glm::dmat3 rotation_of(const json& light) { return glm::dmat3(matrix_of(light)); }
+
+}  // namespace
+
+TEST(PbrtImport, AnImageInfiniteLightIsAnEqualAreaEnvironmentAtTheNearestTexel) {
+  write_temp_exr("sky.exr", 16, 16, 0.5f);
+  // pbrt's usual placement of a sky: Rotate -90 1 0 0 takes light space's +z (the square's centre) to +y.
+  const ImportedScene s = import_file("sky.pbrt", kHeader +
+                                                      "AttributeBegin\n"
+                                                      "  Rotate -90 1 0 0\n"
+                                                      "  LightSource \"infinite\" \"string filename\" \"sky.exr\" \"float scale\" 2.5\n"
+                                                      "AttributeEnd\n");
+  EXPECT_FALSE(has_light_warning(s)) << warnings_of(s);
+  const json& l = s.scene["lights"];
+  ASSERT_EQ(l.size(), 1u) << l;
+  EXPECT_EQ(l[0]["type"], "environment");
+  EXPECT_EQ(l[0]["file"], "sky.exr");
+  EXPECT_EQ(l[0]["mapping"], "equal_area");
+  EXPECT_EQ(l[0]["filter"], "nearest");
+  EXPECT_EQ(l[0]["scale"], 2.5);
+  // The map's direction d is the light-space direction: world = CTM d.
+  expect_matrix(matrix_of(l[0]), {{1, 0, 0, 0}, {0, 0, 1, 0}, {0, -1, 0, 0}, {0, 0, 0, 1}});
+  EXPECT_LT(glm::length(rotation_of(l[0]) * glm::dvec3(0, 0, 1) - glm::dvec3(0, 1, 0)), 1e-15);
+  EXPECT_EQ(origin_of(s, "lights[0]"), pbrt_path("sky.pbrt") + ":7: LightSource \"infinite\"");
+  // It loads: an equal-area map at the nearest texel, placed by the rotation.
+  const DeviceScene scene = load_device_scene(pbrt_path("sky.pbrt"));
+  ASSERT_EQ(scene.lights.size(), 1u);
+  EXPECT_EQ(scene.lights[0].slot, PC_ENV_EQUAL_AREA_NEAREST);
+  EXPECT_EQ(scene.lights[0].emission.x, 2.5f);
+
+  // A translation and a uniform scale change no direction (pbrt normalises the light-space direction): the
+  // rotation alone; without one, no transform at all.
+  const ImportedScene moved = import_file(
+      "moved-sky.pbrt", kHeader + "Translate 1 2 3\nScale 2 2 2\nRotate 30 0 0 1\nLightSource \"infinite\" \"string filename\" \"sky.exr\"\n");
+  const double c = std::cos(kPi / 6), sn = std::sin(kPi / 6);
+  expect_matrix(matrix_of(moved.scene["lights"][0]), {{c, -sn, 0, 0}, {sn, c, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}});
+  EXPECT_EQ(moved.scene["lights"][0]["scale"], 1);
+  const ImportedScene plain = import_file("plain-sky.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"sky.exr\"\n");
+  EXPECT_FALSE(plain.scene["lights"][0].contains("transform"));
+
+  // A portal is dropped with a warning, as before.
+  const ImportedScene portal = import_file(
+      "portal-sky.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"sky.exr\"\n"
+                                   "  \"point3 portal\" [0 0 0  1 0 0  1 1 0  0 1 0]\n");
+  EXPECT_TRUE(has_warning(portal, pbrt_path("portal-sky.pbrt") + ":6: ", "the portal is dropped")) << warnings_of(portal);
+  EXPECT_EQ(portal.scene["lights"][0]["mapping"], "equal_area");
+}
+
+TEST(PbrtImport, AnImageLightsIlluminanceIsPbrtsUpperHemisphereEstimate) {
+  // pbrt-v4 scales the map by E / k, k = 2 pi / (w h) x the sum of luminance x cos theta over the texels whose
+  // centre is above the horizon: z = 1 - r^2 > 0 at the centre, r = |u'| + |v'| < 1 (u' = 2u - 1, v' = 2v - 1).
+  // A map of 1 above the horizon and 7 below: only the upper texels count; for 64 x 64 texels their sum
+  // comes to about pi / 2 (half the texels, cos theta 1/2 on average).
+  const int n = 64;
+  auto upper = [n](int x, int y) { return std::abs(2 * (x + 0.5) / n - 1) + std::abs(2 * (y + 0.5) / n - 1) < 1; };
+  double sum = 0;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      double r = std::abs(2 * (x + 0.5) / n - 1) + std::abs(2 * (y + 0.5) / n - 1);
+      if (upper(x, y)) sum += 1 - r * r;
+    }
+  const double k = sum * 2 * kPi / (n * n);
+  EXPECT_NEAR(k, kPi / 2, 2e-3);
+  write_temp_exr("half.exr", n, n, [&](int x, int y) { return upper(x, y) ? 1.0f : 7.0f; });
+  const ImportedScene s = import_file(
+      "illuminance.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"half.exr\" \"float illuminance\" 3 \"float scale\" 2\n");
+  // The luminance of grey 1 is the sum of sRGB's luminance row, 1 within 1e-12.
+  EXPECT_NEAR(s.scene["lights"][0]["scale"].get<double>(), 2 * 3 / k, 1e-9);
+  write_temp_exr("seven.exr", n, n, 7.0f);
+  const ImportedScene sevens = import_file(
+      "illuminance-7.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"seven.exr\" \"float illuminance\" 3\n");
+  EXPECT_NEAR(sevens.scene["lights"][0]["scale"].get<double>(), 3 / (7 * k), 1e-9);
+}
+
+TEST(PbrtImport, ImageLightsThatPathclCannotRenderAreRefused) {
+  write_temp_exr("sky.exr", 16, 16, 0.5f);
+  write_temp_exr("wide.exr", 16, 8, 0.5f);
+  write_temp_exr("black.exr", 8, 8, 0.0f);
+  // Rec. 2020 primaries with D65 white; and chromaticities pbrt knows no colour space of.
+  write_temp_exr("rec2020.exr", 8, 8, 0.5f, {0.708f, 0.292f, 0.170f, 0.797f, 0.131f, 0.046f, 0.3127f, 0.3290f});
+  write_temp_exr("odd.exr", 8, 8, 0.5f, {0.6f, 0.3f, 0.3f, 0.6f, 0.15f, 0.06f, 0.3127f, 0.3290f});
+  write_temp_exr("srgb.exr", 8, 8, 0.5f, {0.64f, 0.33f, 0.3f, 0.6f, 0.15f, 0.06f, 0.3127f, 0.329f});
+  const std::string sky = "LightSource \"infinite\" \"string filename\" \"sky.exr\"\n";
+  struct Case {
+    const char* name;
+    std::string text;
+    int line;
+    std::vector<std::string> words;
+  };
+  const std::vector<Case> cases = {
+      {"both.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"sky.exr\"\n  \"rgb L\" [1 1 1]\n", 6,
+       {"\"L\" and \"filename\" together"}},
+      {"missing.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"nowhere.exr\"\n", 5, {"cannot find \"nowhere.exr\""}},
+      {"shear.pbrt", kHeader + "Scale 1 2 1\n" + sky, 6, {"scales unevenly or shears"}},
+      {"mirror.pbrt", kHeader + "Scale -1 1 1\n" + sky, 6, {"mirrors"}},
+      {"two.pbrt", kHeader + "LightSource \"infinite\" \"rgb L\" [1 1 1]\n" + sky, 6, {"a second environment light", "two.pbrt:5"}},
+      {"two-images.pbrt", kHeader + sky + "LightSource \"infinite\" \"rgb L\" [1 1 1]\n", 6, {"a second environment light"}},
+      {"rec2020.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"rec2020.exr\"\n", 5, {"rec2020 colour space"}},
+      {"black.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"black.exr\" \"float illuminance\" 5\n", 5,
+       {"black above the horizon"}},
+      {"wide-illuminance.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"wide.exr\" \"float illuminance\" 5\n", 5,
+       {"16 x 8 texels, not square"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string error = import_error(c.name, c.text);
+    const std::string prefix = pbrt_path(c.name) + ":" + std::to_string(c.line) + ": ";
+    EXPECT_EQ(error.rfind(prefix, 0), 0u) << error;
+    for (const std::string& w : c.words) EXPECT_NE(error.find(w), std::string::npos) << error << "\nmissing: " << w;
+  }
+  // A map that is not square imports, and the loader refuses it at the LightSource's line, naming the file.
+  import_file("wide.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"wide.exr\"\n");
+  const std::string error = scene_load_error(pbrt_path("wide.pbrt"));
+  EXPECT_EQ(error.rfind(pbrt_path("wide.pbrt") + ":5: ", 0), 0u) << error;
+  EXPECT_NE(error.find("wide.exr is 16 x 8 texels: an equal_area map is a square image"), std::string::npos) << error;
+  // sRGB's chromaticities are fine; unknown ones are sRGB to pbrt, with a warning.
+  EXPECT_FALSE(has_light_warning(import_file("srgb.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"srgb.exr\"\n")));
+  const ImportedScene odd = import_file("odd.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"odd.exr\"\n");
+  EXPECT_TRUE(has_warning(odd, pbrt_path("odd.pbrt") + ":5: ", "taken as sRGB")) << warnings_of(odd);
+}
+
 TEST(PbrtImport, ObjectInstancesPlaceTheObjectsShapes) {
   const ImportedScene s = import_file("instances.pbrt", kHeader +
                                                             "ObjectBegin \"thing\"\n"
@@ -508,7 +701,6 @@ TEST(PbrtImport, ErrorsNameTheFileAndLine) {
       {"attribute.pbrt", kHeader + "AttributeBegin\n" + kTriangle, 5, {"AttributeBegin without AttributeEnd"}},
       {"medium.pbrt", kHeader + "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nMediumInterface \"fog\" \"\"\n" + kTriangle, 7,
        {"participating media are not supported", "\"fog\""}},
-      {"envmap.pbrt", kHeader + "LightSource \"infinite\" \"string filename\" \"sky.exr\"\n", 5, {"equal-area octahedral"}},
       {"camera.pbrt", "Camera \"orthographic\"\nWorldBegin\n", 1, {"Camera \"orthographic\" is not supported"}},
       {"partial.pbrt", kHeader + "Shape \"sphere\" \"float zmax\" 0.5\n", 5, {"partial sphere"}},
       {"ellipsoid.pbrt", kHeader + "Scale 1 2 1\nShape \"sphere\"\n", 6, {"ellipsoid"}},

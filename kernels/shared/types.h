@@ -44,6 +44,13 @@ typedef uint32_t pc_uint;
 #define PC_LIGHT_DIRECTIONAL 3u
 #define PC_LIGHT_ENVIRONMENT 4u
 
+/* An environment map's parameterisation, held in its Light's slot (an environment has no primitive):
+ * a lat-long image (PC_INVALID, every other light's slot outside the area lights), or pbrt-v4's
+ * equal-area octahedral square looked up bilinearly or at the nearest texel (kernels/environment.cl). */
+#define PC_ENV_LAT_LONG PC_INVALID
+#define PC_ENV_EQUAL_AREA 1u
+#define PC_ENV_EQUAL_AREA_NEAREST 2u
+
 /* Pixel filters (SceneHeader.filter), sampled by filter importance sampling. */
 #define PC_FILTER_BOX 0u
 #define PC_FILTER_TENT 1u
@@ -211,7 +218,8 @@ typedef struct {
   pc_float4 direction; /* spot: cone axis; directional: the direction light travels in; unit length */
   pc_uint type;        /* PC_LIGHT_* */
   pc_uint prim;        /* area: scene-order primitive index */
-  pc_uint slot;        /* area: the same primitive's index in the leaf-ordered primitive array */
+  pc_uint slot;        /* area: the same primitive's index in the leaf-ordered primitive array;
+                        * environment: its map's PC_ENV_*; others PC_INVALID */
   float area;          /* area: surface area */
   float infinite_share; /* lights at infinity: the probability of choosing this one among them; others 0 */
   float cos_inner;     /* spot: full intensity inside this cone */
