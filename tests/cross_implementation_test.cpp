@@ -1,5 +1,5 @@
 // The same bits on two independent OpenCL implementations: small renders of every feature (each material,
-// light type, shape, texture, sampler, camera, pixel filter, smooth normals, the environment map) on
+// light type, shape, texture, sampler, camera, pixel filter, smooth normals, the environment maps) on
 // PoCL and on Oclgrind (an interpreter with its own builtins, registered for this test's processes only
 // through OCL_ICD_VENDORS, see tests/CMakeLists.txt) must be bitwise equal, and Oclgrind, which checks
 // every memory access, must report no invalid access and no data race on them. Then the two devices
@@ -58,6 +58,31 @@ std::string textured_scene() {
     "render": {"spp": 2, "max_depth": 5, "seed": 3}})");
 }
 
+// What the Mitsuba and pbrt importers map onto: a checkerboard floor, a thin glass pane, a metal mirror
+// (eta and k) and pbrt's equal-area environment map, rotated, looked up bilinearly across its folded edges.
+std::string imported_features_scene() {
+  std::vector<unsigned char> sky(16 * 16 * 3);
+  for (int i = 0; i < 256; ++i)
+    for (int c = 0; c < 3; ++c) sky[3 * i + c] = uint8_t((i / 16 < 5 ? 240 : 50) - 15 * c + (i % 16 == 0 ? 10 : 0));
+  write_temp_png("sky-square.png", 16, 16, sky);
+  return scene_file("imported-features", R"({
+    "camera": {"position": [0, 1, 3.5], "look_at": [0, 0.6, 0], "width": 12, "height": 9},
+    "materials": {
+      "floor": {"type": "diffuse", "reflectance": {"checkerboard": {"color0": [0.8, 0.7, 0.6], "color1": [0.1, 0.2, 0.3],
+                                                                     "tiles": [3, 5], "offset": [0.25, 0.5]}}},
+      "pane":  {"type": "thin_dielectric", "ior": 1.5, "transmittance": [0.9, 0.95, 1]},
+      "gold":  {"type": "mirror", "eta": [0.18, 0.42, 1.37], "k": [3.42, 2.35, 1.77]}},
+    "shapes": [
+      {"type": "triangles", "positions": [[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
+       "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]], "indices": [[0, 2, 1], [0, 3, 2]], "material": "floor"},
+      {"type": "triangles", "positions": [[-1, 0, 0.5], [0, 0, 0.5], [0, 1.2, 0.5], [-1, 1.2, 0.5]],
+       "indices": [[0, 1, 2], [0, 2, 3]], "material": "pane"},
+      {"type": "sphere", "center": [0.6, 0.5, 0], "radius": 0.45, "material": "gold"}],
+    "lights": [{"type": "environment", "file": "sky-square.png", "mapping": "equal_area", "scale": 0.8,
+                "transform": {"rotate": {"axis": [1, 0.3, 0], "degrees": -80}}}],
+    "render": {"spp": 2, "max_depth": 5, "seed": 3}})");
+}
+
 // A copy of a bundled scene (or with `from`, another scene file whose meshes are the bundled ones) at
 // another resolution.
 std::string resized(const std::string& bundled, int width, int height, int spp, const std::string& from = "") {
@@ -79,7 +104,7 @@ std::string resized(const std::string& bundled, int width, int height, int spp, 
 const std::string kEveryAov = "albedo,normal,depth,position,uv,material_id";
 
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
-constexpr size_t kCases = 20;
+constexpr size_t kCases = 21;
 
 std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
@@ -116,6 +141,7 @@ std::array<Case, kCases> make_cases() {
           {"cornell box, single rays, 8-wide layout", cornell, "--lanes 1", 8},
           {"cornell box, single rays, 16-wide layout", cornell, "--lanes 1", 16},
           {"textures, smooth normals, emitting sphere, environment map, every AOV", textured_scene(), "--aov " + kEveryAov},
+          {"checkerboard, thin glass, metal mirror, rotated equal-area environment map", imported_features_scene(), ""},
           {"instances: moved, scaled, mirrored, smooth, cut-out",
            resized("instances", 12, 9, 2, std::string(PATHCL_TEST_SCENES) + "/instances.json"), ""}}};
 }
