@@ -453,12 +453,17 @@ bool is_affine(const glm::dmat4& m) { return m[0][3] == 0 && m[1][3] == 0 && m[2
 bool is_identity(const glm::dmat4& m) { return m == glm::dmat4(1.0); }
 
 // Whether a 3x3 part is a rotation (or a mirroring) times a uniform scale, to pathcl's tolerance for spheres.
-bool is_similarity(const glm::dmat3& l) {
+// How far a linear map is from a similarity (a rotation times a uniform scale, mirrored or not): the largest
+// difference of its columns' lengths and of their products, relative to its scale; infinity when singular.
+double similarity_error(const glm::dmat3& l) {
   double sx = glm::length(l[0]), sy = glm::length(l[1]), sz = glm::length(l[2]);
-  double tol = 1e-5 * std::max({sx, sy, sz});
-  return sx > 0 && std::abs(sx - sy) <= tol && std::abs(sx - sz) <= tol && std::abs(glm::dot(l[0], l[1])) <= tol * sx &&
-         std::abs(glm::dot(l[0], l[2])) <= tol * sx && std::abs(glm::dot(l[1], l[2])) <= tol * sx;
+  double s = std::max({sx, sy, sz});
+  if (!(std::min({sx, sy, sz}) > 0)) return HUGE_VAL;
+  return std::max({std::abs(sx - sy) / s, std::abs(sx - sz) / s, std::abs(glm::dot(l[0], l[1])) / (sx * sy),
+                   std::abs(glm::dot(l[0], l[2])) / (sx * sz), std::abs(glm::dot(l[1], l[2])) / (sy * sz)});
 }
+
+bool is_similarity(const glm::dmat3& l) { return similarity_error(l) <= 1e-5; }
 
 json matrix_json(const glm::dmat4& m) {
   json rows = json::array();
@@ -1316,6 +1321,46 @@ json image_texture(Translator& t, const TextureEntity& tex) {
   return {{"texture", file}, {"wrap", wrap}};
 }
 
+// pbrt-v4's 2D checkerboard: tex1 where floor(s) + floor(t) is even, tex2 elsewhere, (s, t) = (uscale u +
+// udelta, vscale v + vdelta). pathcl's checkerboard is color0 where floor(x) + floor(y) is even with
+// x = tiles_u u + offset_u and y = tiles_v (1 - v) + offset_v: the same parity for every v when offset_v =
+// 1 - vscale - vdelta (mod 2), as floor(c - w) = c - 1 - floor(w) for an integer c and a w that is not one.
+json checkerboard_texture(Translator& t, const TextureEntity& tex, SpectrumUse use, int depth) {
+  const Params& ps = tex.entity.params;
+  const std::string what = tex.entity.directive + " (checkerboard)";
+  const Place& at = tex.entity.place;
+  if (int dimension = get_int(ps, what, "dimension", 2); dimension != 2)
+    fail(at, what + ": a " + std::to_string(dimension) + "D checkerboard is not supported (pathcl's is 2D, over uv)");
+  std::string mapping = get_string(ps, what, "mapping", "uv");
+  if (mapping != "uv") fail(at, what + ": mapping " + in_quotes(mapping) + " is not supported (pathcl maps by uv)");
+  double su = get_float(ps, what, "uscale", 1), sv = get_float(ps, what, "vscale", 1);
+  double du = get_float(ps, what, "udelta", 0), dv = get_float(ps, what, "vdelta", 0);
+  if (!(su > 0 && sv > 0))
+    fail(at, what + ": uscale and vscale must be > 0 for pathcl's checkerboard (got " + num(su) + ", " + num(sv) + ")");
+  // Each checker's colour: a constant (rgb, spectrum, float) or a constant texture; pbrt-v4's defaults 1 and 0.
+  auto colour = [&](const std::string& name, double fallback) {
+    const Param* p = lookup(ps, what, name,
+                            tex.spectrum ? std::vector<std::string>{"texture", "rgb", "spectrum", "blackbody"}
+                                         : std::vector<std::string>{"texture", "float"});
+    if (!p) return glm::dvec3(fallback);
+    if (p->type == "texture") {
+      TextureOut o = texture_named(t, one_value(p)->strings[0], tex.spectrum, use, p->place, what, depth);
+      if (o.image) fail(p->place, what + ": " + p->decl() + ": a checker of a varying texture is not supported");
+      return tex.spectrum ? o.colour : glm::dvec3(o.value);
+    }
+    if (p->type == "float") return glm::dvec3(one_value(p)->numbers[0]);
+    return colour_of(t, *p, use, what);
+  };
+  const glm::dvec3 tex1 = colour("tex1", 1), tex2 = colour("tex2", 0);
+  warn(t, at, what + ": pbrt-v4 filters the checkerboard over each ray's footprint, pathcl evaluates it at the point: "
+                     "the same image once the pixels are integrated, its edges less blurred");
+  warn_unused(t.messages, ps, what);
+  const double offset_v = std::fmod(std::fmod(1 - sv - dv, 2.0) + 2.0, 2.0);
+  return {{"checkerboard",
+           {{"color0", vec_json(tex1)}, {"color1", vec_json(tex2)}, {"tiles", json::array({su, sv})},
+            {"offset", json::array({std::fmod(std::fmod(du, 2.0) + 2.0, 2.0), offset_v})}}}};
+}
+
 TextureOut translate_texture(Translator& t, const TextureEntity& tex, SpectrumUse use, int depth) {
   const Params& ps = tex.entity.params;
   const std::string& kind = tex.entity.type;
@@ -1361,8 +1406,13 @@ TextureOut translate_texture(Translator& t, const TextureEntity& tex, SpectrumUs
     out.value = a.value * s.value;
     return out;
   }
+  if (kind == "checkerboard") {
+    out.image = true;
+    out.texture = checkerboard_texture(t, tex, use, depth);
+    return out;
+  }
   fail(tex.entity.place, what + ": texture class " + in_quotes(kind) + " is not supported (supported: imagemap, constant, "
-                         "and scale of an image by 1 or of constants)");
+                         "checkerboard, and scale of an image by 1 or of constants)");
 }
 
 // A material colour (a reflectance): rgb, spectrum or a texture; json [r, g, b] or {"texture": ...}.
@@ -2350,9 +2400,17 @@ json translate_camera(Translator& t) {
   glm::dvec3 right = apply_vector(world_from_camera, {1, 0, 0}), up = apply_vector(world_from_camera, {0, 1, 0});
   glm::dvec3 forward = apply_vector(world_from_camera, {0, 0, 1});
   double s = glm::length(forward);
-  if (!is_similarity(glm::dmat3(right, up, forward)))
+  // Exporters write matrices to 6 digits (Bitterli's scenes: columns 2e-5 from orthogonal): a frame within
+  // 1e-4 of a rotation is taken as its rotation (the view moves by at most 1e-4 radians), with a warning
+  // beyond 1e-6; a larger shear or uneven scale would distort pbrt's image, which pathcl's camera cannot.
+  const double camera_error = similarity_error(glm::dmat3(right, up, forward));
+  if (camera_error > 1e-4)
     fail(at, what + ": the camera transform scales unevenly or shears (pbrt would render a distorted image; pathcl's "
                     "camera is a rotation and a position)");
+  if (camera_error > 1e-6)
+    warn(t, at, what + ": the camera transform is " + num(camera_error) +
+                    " from a rotation (a matrix written with few digits): pathcl builds the camera's frame from its view "
+                    "direction and up");
 
   // "fov" spans the shorter image axis: the screen window is [-frame, frame] x [-1, 1] for a wide image and
   // [-1, 1] x [-1/frame, 1/frame] for a tall one, and a screen unit is tan(fov / 2) ahead at distance 1.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <random>
 #include <string>
 
 #include <glm/mat4x4.hpp>
@@ -303,6 +304,32 @@ TEST(PbrtImport, MaterialsMapOntoPathclsOwn) {
   expect_vec(m["spectral"]["reflectance"], 0.5, 0.5, 0.5, 2e-3);
   EXPECT_EQ(m["rough glass"]["type"], "dielectric");
   EXPECT_TRUE(has_warning(s, file + ":12: ", "rendered smooth")) << warnings_of(s);
+}
+
+TEST(PbrtImport, CheckerboardsKeepPbrtsParity) {
+  const ImportedScene s = import_file(
+      "checker.pbrt", kHeader +
+                          "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.7 0.6 0.5] \"rgb tex2\" [0.1 0.2 0.3]\n"
+                          "  \"float uscale\" 4 \"float vscale\" 3 \"float udelta\" 0.3 \"float vdelta\" -0.7\n"
+                          "Material \"diffuse\" \"texture reflectance\" \"c\"\n" + kTriangle);
+  const json& c = s.scene["materials"]["diffuse@checker.pbrt:7"]["reflectance"]["checkerboard"];
+  ASSERT_TRUE(c.is_object()) << s.scene["materials"];
+  expect_vec(c["color0"], 0.7, 0.6, 0.5);
+  expect_vec(c["color1"], 0.1, 0.2, 0.3);
+  EXPECT_TRUE(has_warning(s, pbrt_path("checker.pbrt") + ":5: ", "footprint")) << warnings_of(s);
+  // pathcl's rule (docs/scene-format.md, kernels/texture.cl) with the emitted tiles and offset gives pbrt-v4's
+  // tex1 where floor(uscale u + udelta) + floor(vscale v + vdelta) is even, at points off the tiles' edges.
+  const double tu = c["tiles"][0], tv = c["tiles"][1], ou = c["offset"][0], ov = c["offset"][1];
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uniform(-2, 3);
+  for (int i = 0; i < 1000; ++i) {
+    const double u = uniform(rng), v = uniform(rng);
+    const double s_ = 4 * u + 0.3, t_ = 3 * v - 0.7;
+    if (std::abs(s_ - std::round(s_)) < 1e-6 || std::abs(t_ - std::round(t_)) < 1e-6) continue;
+    const bool pbrt_tex1 = (int64_t(std::floor(s_)) + int64_t(std::floor(t_))) % 2 == 0;
+    const bool pathcl_color0 = (int64_t(std::floor(u * tu + ou)) + int64_t(std::floor((1 - v) * tv + ov))) % 2 == 0;
+    ASSERT_EQ(pbrt_tex1, pathcl_color0) << "u " << u << " v " << v;
+  }
 }
 
 TEST(PbrtImport, ImageTexturesAndAlphaBecomePathclTexturesAndOpacity) {
