@@ -53,11 +53,14 @@ REFUSED = {
                   " one",
     "phong": "Cycles has no normalised modified Phong BSDF",
     "plastic": "no node can give the base pathcl's (1 - F(cos theta_i)) factor of the light direction",
+    "thin_dielectric": "no node reflects R' = 2R / (1 + R) and passes the rest straight through",
 }
 
 
 def material_data(m):
     """What the generated script needs to build material M (scene_model.Material) in Cycles."""
+    if m.type == "mirror" and m.eta is not None:
+        refuse(m, "Cycles", "its Sharp Glossy BSDF reflects a constant colour, not a metal's Fresnel term (eta, k)")
     if m.type in ("diffuse", "mirror"):
         return {"type": m.type, "reflectance": list(m.reflectance)}
     if m.type == "dielectric":

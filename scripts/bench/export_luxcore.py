@@ -58,6 +58,7 @@ REFUSED = {
     "oren_nayar": "its roughmatte looks like the same qualitative Oren-Nayar formula (sigma in radians), but that"
                   " mapping has not been checked against pathcl yet",
     "phong": "LuxCore has no normalised modified Phong BSDF",
+    "thin_dielectric": "its archglass has not been checked against pathcl's thin dielectric yet",
     "plastic": "its glossy2 is Schlick's coating model (Schlick's Fresnel approximation and distribution), not"
                " pathcl's exact-Fresnel coat",
 }
@@ -69,6 +70,8 @@ def material_lines(m, name=None):
     if m.type == "diffuse":
         return [p + 'type = "matte"', p + "kd = " + _vec(m.reflectance)]
     if m.type == "mirror":
+        if m.eta is not None:
+            refuse(m, "LuxCore", "its mirror has no Fresnel term (a metal's eta and k): metal2 is not smooth")
         return [p + 'type = "mirror"', p + "kr = " + _vec(m.reflectance)]
     if m.type == "dielectric":
         return [p + 'type = "glass"', p + "kr = 1 1 1", p + "kt = " + _vec(m.transmittance),

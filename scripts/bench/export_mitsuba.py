@@ -15,7 +15,9 @@ Mapping:
   - `diffuse`: `diffuse`. pathcl's reflects on both sides, Mitsuba's only on the front, so it is wrapped
     in `twosided`.
   - `mirror`: `conductor` with material "none" (complex index 0 + 1i: Fresnel reflectance exactly 1)
-    and `specular_reflectance` = reflectance, in `twosided`.
+    and `specular_reflectance` = reflectance, in `twosided`; a mirror with `eta` and `k` (a smooth metal):
+    `conductor` with that eta and k.
+  - `thin_dielectric`: `thindielectric` (int_ior = ior, ext_ior = 1, `specular_transmittance`), in `twosided`.
   - `dielectric`: `dielectric` with int_ior = ior and ext_ior = 1 (Mitsuba's default ext_ior is air,
     1.000277), `specular_transmittance` = transmittance, reflection untinted. Exact Fresnel, the normal's
     side is the outside (the counter-clockwise side, as pathcl's front side), and both scale radiance by
@@ -66,10 +68,19 @@ def bsdf_lines(m):
                 '    <bsdf type="diffuse"><rgb name="reflectance" value="%s"/></bsdf>' % _vec(m.reflectance),
                 '  </bsdf>']
     if m.type == "mirror":
+        # A plain mirror: Mitsuba's perfect conductor; a metal mirror: its complex index (the same Fresnel term).
+        index = (['      <string name="material" value="none"/>'] if m.eta is None else
+                 ['      <rgb name="eta" value="%s"/>' % _vec(m.eta), '      <rgb name="k" value="%s"/>' % _vec(m.k)])
+        return (['  <bsdf type="twosided" id=%s>' % mid, '    <bsdf type="conductor">'] + index +
+                ['      <rgb name="specular_reflectance" value="%s"/>' % _vec(m.reflectance),
+                 '    </bsdf>',
+                 '  </bsdf>'])
+    if m.type == "thin_dielectric":  # the same R' = 2R / (1 + R) and straight transmission
         return ['  <bsdf type="twosided" id=%s>' % mid,
-                '    <bsdf type="conductor">',
-                '      <string name="material" value="none"/>',
-                '      <rgb name="specular_reflectance" value="%s"/>' % _vec(m.reflectance),
+                '    <bsdf type="thindielectric">',
+                '      <float name="int_ior" value="%.9g"/>' % m.ior,
+                '      <float name="ext_ior" value="1"/>',
+                '      <rgb name="specular_transmittance" value="%s"/>' % _vec(m.transmittance),
                 '    </bsdf>',
                 '  </bsdf>']
     if m.type == "dielectric":

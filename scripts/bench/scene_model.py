@@ -25,7 +25,8 @@ class Camera:
 
 # The material types the exporters read (docs/scene-format.md); each exporter maps those its peer renders
 # with the same BSDF model and refuses the others (refuse below).
-MATERIAL_TYPES = ("diffuse", "oren_nayar", "phong", "mirror", "dielectric", "rough_conductor", "plastic")
+MATERIAL_TYPES = ("diffuse", "oren_nayar", "phong", "mirror", "dielectric", "thin_dielectric", "rough_conductor",
+                  "plastic")
 
 
 @dataclass
@@ -36,10 +37,11 @@ class Material:
     type: str = "diffuse"
     place: str = ""             # "scene.json: materials.NAME", for error messages
     reflectance: tuple = None   # diffuse, mirror
-    ior: float = None           # dielectric: the inside's index; the front side faces index 1
-    transmittance: tuple = None  # dielectric: tints each refraction, not reflection
+    ior: float = None           # dielectric: the inside's index; the front side faces index 1; thin_dielectric
+    transmittance: tuple = None  # dielectric: tints each refraction, not reflection; thin_dielectric
     roughness: float = None     # rough_conductor: GGX alpha = roughness^2
-    eta: tuple = None           # rough_conductor: complex index eta + i k per channel
+    eta: tuple = None           # rough_conductor, and a mirror with a metal's Fresnel term (else None):
+                                # complex index eta + i k per channel
     k: tuple = None
 
     @property
@@ -185,7 +187,9 @@ def read_material(name, m, place):
         mat.reflectance = _colour(m, "reflectance", (0.5, 0.5, 0.5), place)
     elif t == "mirror":
         mat.reflectance = _colour(m, "reflectance", (1, 1, 1), place)
-    elif t == "dielectric":
+        if "eta" in m:
+            mat.eta, mat.k = _colour(m, "eta", None, place), _colour(m, "k", None, place)
+    elif t in ("dielectric", "thin_dielectric"):
         mat.ior = float(m["ior"])
         mat.transmittance = _colour(m, "transmittance", (1, 1, 1), place)
     elif t == "rough_conductor":

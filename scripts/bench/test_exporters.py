@@ -344,6 +344,11 @@ INEXPRESSIBLE = {
     "plastic": {"type": "plastic", "diffuse": [0.1, 0.2, 0.6], "ior": 1.5, "roughness": 0.2},
     "phong": {"type": "phong", "diffuse": [0.3, 0.3, 0.3], "specular": [0.5, 0.5, 0.5], "exponent": 40},
 }
+# The importers' materials: a metal mirror (eta, k) and a thin dielectric; Mitsuba renders both as they are.
+IMPORTED = {
+    "polished": {"type": "mirror", "reflectance": [0.9, 1, 1], "eta": [0.2, 0.92, 1.1], "k": [3.9, 2.45, 2.14]},
+    "pane": {"type": "thin_dielectric", "ior": 1.52, "transmittance": [0.9, 0.95, 1]},
+}
 REFUSED_BY = {  # peer -> material types it refuses
     "Mitsuba": ("rough_conductor", "oren_nayar", "phong", "plastic"),
     "Cycles": ("rough_conductor", "oren_nayar", "phong", "plastic"),
@@ -386,6 +391,27 @@ class MaterialsFixture(unittest.TestCase):
         j["shapes"][shape_index]["material"] = name
         return self.load(j, "variant")
 
+
+
+class ImportedMaterials(MaterialsFixture):
+    def test_mitsuba_takes_metal_mirrors_and_thin_glass_and_the_others_refuse_them(self):
+        for name, m in IMPORTED.items():
+            scene_json = json.loads(json.dumps(MATERIALS_SCENE))
+            scene_json["materials"]["metal"] = m
+            scene = self.load(scene_json, "imported-" + name)
+            xml = open(export_mitsuba.export(scene, os.path.join(self.dir, "mi-" + name))).read()
+            if m["type"] == "mirror":
+                self.assertIn('<rgb name="eta" value="0.2, 0.92, 1.1"/>', xml)
+                self.assertIn('<rgb name="k" value="3.9, 2.45, 2.14"/>', xml)
+                self.assertNotIn('value="none"', xml)
+            else:
+                self.assertIn('<bsdf type="thindielectric">', xml)
+                self.assertIn('<float name="int_ior" value="1.52"/>', xml)
+                self.assertIn('<rgb name="specular_transmittance" value="0.9, 0.95, 1"/>', xml)
+            for peer, export in (("Cycles", export_cycles.export), ("LuxCore", export_luxcore.export)):
+                with self.assertRaises(sm.UnsupportedMaterial, msg=peer + " " + name) as caught:
+                    export(scene, os.path.join(self.dir, peer + name))
+                self.assertIn("materials.metal", str(caught.exception))
 
 class MaterialModelTest(MaterialsFixture):
     def test_materials_with_pathcl_defaults(self):
