@@ -1740,19 +1740,25 @@ Mesh bilinear_mesh(Translator& t, const Params& ps, const std::string& what, con
 int segments_for(double phimax_degrees) { return std::max(3, int(std::ceil(128 * phimax_degrees / 360))); }
 
 // A disk (pbrt-v4's Disk: at z = height, facing +z, radius to innerradius, phi up to phimax) as triangles.
+// Two rings of n + 1 vertices each about z, interleaved (vertex 2i on the first ring, 2i + 1 on the second, at
+// phi = phimax i / n), with uv (i / n, 0) and (i / n, 1): the strip a disk and a cylinder are made of.
+void add_ring_strip(Mesh& m, int n, double phimax_degrees, double r0, double z0, double r1, double z1) {
+  for (int i = 0; i <= n; ++i) {
+    double phi = phimax_degrees * kPi / 180 * i / n, u = double(i) / n;
+    m.p.push_back({r0 * std::cos(phi), r0 * std::sin(phi), z0});
+    m.uv.push_back({u, 0});
+    m.p.push_back({r1 * std::cos(phi), r1 * std::sin(phi), z1});
+    m.uv.push_back({u, 1});
+  }
+}
+
 Mesh disk_mesh(Translator& t, const Params& ps, const std::string& what, const Place& at) {
   double h = get_float(ps, what, "height", 0), r = get_float(ps, what, "radius", 1);
   double ri = get_float(ps, what, "innerradius", 0), phimax = std::clamp(get_float(ps, what, "phimax", 360), 0.0, 360.0);
   if (!(r > 0) || ri < 0 || ri >= r || phimax <= 0) fail(at, what + ": expected 0 <= innerradius < radius and phimax > 0");
   int n = segments_for(phimax);
   Mesh m;
-  for (int i = 0; i <= n; ++i) {
-    double phi = phimax * kPi / 180 * i / n, u = double(i) / n;
-    m.p.push_back({r * std::cos(phi), r * std::sin(phi), h});
-    m.uv.push_back({u, 0});
-    m.p.push_back({ri * std::cos(phi), ri * std::sin(phi), h});
-    m.uv.push_back({u, 1});
-  }
+  add_ring_strip(m, n, phimax, r, h, ri, h);  // the outer ring, then the inner
   for (int i = 0; i < n; ++i) {
     int o0 = 2 * i, i0 = 2 * i + 1, o1 = 2 * i + 2, i1 = 2 * i + 3;
     m.triangles.push_back({i0, o0, o1});
@@ -1772,13 +1778,7 @@ Mesh cylinder_mesh(Translator& t, const Params& ps, const std::string& what, con
   if (z0 > z1) std::swap(z0, z1);
   int n = segments_for(phimax);
   Mesh m;
-  for (int i = 0; i <= n; ++i) {
-    double phi = phimax * kPi / 180 * i / n, u = double(i) / n;
-    m.p.push_back({r * std::cos(phi), r * std::sin(phi), z0});
-    m.uv.push_back({u, 0});
-    m.p.push_back({r * std::cos(phi), r * std::sin(phi), z1});
-    m.uv.push_back({u, 1});
-  }
+  add_ring_strip(m, n, phimax, r, z0, r, z1);  // the bottom ring, then the top
   for (int i = 0; i < n; ++i) {
     int b0 = 2 * i, t0 = 2 * i + 1, b1 = 2 * i + 2, t1 = 2 * i + 3;
     m.triangles.push_back({b0, b1, t1});
