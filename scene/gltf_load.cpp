@@ -657,8 +657,7 @@ void read_node(Reader& r, int index, const glm::dmat4& parent, std::vector<bool>
 }  // namespace
 
 bool is_gltf_file(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(path);
   return ext == ".gltf" || ext == ".glb";
 }
 

@@ -3,6 +3,7 @@
 // a library made of it ("basic_filebuf::underflow error", "no faces"); lines split as tinyobjloader splits
 // them; and file names as exporters write them.
 #pragma once
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -27,6 +28,13 @@ inline constexpr InputKind kMaterialInput{"material file", "an MTL material file
 inline constexpr InputKind kBufferInput{"buffer file", "a glTF buffer file", "a glTF buffer"};
 inline constexpr InputKind kImageInput{"image file", "an image file (PNG, JPEG, BMP, TGA, Radiance HDR or OpenEXR)",
                                          "an image"};
+
+// The file name's extension in lower case (".PLY" -> ".ply"; "" for none): readers are chosen by it.
+inline std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
 
 // Reads up to `limit` bytes from the start of the file, or throws SceneError naming it: a directory, a
 // file that cannot be opened (and why), or a Git LFS pointer (what a clone without git lfs has in place of

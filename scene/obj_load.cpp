@@ -57,12 +57,6 @@ const MeshFormat kOtherMeshFormats[] = {
      "; decompress it first"},
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 [[noreturn]] void refuse_format(const std::string& path, const MeshFormat& f) {
   if (std::string(f.name) == "glTF")
     throw SceneError(path + ": a glTF file is placed by a shape of its own ({\"type\": \"gltf\", \"file\": ...}), "

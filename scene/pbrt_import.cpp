@@ -35,6 +35,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 
+#include "scene/input_file.h"
 #include "scene/scene_error.h"
 #include "scene/scene_import.h"
 #include "scene/spectrum.h"
@@ -1310,8 +1311,7 @@ json image_texture(Translator& t, const TextureEntity& tex) {
   if (filter != "bilinear") warn(t, at, what + ": filter " + in_quotes(filter) + ": pathcl looks images up bilinearly");
   // pbrt-v4 decodes 8-bit images by "encoding", sRGB by default for PNG only; pathcl decodes every 8-bit
   // image as sRGB (floating-point images are linear in both).
-  std::string ext = fs::path(written).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = lower_extension(written);
   bool eight_bit = ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tga" || ext == ".bmp";
   std::string encoding = get_string(ps, what, "encoding", ext == ".png" ? "sRGB" : "linear");
   if (eight_bit && encoding != "sRGB")

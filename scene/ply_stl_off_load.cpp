@@ -37,12 +37,6 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using PlyElement = CGAL::IO::internal::PLY_element;
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 // The value of the numeric property `tag` of the item just read, of whichever PLY type the file gives it.
 bool ply_number(PlyElement& element, const char* tag, double& value) {
   if (element.has_property<double>(tag)) {  // float or double (CGAL's overload for double takes both)

@@ -307,8 +307,4 @@ PolygonSoup load_serialized(const std::string& path, uint32_t shape_index, std::
   return soup;
 }
 
-bool is_serialized_file(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".serialized";
-}
+bool is_serialized_file(const std::string& path) { return lower_extension(path) == ".serialized"; }

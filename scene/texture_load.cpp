@@ -252,12 +252,6 @@ const ImageFormat kOtherImageFormats[] = {
     {"HEIF", {".heic", ".heif", ".avif"}, {}},
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 // Whether the file begins like one of kOtherImageFormats.
 bool is_other_image_format(const std::string& head) {
   for (const ImageFormat& f : kOtherImageFormats)
