@@ -844,23 +844,6 @@ void warn_unused(Importer& im, const Object& o) {
 // ---------------------------------------------------------------------------------------------------
 // JSON values
 
-json vec_json(glm::dvec3 v) { return json::array({v.x, v.y, v.z}); }
-
-json matrix_json(const glm::dmat4& m) {
-  json rows = json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back(json::array({m[0][r], m[1][r], m[2][r], m[3][r]}));
-  return rows;
-}
-
-bool is_identity(const glm::dmat4& m, double tolerance = 0) {
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (std::abs(m[c][r] - (c == r ? 1.0 : 0.0)) > tolerance) return false;
-  return true;
-}
-
-glm::dvec3 transform_point(const glm::dmat4& m, glm::dvec3 p) { return glm::dvec3(m * glm::dvec4(p, 1.0)); }
-glm::dvec3 transform_vector(const glm::dmat4& m, glm::dvec3 v) { return glm::dvec3(m * glm::dvec4(v, 0.0)); }
 
 std::string format_number(double v, int digits = 4) {
   std::ostringstream s;
@@ -2213,16 +2196,12 @@ void convert_sensor(Importer& im, const Object& s, json& camera, json& render) {
   const glm::dvec3 right = transform_vector(m, {-1, 0, 0});
   const double aspect = double(film.width) / film.height;
   const double fov_y = glm::degrees(2 * std::atan(std::tan(glm::radians(horizontal_fov(s, aspect)) / 2) / aspect));
-  camera = {{"type", "perspective"},
-            {"position", vec_json(position)},
-            {"look_at", vec_json(position + forward)},
-            {"up", vec_json(up)},
-            {"fov_y_degrees", fov_y},
-            {"width", unsigned(film.width)},
-            {"height", unsigned(film.height)},
-            {"filter", film.filter}};
-  // pathcl's image x axis is cross(forward, up); a mirroring to_world turns Mitsuba's the other way.
-  if (glm::dot(right, glm::cross(forward, up)) < 0) camera["handedness"] = "left";
+  camera = camera_frame_json(position, forward, up, right);  // a mirroring to_world is left-handed
+  camera["type"] = "perspective";
+  camera["fov_y_degrees"] = fov_y;
+  camera["width"] = unsigned(film.width);
+  camera["height"] = unsigned(film.height);
+  camera["filter"] = film.filter;
   if (s.type == "thinlens") {
     std::optional<double> aperture = optional_number(s, "aperture_radius");
     if (!aperture) fail(s.place, s.label() + ": needs an aperture_radius");

@@ -451,9 +451,6 @@ glm::dmat4 matrix_from_file(const std::vector<double>& v) { return glm::make_mat
 
 bool is_affine(const glm::dmat4& m) { return m[0][3] == 0 && m[1][3] == 0 && m[2][3] == 0 && m[3][3] == 1; }
 
-bool is_identity(const glm::dmat4& m) { return m == glm::dmat4(1.0); }
-
-// Whether a 3x3 part is a rotation (or a mirroring) times a uniform scale, to pathcl's tolerance for spheres.
 // How far a linear map is from a similarity (a rotation times a uniform scale, mirrored or not): the largest
 // difference of its columns' lengths and of their products, relative to its scale; infinity when singular.
 double similarity_error(const glm::dmat3& l) {
@@ -466,17 +463,6 @@ double similarity_error(const glm::dmat3& l) {
 
 bool is_similarity(const glm::dmat3& l) { return similarity_error(l) <= 1e-5; }
 
-json matrix_json(const glm::dmat4& m) {
-  json rows = json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({m[0][r], m[1][r], m[2][r], m[3][r]});
-  return rows;
-}
-
-json vec_json(glm::dvec3 v) { return json::array({v.x, v.y, v.z}); }
-
-glm::dvec3 apply_point(const glm::dmat4& m, glm::dvec3 p) { return glm::dvec3(m * glm::dvec4(p, 1.0)); }
-
-glm::dvec3 apply_vector(const glm::dmat4& m, glm::dvec3 v) { return glm::dvec3(m * glm::dvec4(v, 0.0)); }
 
 // ---------------------------------------------------------------------------------------------------------
 // The parser: directives in order, with the state pbrt-v4's BasicSceneBuilder keeps.
@@ -1705,7 +1691,7 @@ Mesh triangle_mesh(Translator& t, const Params& ps, const std::string& what, con
     m.triangles.push_back(tri);
     m.primitive.push_back(int(m.area.size()));
     // pbrt-v4 keeps triangles in render space: an emitter's "power" is spread over the transformed area.
-    m.area.push_back(triangle_area(apply_point(ctm, m.p[tri.x]), apply_point(ctm, m.p[tri.y]), apply_point(ctm, m.p[tri.z])));
+    m.area.push_back(triangle_area(transform_point(ctm, m.p[tri.x]), transform_point(ctm, m.p[tri.y]), transform_point(ctm, m.p[tri.z])));
   }
   return m;
 }
@@ -1728,7 +1714,7 @@ Mesh bilinear_mesh(Translator& t, const Params& ps, const std::string& what, con
     m.triangles.push_back({v00, v10, v11});
     m.triangles.push_back({v00, v11, v01});
     m.primitive.insert(m.primitive.end(), {primitive, primitive});
-    glm::dvec3 w00 = apply_point(ctm, p00), w10 = apply_point(ctm, p10), w01 = apply_point(ctm, p01), w11 = apply_point(ctm, p11);
+    glm::dvec3 w00 = transform_point(ctm, p00), w10 = transform_point(ctm, p10), w01 = transform_point(ctm, p01), w11 = transform_point(ctm, p11);
     m.area.push_back(triangle_area(w00, w10, w11) + triangle_area(w00, w11, w01));
   }
   if (curved)
@@ -2220,7 +2206,7 @@ void translate_light(Translator& t, const LightEntity& l) {
     glm::dvec3 intensity = light_colour(t, lookup(ps, what, "I", kSpectrumTypes), what) * scale;
     glm::dvec3 from = get_point(ps, what, "from", glm::dvec3(0));
     double power = get_float(ps, what, "power", -1);
-    json light = {{"type", type}, {"position", vec_json(apply_point(l.ctm, from))}};
+    json light = {{"type", type}, {"position", vec_json(transform_point(l.ctm, from))}};
     if (type == "point") {
       if (power > 0) intensity *= power / (4 * kPi);
     } else {
@@ -2240,7 +2226,7 @@ void translate_light(Translator& t, const LightEntity& l) {
         double cos_end = std::cos(cone * kPi / 180), cos_start = std::cos(inner * kPi / 180);
         intensity *= power / (2 * kPi * ((1 - cos_start) + (cos_start - cos_end) / 2));
       }
-      light["direction"] = vec_json(apply_vector(l.ctm, to - from));
+      light["direction"] = vec_json(transform_vector(l.ctm, to - from));
       light["outer_angle_degrees"] = cone;
       light["inner_angle_degrees"] = inner;
     }
@@ -2252,7 +2238,7 @@ void translate_light(Translator& t, const LightEntity& l) {
     if (glm::length(to - from) == 0) fail(at, what + ": \"from\" and \"to\" coincide");
     // Light travels from "from" towards "to"; "illuminance" is the irradiance of a surface facing it.
     if (double e = get_float(ps, what, "illuminance", -1); e > 0) irradiance *= e;
-    push_light(t, {{"type", "directional"}, {"direction", vec_json(apply_vector(l.ctm, to - from))},
+    push_light(t, {{"type", "directional"}, {"direction", vec_json(transform_vector(l.ctm, to - from))},
                    {"irradiance", vec_json(irradiance)}},
                at, what);
   } else {  // infinite
@@ -2396,9 +2382,9 @@ json translate_camera(Translator& t) {
   if (!is_affine(camera_from_world) || glm::determinant(glm::dmat3(camera_from_world)) == 0)
     fail(at, what + ": the camera transform is projective or singular");
   glm::dmat4 world_from_camera = glm::inverse(camera_from_world);
-  glm::dvec3 position = apply_point(world_from_camera, glm::dvec3(0));
-  glm::dvec3 right = apply_vector(world_from_camera, {1, 0, 0}), up = apply_vector(world_from_camera, {0, 1, 0});
-  glm::dvec3 forward = apply_vector(world_from_camera, {0, 0, 1});
+  glm::dvec3 position = transform_point(world_from_camera, glm::dvec3(0));
+  glm::dvec3 right = transform_vector(world_from_camera, {1, 0, 0}), up = transform_vector(world_from_camera, {0, 1, 0});
+  glm::dvec3 forward = transform_vector(world_from_camera, {0, 0, 1});
   double s = glm::length(forward);
   // Exporters write matrices to 6 digits (Bitterli's scenes: columns 2e-5 from orthogonal): a frame within
   // 1e-4 of a rotation is taken as its rotation (the view moves by at most 1e-4 radians), with a warning
@@ -2432,12 +2418,11 @@ json translate_camera(Translator& t) {
   if (!(fov > 0 && fov < 180)) fail(at, what + ": fov " + num(fov) + " is not in (0, 180)");
   double fov_y = 2 * std::atan(y1 * std::tan(fov * kPi / 360)) * 180 / kPi;
 
-  json camera = {{"position", vec_json(position)}, {"look_at", vec_json(position + forward / s)},
-                 {"up", vec_json(up / s)},         {"fov_y_degrees", fov_y},
-                 {"width", film.width},            {"height", film.height}};
-  // pathcl's image right is cross(forward, up); pbrt's camera +x is usually cross(up, forward) (LookAt), the
-  // other handedness.
-  if (glm::dot(glm::cross(forward, up), right) < 0) camera["handedness"] = "left";
+  // pbrt's camera +x is usually cross(up, forward) (LookAt): left-handed.
+  json camera = camera_frame_json(position, forward / s, up / s, right);
+  camera["fov_y_degrees"] = fov_y;
+  camera["width"] = film.width;
+  camera["height"] = film.height;
   double lens = get_float(ps, what, "lensradius", 0), focus = get_float(ps, what, "focaldistance", 1e6);
   if (lens > 0) {
     camera["type"] = "thin_lens";

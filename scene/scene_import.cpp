@@ -5,7 +5,11 @@
 #include "scene/scene_error.h"
 
 #include <cctype>
+#include <cmath>
 #include <filesystem>
+
+#include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 namespace {
 
@@ -116,4 +120,29 @@ std::string scene_json_text(const nlohmann::json& scene) {
   std::string out;
   write_json(scene, 0, out);
   return out + "\n";
+}
+
+nlohmann::json vec_json(const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+nlohmann::json matrix_json(const glm::dmat4& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back(nlohmann::json::array({m[0][r], m[1][r], m[2][r], m[3][r]}));
+  return rows;
+}
+
+bool is_identity(const glm::dmat4& m, double tolerance) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!(std::abs(m[c][r] - (c == r ? 1.0 : 0.0)) <= tolerance)) return false;
+  return true;
+}
+
+glm::dvec3 transform_point(const glm::dmat4& m, const glm::dvec3& p) { return glm::dvec3(m * glm::dvec4(p, 1.0)); }
+glm::dvec3 transform_vector(const glm::dmat4& m, const glm::dvec3& v) { return glm::dvec3(m * glm::dvec4(v, 0.0)); }
+
+nlohmann::json camera_frame_json(const glm::dvec3& position, const glm::dvec3& forward, const glm::dvec3& up,
+                                 const glm::dvec3& image_right) {
+  nlohmann::json camera = {{"position", vec_json(position)}, {"look_at", vec_json(position + forward)}, {"up", vec_json(up)}};
+  if (glm::dot(glm::cross(forward, up), image_right) < 0) camera["handedness"] = "left";
+  return camera;
 }

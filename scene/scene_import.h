@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
 enum class SceneFileFormat { json, mitsuba_xml, pbrt };
@@ -50,3 +52,17 @@ std::string scene_json_text(const nlohmann::json& scene);
 // Each throws SceneError naming the file and line ("cbox.xml:12: ...") on bad or unsupported input.
 ImportedScene import_mitsuba_xml(const std::string& path, const std::string& text, const SceneDefines& defines = {});
 ImportedScene import_pbrt(const std::string& path, const std::string& text);
+
+// ---- What both importers write into the document.
+
+nlohmann::json vec_json(const glm::dvec3& v);     // [x, y, z]
+nlohmann::json matrix_json(const glm::dmat4& m);  // a transform's "matrix": 4 rows of 4 numbers
+// Whether every entry is within `tolerance` of the identity's (false for a NaN).
+bool is_identity(const glm::dmat4& m, double tolerance = 0);
+glm::dvec3 transform_point(const glm::dmat4& m, const glm::dvec3& p);
+glm::dvec3 transform_vector(const glm::dmat4& m, const glm::dvec3& v);
+// The camera's "position", "look_at" (position + forward) and "up" as given, and "handedness": "left" where the
+// image's right is cross(up, forward), the mirror of pathcl's cross(forward, up) (pbrt's LookAt frame, a
+// mirroring Mitsuba to_world).
+nlohmann::json camera_frame_json(const glm::dvec3& position, const glm::dvec3& forward, const glm::dvec3& up,
+                                 const glm::dvec3& image_right);
