@@ -53,7 +53,7 @@ int run_convert_command() {
     throw UsageError("-o " + output + ": is the scene being converted (choose another file)");
   check_output_files({{"-o", output}});
   // Every check a render makes (meshes, images, ranges): what convert writes is a scene pathcl renders.
-  const SceneDescription scene = load_scene(a.input, defines);
+  const SceneDescription scene = load_scene(a.input, document);
   rebase_scene_paths(document.scene, fs::path(a.input).parent_path().string(), fs::path(output).parent_path().string());
   write_text_file(output, scene_json_text(document.scene));
   if (!a.quiet) {

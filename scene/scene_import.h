@@ -40,6 +40,11 @@ SceneFileFormat scene_file_format(const std::string& text);
 // `defines` are for Mitsuba files only: SceneError for a JSON or pbrt file given any.
 ImportedScene load_scene_document(const std::string& path, const SceneDefines& defines = {});
 
+// The scene of a document that load_scene_document read from `path` (relative files resolved beside it): what
+// load_scene(path) gives, without reading and translating the file again.
+struct SceneDescription;
+SceneDescription load_scene(const std::string& path, const ImportedScene& document);
+
 // Mesh, image and glTF paths of a document (shapes' `file`, textures, environment maps, `from_gltf`)
 // written relative to `to_dir` instead of `from_dir` (absolute paths stay): a converted scene written to
 // another directory still names the source's files.

@@ -1216,7 +1216,10 @@ ImportedScene load_scene_document(const std::string& path, const SceneDefines& d
 }
 
 SceneDescription load_scene(const std::string& path, const SceneDefines& defines) {
-  const ImportedScene document = scene_document(path, defines);
+  return load_scene(path, scene_document(path, defines));
+}
+
+SceneDescription load_scene(const std::string& path, const ImportedScene& document) {
   const json& root = document.scene;
   SceneDescription scene;
   scene.path = path;
