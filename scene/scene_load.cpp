@@ -421,15 +421,9 @@ MaterialDesc read_material(const Node& n, const std::string& name, SceneDescript
       m.specular = n.at("eta").color();
       m.k = n.at("k").color();
     }
-  } else if (m.type == "dielectric") {
+  } else if (m.type == "dielectric" || m.type == "thin_dielectric") {
     n.expect_object({"type", "opacity", "ior", "transmittance"}, {"ior"});
-    m.type_id = PC_MAT_DIELECTRIC;
-    m.ior = read_ior(n.at("ior"));
-    m.color = glm::vec3(1);
-    if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
-  } else if (m.type == "thin_dielectric") {
-    n.expect_object({"type", "opacity", "ior", "transmittance"}, {"ior"});
-    m.type_id = PC_MAT_THIN_DIELECTRIC;
+    m.type_id = m.type == "dielectric" ? PC_MAT_DIELECTRIC : PC_MAT_THIN_DIELECTRIC;
     m.ior = read_ior(n.at("ior"));
     m.color = glm::vec3(1);
     if (n.has("transmittance")) read_albedo_or_texture(n.at("transmittance"), scene, dir, m);
