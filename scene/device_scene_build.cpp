@@ -470,13 +470,14 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       Light light{};
       light.type = l.type;
       light.emission = f4(l.emission);
-      light.position = f4(glm::vec3(l.position - out.origin));  // camera-relative, like the geometry
-      if (l.type == PC_LIGHT_ENVIRONMENT) light.position = environment_rotation(l.rotation);
+      const bool environment = l.type == PC_LIGHT_ENVIRONMENT;
+      // Point and spot lights camera-relative, like the geometry; an environment's rotation in its place.
+      light.position = environment ? environment_rotation(l.rotation) : f4(glm::vec3(l.position - out.origin));
       light.direction = f4(l.direction);
-      light.prim = light.slot = PC_INVALID;
+      light.prim = PC_INVALID;
       // An environment map's parameterisation in its slot (it has no primitive): PC_ENV_LAT_LONG is
       // PC_INVALID, so a lat-long map's light is as it was.
-      if (l.type == PC_LIGHT_ENVIRONMENT && l.texture != PC_INVALID) light.slot = l.mapping;
+      light.slot = environment && l.texture != PC_INVALID ? l.mapping : PC_INVALID;
       light.cos_inner = l.cos_inner;
       light.cos_outer = l.cos_outer;
       light.texture = l.texture;
