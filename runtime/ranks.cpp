@@ -277,6 +277,10 @@ struct RankLink {
 
 struct RankJob::Impl {
   bool initialised = false;  // MPI_Init_thread was called (and MPI_Finalize is due)
+  // A rank of the job was lost: MPI_Finalize is skipped. Open MPI's finalize is a fence over every process
+  // of the job, the dead one too: under --enable-recovery it spins there for good when the process's death
+  // has not reached the runtime first (seen as a hang of rank 0 and the other live ranks, 1 run in ~20).
+  bool rank_lost = false;
   std::unique_ptr<AnswerCourier> courier;  // while remote devices render
   std::vector<std::unique_ptr<RankLink>> links;  // ranks 1 .. K-1
   double timeout = 30;
@@ -530,7 +534,7 @@ RankJob::~RankJob() {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
   }
-  MPI_Finalize();
+  if (!impl_->rank_lost) MPI_Finalize();
 }
 
 std::vector<WorkerSource> RankJob::remote_workers(double timeout_seconds, std::vector<std::string>* warnings) {
@@ -587,10 +591,12 @@ void RankJob::finish() {
   if (rank_ != 0 || impl_->finished) return;
   impl_->finished = true;
   impl_->courier.reset();  // nobody waits for an answer any more: the render's worker threads have ended
-  // Every rank, lost ones too (a lost rank that is gone never takes it: it is given up after a second).
+  impl_->rank_lost = !lost_ranks().empty();
+  // Every rank, lost ones too (a lost rank that is gone never takes it: it is given up after a second); its
+  // byte says whether a rank was lost, and so whether to skip MPI_Finalize.
   for (int r = 1; r < size_; ++r) {
     try {
-      send_bytes(r, kTagQuit, Bytes{}, after(1.0));
+      send_bytes(r, kTagQuit, Bytes{uint8_t(impl_->rank_lost)}, after(1.0));
     } catch (const std::exception&) {
     }
   }
@@ -623,7 +629,10 @@ int RankJob::serve(const std::string& selector, const Faults& faults) {
       }
       const int tag = status.MPI_TAG;
       std::optional<Bytes> bytes = receive_bytes(0, tag, Clock::time_point::max());
-      if (tag == kTagQuit) break;
+      if (tag == kTagQuit) {
+        impl_->rank_lost = !bytes->empty() && (*bytes)[0] != 0;
+        break;
+      }
       if (tag == kTagScene) {
         try {
           scene = std::make_shared<const DeviceScene>(decode_scene(*bytes));
