@@ -20,3 +20,5 @@ constexpr uint64_t kMaxSceneTexelWords = uint64_t(1) << 32;
 // radiance of 1e12 seen directly sums to 1.7e31 there, which leaves a factor of 1e7 below FLT_MAX for
 // the light that reflections gather from lights close by. 1e12 is still 600 times the sun's luminance.
 constexpr float kMaxLightValue = 1e12f;
+// A mesh shape's "subdivide": parts per edge (each triangle into their square).
+constexpr uint32_t kMaxSubdivide = 64;

@@ -21,6 +21,7 @@
 #include "scene/scene_description.h"
 #include "kernels/shared/types.h"
 #include "scene/gltf_load.h"
+#include "scene/mesh_subdivide.h"
 #include "scene/mtl_load.h"
 #include "scene/obj_load.h"
 #include "scene/ply_stl_off_load.h"
@@ -747,11 +748,11 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
   ShapeDesc s;
   if (type == "mesh")
     n.expect_object({"type", "file", "material", "emission", "two_sided", "transform", "orient", "smooth",
-                     "smooth_angle_degrees", "instance", "vertex_colors", "shape_index"},
+                     "smooth_angle_degrees", "instance", "vertex_colors", "shape_index", "subdivide"},
                     {"file", "material"});
   else if (type == "triangles")
     n.expect_object({"type", "positions", "indices", "uvs", "colors", "material", "emission", "two_sided",
-                     "transform", "orient", "smooth", "smooth_angle_degrees", "instance", "vertex_colors"},
+                     "transform", "orient", "smooth", "smooth_angle_degrees", "instance", "vertex_colors", "subdivide"},
                     {"positions", "indices", "material"});
   else if (type == "sphere")
     n.expect_object({"type", "center", "radius", "material", "emission", "two_sided", "transform",
@@ -857,6 +858,13 @@ ShapeDesc read_shape(const Node& n, const std::filesystem::path& dir, const std:
     s.mesh = clean_mesh(soup, options, s.clean);
   } catch (const SceneError& e) {
     n.fail(e.what());
+  }
+  if (n.has("subdivide")) {
+    Node sub = n.at("subdivide");
+    const double parts = sub.number();
+    if (!(parts >= 1 && parts <= kMaxSubdivide && parts == std::floor(parts)))
+      sub.fail("expected a whole number of parts per edge, 1 to " + std::to_string(kMaxSubdivide) + sub.got());
+    subdivide_mesh(s.mesh, uint32_t(parts));
   }
   if (from_mtl) {
     std::vector<uint32_t> scene_material;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -150,6 +151,11 @@ TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
        "shapes[0].transform: a sphere allows only translation, rotation and uniform scale"},
       {R"({"type": "sphere", "radius": 1, "material": "m", "transform": {"skew": 1}})",
        "shapes[0].transform: unknown key \"skew\""},
+      {R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m", "subdivide": 0})",
+       "shapes[0].subdivide: expected a whole number of parts per edge, 1 to 64, got 0"},
+      {R"({"type": "triangles", "positions": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]], "material": "m", "subdivide": 2.5})",
+       "shapes[0].subdivide: expected a whole number of parts per edge, 1 to 64, got 2.5"},
+      {R"({"type": "sphere", "radius": 1, "material": "m", "subdivide": 2})", "shapes[0]: unknown key \"subdivide\""},
   };
   for (const Case& c : cases) {
     std::string path = write_temp_file("case.json", scene_with_shape(c.shape));
@@ -157,6 +163,43 @@ TEST(SceneLoad, WrongTypesAndValuesAreRejected) {
     EXPECT_NE(error.find(c.expected), std::string::npos) << c.shape << "\n  gave: " << error;
     EXPECT_EQ(error.rfind(path, 0), 0u) << "the message starts with the file: " << error;
   }
+}
+
+// "subdivide": n splits each triangle into n^2 of the same plane: a closed cube stays closed (every edge in
+// exactly two triangles, opposite ways), its area and winding unchanged, the points of shared edges shared.
+TEST(SceneLoad, SubdivideKeepsTheSurfaceWatertight) {
+  const std::string cube = std::string(PATHCL_SOURCE_DIR) + "/scenes/meshes/cube.obj";
+  auto load = [&](int parts) {
+    std::string shape = R"({"type": "mesh", "file": ")" + cube + R"(", "material": "m")" +
+                        (parts > 0 ? ", \"subdivide\": " + std::to_string(parts) : std::string()) + "}";
+    return load_scene(write_temp_file("subdivide.json", scene_with_shape(shape))).shapes.at(0).mesh;
+  };
+  const TriangleMesh plain = load(0), fine = load(3);
+  ASSERT_EQ(fine.triangles.size(), 9 * plain.triangles.size());
+  auto area_and_normal = [](const TriangleMesh& m, size_t t) {
+    const auto& [a, b, c] = m.triangles[t];
+    return glm::cross(m.positions[b] - m.positions[a], m.positions[c] - m.positions[a]) * 0.5;
+  };
+  glm::dvec3 plain_sum(0), fine_sum(0);
+  double plain_area = 0, fine_area = 0;
+  for (size_t t = 0; t < plain.triangles.size(); ++t) {
+    plain_area += glm::length(area_and_normal(plain, t));
+    // The 9 parts of triangle t face as it does.
+    for (size_t k = 9 * t; k < 9 * t + 9; ++k) {
+      EXPECT_GT(glm::dot(area_and_normal(fine, k), area_and_normal(plain, t)), 0.0) << "part " << k;
+      fine_area += glm::length(area_and_normal(fine, k));
+    }
+  }
+  EXPECT_NEAR(fine_area, plain_area, 1e-12 * plain_area);
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& t : fine.triangles)
+    for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1) << edge.first << "-" << edge.second;
+    EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << "edge " << edge.first << "-" << edge.second << " is open";
+  }
+  // Each point once: the 8 corners, 2 on each of the 18 edges (12 and 6 diagonals), 1 inside each triangle.
+  EXPECT_EQ(fine.positions.size(), 8u + 18 * 2 + 12 * 1);
 }
 
 TEST(SceneLoad, CameraLookingAlongTheDefaultUpIsAClearError) {
