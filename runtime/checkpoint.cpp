@@ -49,9 +49,9 @@ uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
   // Other techniques than `path` are in the key too (path keys are as before they existed).
   const Technique& t = technique_named(options.integrator, "integrator");
   if (t.id != PC_INTEGRATOR_PATH) h = fnv1a(&t.id, sizeof t.id, h);
-  if (t.merging) {
-    const double merging[] = {options.radius, options.alpha, options.merge ? 1.0 : 0.0};
-    h = fnv1a(merging, sizeof merging, h);
+  if (t.key_settings) {
+    const std::vector<double> settings_of_technique = t.key_settings(options);
+    h = fnv1a(settings_of_technique.data(), settings_of_technique.size() * sizeof(double), h);
   }
   return h;
 }

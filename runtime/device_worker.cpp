@@ -50,7 +50,8 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     light_header_ = ClBuffer(cl, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof lt.header, &lt.header);
     emission_cdf_ = upload(cl, lt.emission_cdf);
   }
-  TechniqueSizes sizes{layout_.pixels, settings.max_depth, 0, &cl.info};
+  TechniqueSizes sizes{layout_.pixels, settings.max_depth, 0, &cl.info,
+                       settings.light ? settings.light->header.light_paths : 0, header.prim_count};
   sizes.unit_items = unit_items_ = technique_unit_items(t, sizes);
   for (const TechniqueBuffer& b : t.buffers) {
     const cl_uint zero = 0;

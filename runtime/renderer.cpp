@@ -193,12 +193,9 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   light_setup.header.only_strategy = options.debug_bdpt_strategy_s >= 0
                                          ? uint32_t(options.debug_bdpt_strategy_s) | uint32_t(options.debug_bdpt_strategy_t) << 16
                                          : PC_INVALID;
-  if (technique.merging) {  // kernels/vcm.cl
-    LightTransportHeader& lt = light_setup.header;
-    lt.vcm_mode = options.merge ? technique.merging : technique.merging & ~PC_VCM_MERGE;
-    lt.radius = float(options.radius > 0 ? options.radius : default_merging_radius(scene, lt));
-    lt.alpha = float(options.alpha);
-  }
+  if (technique.setup_light) technique.setup_light(light_setup, scene, options);
+  if (technique.check_scene)
+    for (std::string& w : technique.check_scene(scene)) result.warnings.push_back(std::move(w));
   result.light = light_setup.header;
 
   // Set-up on every device at once: kernel build (or cache), scene upload, and with several devices

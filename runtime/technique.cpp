@@ -14,7 +14,8 @@ std::mutex registry_mutex;
 std::vector<Technique>& registry() {
   // The registry: one line per technique.
   static std::vector<Technique> list = {path_technique(), light_technique(), bdpt_technique(),
-                                         vcm_technique(),  bpm_technique(),   sppm_technique()};
+                                         vcm_technique(),  bpm_technique(),   sppm_technique(),
+                                         instant_radiosity_technique(), radiosity_technique()};
   return list;
 }
 }  // namespace

@@ -14,7 +14,9 @@
 #include "kernels/shared/light_types.h"
 
 struct DeviceInfo;
+struct DeviceScene;
 struct Film;
+struct LightTransportSetup;
 struct RenderOptions;
 
 // How a technique's units cover the film (runtime/render_schedule.h schedules both the same way: tiles of
@@ -59,6 +61,8 @@ struct TechniqueSizes {
   uint32_t max_depth = 0;
   uint32_t unit_items = 0;  // the largest unit's pixels or paths on this device (Technique::max_unit_items)
   const DeviceInfo* device = nullptr;
+  uint32_t light_paths = 0;  // LightTransportHeader.light_paths (the gathering integrators' per iteration)
+  uint32_t prims = 0;        // the scene's primitives (SceneHeader.prim_count)
 };
 
 // A device buffer of the technique's own, made at set-up, cleared to zero once, and kept for the whole
@@ -78,7 +82,8 @@ struct TechniqueOption {
 
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
-  uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2, vcm 3, bpm 4, sppm 5); never reused
+  uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2, vcm 3, bpm 4,
+                        // sppm 5, instant_radiosity 6, radiosity 7); never reused
   std::string summary;  // one line for --help and the docs
   std::string kernel_file;             // its program's main file under kernels/
   std::vector<TechniquePhase> phases;  // what a unit runs
@@ -91,13 +96,20 @@ struct Technique {
   // over the unit's samples: an iteration's phases (trace light paths, build a grid over their vertices,
   // gather) finish before the next iteration's begin.
   bool per_sample = false;
-  uint32_t merging = 0;  // the strategies of a merging technique (PC_VCM_*, LightTransportHeader.vcm_mode)
   // The largest unit (pixels or paths) a device takes, when the technique's buffers grow with it (light
   // subpaths kept per path): sizes.unit_items is 0 here. Empty: any. Units never exceed it (the schedule
   // takes the smallest over the devices), so an iteration too large for a device is split into units.
   std::function<uint32_t(const TechniqueSizes&)> max_unit_items;
   double cpu_unit_seconds = 0.25;   // unit duration to aim for on CPU devices
   std::vector<TechniqueOption> options;
+  // Its options' values, hashed into render keys (checkpoints resume only the same settings); may be empty.
+  std::function<std::vector<double>(const RenderOptions&)> key_settings;
+  // Fills the light-transport header's fields of its own from the render's options (techniques with
+  // emission); may be empty.
+  std::function<void(LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& options)> setup_light;
+  // Checks that it can render the scene (UsageError naming what it does not take) and returns warnings of
+  // what it approximates; may be empty.
+  std::function<std::vector<std::string>(const DeviceScene& scene)> check_scene;
   // Extra -D flags for a device (besides the scene's features); may be empty.
   std::function<std::string(const TechniqueBuild&)> build_options;
   // The film's image: fills film.mean, variance, even_mean and odd_mean from the technique's layers at
@@ -105,12 +117,13 @@ struct Technique {
   std::function<void(Film& film, const LightTransportHeader& lt, uint64_t* overflows)> develop;
 };
 
-// Every registered technique, in registration order (path, light, bdpt, vcm, bpm, sppm, then any a test adds).
+// Every registered technique, in registration order (path, light, bdpt, vcm, bpm, sppm, instant_radiosity,
+// radiosity, then any a test adds).
 const std::vector<Technique>& techniques();
 // Adds one (tests: a technique of their own, with a kernel from register_kernel_source); the name and id
 // must be new.
 void register_technique(Technique technique);
-// The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light, bdpt, vcm, bpm or sppm)".
+// The technique of this name; UsageError "WHERE: unknown integrator "NAME" (expected path, light, ...)".
 const Technique& technique_named(const std::string& name, const std::string& where);
 // Whether a phase takes "lt" or "emission_cdf": the render then sets up the emission distribution and the
 // splat scales (runtime/light_transport.h).
@@ -119,7 +132,7 @@ bool uses_emission(const Technique& t);
 uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes);
 // By id (checkpoints); nullptr if none has it.
 const Technique* technique_with_id(uint32_t id);
-// "path, light, bdpt, vcm, bpm or sppm"
+// "path, light, bdpt, vcm, bpm, sppm, instant_radiosity or radiosity"
 std::string technique_list();
 
 // Refuses options that do not apply to the technique or exceed its limits (UsageError naming them).
@@ -136,3 +149,5 @@ Technique bdpt_technique();
 Technique vcm_technique();
 Technique bpm_technique();
 Technique sppm_technique();
+Technique instant_radiosity_technique();
+Technique radiosity_technique();

@@ -29,7 +29,6 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.id = id;
   t.summary = summary;
   t.kernel_file = "vcm.cl";
-  t.merging = mode;
   t.per_sample = true;
   // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
   // its vertex count, the grid's buckets (a power of two >= c, one end and the prefix sum's block offsets)
@@ -56,6 +55,13 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   };
   // A unit traces every camera path of its iteration: whole iterations where the time allows.
   t.cpu_unit_seconds = 2.0;
+  t.key_settings = [](const RenderOptions& o) { return std::vector<double>{o.radius, o.alpha, o.merge ? 1.0 : 0.0}; };
+  t.setup_light = [mode](LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& o) {
+    LightTransportHeader& lt = setup.header;
+    lt.vcm_mode = o.merge ? mode : mode & ~PC_VCM_MERGE;
+    lt.radius = float(o.radius > 0 ? o.radius : default_merging_radius(scene, lt));
+    lt.alpha = float(o.alpha);
+  };
   t.options = {{"radius", "a radius > 0 (scene units)",
                 [](double v, RenderOptions& o) {
                   if (!(v > 0) || !std::isfinite(v)) return false;

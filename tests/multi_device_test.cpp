@@ -148,7 +148,7 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
   std::vector<DeviceInfo> devices = all_devices();
   for (const char* integrator : {"light", "bdpt", "vcm", "sppm"}) {
     // A merging unit traces all of its iteration's camera paths: units of 480 paths rather than 7.
-    const bool merging = technique_named(integrator, "test").merging != 0;
+    const bool merging = technique_named(integrator, "test").per_sample;
     SCOPED_TRACE(integrator);
     RenderOptions opt = base_options();
     opt.integrator = integrator;
@@ -185,6 +185,39 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
     failing.faults[1].fail_after_units = 1;
     RenderResult r = render(devices, scene, failing);
     same(r, "a failing device");
+    EXPECT_EQ(r.devices[1].failures, 1u);
+  }
+}
+
+// The gathering integrators run per-sample pixel units (each unit traces its iteration's light paths, then
+// its pixels gather): any split over the devices, and a failing device, give the one-device bits.
+TEST(MultiDevice, GatheringIntegratorsOnAllDevicesGiveTheOneDeviceBits) {
+  DeviceScene scene = small_cornell();
+  std::vector<DeviceInfo> devices = all_devices();
+  for (const char* integrator : {"instant_radiosity", "radiosity"}) {
+    SCOPED_TRACE(integrator);
+    RenderOptions opt = base_options();
+    opt.integrator = integrator;
+    opt.light_paths = 24;
+    Film one = render({devices.front()}, scene, opt).film;
+    for (uint32_t tile : {1u, 37u, 0u}) {
+      RenderOptions split = opt;
+      split.tile_pixels = tile;
+      split.max_unit_pixels = tile == 1 ? 7 : 0;
+      split.pass_spp = tile == 0 ? 0 : tile == 1 ? 1 : 5;
+      RenderResult r = render(devices, scene, split);
+      EXPECT_EQ(r.film.words, one.words) << "tile " << tile;
+      EXPECT_EQ(r.determinism, "bitwise");
+      if (tile == 1)
+        for (const DeviceReport& d : r.devices) EXPECT_GT(d.units, 0u) << d.name;
+    }
+    RenderOptions failing = opt;
+    failing.tile_pixels = 16;
+    failing.pass_spp = 1;
+    failing.faults.resize(2);
+    failing.faults[1].fail_after_units = 1;
+    RenderResult r = render(devices, scene, failing);
+    EXPECT_EQ(r.film.words, one.words) << "a failing device";
     EXPECT_EQ(r.devices[1].failures, 1u);
   }
 }
