@@ -56,6 +56,12 @@ struct RenderOptions {
   double radius = 0;
   double alpha = 0.75;
   bool merge = true;
+  // The gathering integrators (instant_radiosity, radiosity; kernels/gather.cl): light paths per iteration
+  // (0: the technique's default), instant radiosity's clamp of the geometry term (0: none) and whether
+  // radiosity's camera paths gather one bounce (false: each triangle's radiosity shown).
+  uint32_t light_paths = 0;
+  double clamp = 0;
+  bool final_gather = true;
 
   // Several devices.
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's

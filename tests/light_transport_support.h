@@ -1,4 +1,5 @@
-// What the tests of the splat-film integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`) share: a render with the options they
+// What the tests of the light-transport integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`, and the gathering
+// `instant_radiosity` and `radiosity`) share: a render with the options they
 // vary, image means over independent seeds, and the per-pixel z-test of two films.
 #pragma once
 #include <cmath>
@@ -21,6 +22,9 @@ struct Options {
   int strategy_s = -1, strategy_t = -1;  // bdpt: this strategy alone
   bool merge = true;                      // vcm: merging (false: bdpt's estimator)
   double radius = 0;                      // vcm, bpm, sppm: the first iteration's radius (0: the default)
+  uint32_t light_paths = 0;               // instant_radiosity, radiosity: light paths per iteration (0: the default)
+  double clamp = 0;                       // instant_radiosity: the geometry term's clamp (0: none)
+  bool final_gather = true;               // radiosity
   const Film* resume = nullptr;
 };
 
@@ -40,6 +44,9 @@ inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
   opt.resume = o.resume;
   opt.merge = o.merge;
   opt.radius = o.radius;
+  opt.light_paths = o.light_paths;
+  opt.clamp = o.clamp;
+  opt.final_gather = o.final_gather;
   RenderResult r = render(test_device(), scene, opt);
   EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
   EXPECT_EQ(r.splat_overflows, 0u);
@@ -135,6 +142,9 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   partial.integrator = o.integrator;
   partial.merge = o.merge;
   partial.radius = o.radius;
+  partial.light_paths = o.light_paths;
+  partial.clamp = o.clamp;
+  partial.final_gather = o.final_gather;
   Film start;
   {
     // Render o.spp with power-of-two horizons and keep the half-way film from the horizon callback.

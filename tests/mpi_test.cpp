@@ -75,8 +75,9 @@ nlohmann::json read_stats(const std::string& path) { return nlohmann::json::pars
 
 TEST(MpiRender, AnyNumberOfRanksGivesTheOneProcessBits) {
   // path (ordered units), bdpt (ordered and commutative layers) and vcm (per-sample units: one iteration's
-  // light paths and camera paths in one unit) on 1, 2 and 3 ranks; light, bpm and sppm on 3.
-  for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm"}) {
+  // light paths and camera paths in one unit) on 1, 2 and 3 ranks; light, bpm, sppm, instant radiosity and
+  // radiosity (per-sample pixel units) on 3.
+  for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm", "instant_radiosity", "radiosity"}) {
     const bool all_counts = integrator == "path" || integrator == "bdpt" || integrator == "vcm";
     for (int ranks : {1, 2, 3}) {
       if (!all_counts && ranks != 3) continue;

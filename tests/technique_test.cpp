@@ -114,7 +114,7 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
     technique_named("lite", "scene.json: render.integrator");
     ADD_FAILURE();
   } catch (const UsageError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm or test-constant)", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm, instant_radiosity, radiosity or test-constant)", 0), 0u) << e.what();
   }
   RenderOptions o;
   o.integrator = "light";
@@ -154,6 +154,23 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
   EXPECT_EQ(message("vcm", R"({"merge": "no"})"), "s.json: render.integrator.merge: expected true or false, got \"no\"");
   EXPECT_EQ(message("sppm", R"({"merge": false})"),
             "s.json: render.integrator.merge: the sppm integrator has no option \"merge\" (it has radius, alpha)");
+  // The gathering integrators' light paths per iteration, instant radiosity's clamp, radiosity's final gather.
+  apply_technique_options(technique_named("instant_radiosity", "test"), R"({"light_paths": 32, "clamp": 2.5})",
+                          "s.json: render.integrator", o);
+  EXPECT_EQ(o.light_paths, 32u);
+  EXPECT_EQ(o.clamp, 2.5);
+  apply_technique_options(technique_named("radiosity", "test"), R"({"light_paths": 100000, "final_gather": false})",
+                          "s.json: render.integrator", o);
+  EXPECT_EQ(o.light_paths, 100000u);
+  EXPECT_FALSE(o.final_gather);
+  EXPECT_EQ(message("instant_radiosity", R"({"light_paths": 100000})"),
+            "s.json: render.integrator.light_paths: expected a whole number of light paths per iteration, 1 to 65536, got 100000");
+  EXPECT_EQ(message("radiosity", R"({"light_paths": 2.5})"),
+            "s.json: render.integrator.light_paths: expected a whole number of light paths per iteration, 1 to 16777216, got 2.5");
+  EXPECT_EQ(message("instant_radiosity", R"({"clamp": -1})"),
+            "s.json: render.integrator.clamp: expected a number >= 0 (the largest geometry term cos cos / d^2, in 1 / scene units^2; 0: none), got -1");
+  EXPECT_EQ(message("radiosity", R"({"clamp": 1})"),
+            "s.json: render.integrator.clamp: the radiosity integrator has no option \"clamp\" (it has light_paths, final_gather)");
 
   // Through the scene file and the command line (whose --lanes overrides the scene's).
   std::string scene = read_text_file(std::string(PATHCL_TEST_SCENES) + "/tiny.json"), err;
