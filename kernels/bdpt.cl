@@ -72,7 +72,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
           float emit = emission_choice_pdf(emission_cdf, h->env_light) * pos * dir;
           others = environment_light_pdf(sc, prev_p, ray.d) * dvcm + emit * dvc;
         }
-        radiance += throughput * le * strategy_weight(lt, 0u, t_count, others);
+        radiance += throughput * le * strategy_weight(lt, mis, 0u, t_count, others);
       }
 #endif
       break;
@@ -98,7 +98,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
           float direct_a = light_pdf(sc, sh.light, prev_p, s.p, s.ng) * cos_in / dist2;
           others = direct_a * dvcm + emit * dvc;
         }
-        radiance += throughput * le * strategy_weight(lt, 0u, t_count, others);
+        radiance += throughput * le * strategy_weight(lt, mis, 0u, t_count, others);
       }
 #endif
     }
@@ -133,7 +133,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
           float bsdf_rev = bsdf_pdf(m, direct.wi_local, wo_local);
           float others = bsdf_dir / direct_pdf + emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) *
                                                      (mis->vm + dvcm + dvc * bsdf_rev);
-          w = strategy_weight(lt, 1u, t_count, others);
+          w = strategy_weight(lt, mis, 1u, t_count, others);
         }
 #ifdef PC_HAS_CUTOUTS
         direct.shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
@@ -151,7 +151,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
         float others;
         float3 c = connect_vertices(sc, &s, m, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, lv + k, &others);
         if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
-        float w = strategy_weight(lt, lv[k].length + 1u, t_count, others);
+        float w = strategy_weight(lt, mis, lv[k].length + 1u, t_count, others);
         if (w == 0.0f) continue;
         float3 y_err = (float3)(lv[k].p.w);
         Ray shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, lv[k].p.xyz, y_err, lv[k].ng.xyz);
@@ -170,6 +170,9 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
     }
 #endif
 
+#ifdef PC_MLT
+    if (t_count >= mlt_camera_stop(mis)) break; /* the strategies' last camera vertex was this one */
+#endif
     BsdfSampleLanes bs;
     float3 wi;
     if (!scatter_lanes(&ml, &frame, s.ng, wo_local, wo_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
@@ -188,7 +191,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
   return radiance;
 }
 
-#ifndef PC_VCM
+#if !defined(PC_VCM) && !defined(PC_MLT)
 /* One work unit, as light_integrator.cl's light_pass: the BDPT samples of pixels [path_begin, path_begin +
  * path_count) (a light subpath and a camera subpath each) for samples [sample_begin, sample_begin +
  * sample_count), into the splat film (cleared by the host per unit); work item i keeps its light subpath's

@@ -42,7 +42,6 @@
 /* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
  * every group a camera path of the same key takes (PC_DIM_* of sampler.cl: BDPT's camera subpath, the path
  * integrator's), so that the two subpaths of a BDPT sample are independent. */
-inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
 #define PC_LT_EMIT_POS(h) (light_group_base(h) + 0u)          /* x: light choice, yz: point, w: side */
 #define PC_LT_EMIT_DIR(h) (light_group_base(h) + 1u)          /* xy: direction */
 #define PC_LT_CONNECT(h, v) (light_group_base(h) + 2u + 2u * (v)) /* xy: lens point, z: roulette, at vertex v */
@@ -113,12 +112,37 @@ inline void splat_filtered(__global uint* film, __constant const SceneHeader* h,
  * with connections on too, else 0. BDPT's are 0: its sums then take the same bits (x + 0 is x).
  * connect: whether this iteration takes the connection strategies (s >= 1 with t >= 1); the light paths
  * then splat their camera connections. first_length: the shortest light vertex kept (SPPM keeps those
- * after one scattering event at least: direct light is next-event estimation's). */
+ * after one scattering event at least: direct light is next-event estimation's).
+ * Metropolis (mlt.cl, PC_MLT): a sample takes one strategy, only_s light and only_t camera vertices, weighted
+ * by the balance heuristic against the others; or (only_s PC_INVALID) every strategy of the depths (scattering
+ * events) depth_lo .. depth_hi, weighted. Its subpaths stop where those strategies need no more vertices
+ * (mlt_light_stop, mlt_camera_stop), and its light tracing connections (t = 1) are kept in *splat instead of
+ * splatted. */
 typedef struct {
   float vm, vc;
   bool connect;
   uint first_length;
+#ifdef PC_MLT
+  uint only_s, only_t, depth_lo, depth_hi;
+#endif
 } MisFactors;
+
+#ifdef PC_MLT
+/* The light subpath stops after vertex v where v + 2 reaches this; the camera subpath before scattering at a
+ * vertex of t_count camera vertices where t_count reaches this. */
+inline uint mlt_light_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 1u : m->only_s; }
+inline uint mlt_camera_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 2u : m->only_t; }
+#endif
+
+#ifdef PC_MLT
+/* A Metropolis sample's light tracing contribution: its raster position and value (mlt.cl); with several
+ * strategies taken (only_s PC_INVALID) the last one, and the luminance of them all. */
+typedef struct {
+  float2 raster;
+  float3 value;
+  float luminance;
+} MltSplat;
+#endif
 
 /* Light vertex slots per light path of a unit (runtime/light_transport.h's light_vertex_slots). */
 inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
@@ -168,8 +192,12 @@ inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, floa
 
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
  * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
- * unweighted, and no other. */
-inline float strategy_weight(__constant const LightTransportHeader* lt, uint s, uint t, float others) {
+ * unweighted, and no other; for a Metropolis sample (mis->only) that strategy alone, weighted. */
+inline float strategy_weight(__constant const LightTransportHeader* lt, const MisFactors* mis, uint s, uint t, float others) {
+#ifdef PC_MLT
+  if (mis->only_s == PC_INVALID ? s + t < mis->depth_lo + 2u || s + t > mis->depth_hi + 2u : s != mis->only_s || t != mis->only_t)
+    return 0.0f;
+#endif
   if (lt->only_strategy != PC_INVALID) return lt->only_strategy == (s | (t << 16)) ? 1.0f : 0.0f;
   return 1.0f / (1.0f + others);
 }
@@ -181,6 +209,9 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
                              __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
 #ifdef PC_BDPT
                              , const MisFactors* mis, __global LightVertex* vertices, uint* count
+#endif
+#ifdef PC_MLT
+                             , MltSplat* splat
 #endif
 ) {
   __constant const SceneHeader* h = sc->h;
@@ -269,13 +300,20 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
          * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
         float cam_pdf_a = camera_direction_pdf(h, -cs.wi) * fabs(pc_dot(cs.wi, s.ng)) / (cs.dist * cs.dist);
         float rev = bsdf_pdf(m, wc_local, wl_local);
-        per_path *= strategy_weight(lt, v + 2u, 1u, cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
+        per_path *= strategy_weight(lt, mis, v + 2u, 1u, cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
 #endif
         Hit blocker;
         if (per_path != 0.0f) { /* a NaN goes on, to be counted */
           ++n->rays;
-          if (!trace_scene(sc, sc, &shadow, true, &blocker))
+          if (!trace_scene(sc, sc, &shadow, true, &blocker)) {
+#ifdef PC_MLT
+            splat->raster = cs.raster;
+            splat->value = beta * f * per_path;
+            if (splat_is_valid(splat->value, n)) splat->luminance += luminance(splat->value);
+#else
             splat_filtered(film, h, lt, cs.raster, parity, beta * f * per_path, n);
+#endif
+          }
         }
       }
     }
@@ -296,6 +334,9 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
     }
 #endif
     if (v + 1u >= h->max_depth) break;
+#ifdef PC_MLT
+    if (v + 2u >= mlt_light_stop(mis)) break; /* the strategies' last light vertex was this one */
+#endif
 
     /* The next vertex. */
     float4 u_bsdf = sample4(h, key, PC_LT_BSDF(h, v));

@@ -7,6 +7,9 @@ typedef struct {
   uint pixel;
   uint sample;
   uint seed;
+#ifdef PC_MLT
+  struct MltSampler* mlt; /* Metropolis (mlt.cl): the state the sampler reads (sampler.cl) */
+#endif
 } SampleKey;
 
 #endif

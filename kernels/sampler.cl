@@ -106,6 +106,8 @@ inline uint4 pcg4d(uint4 v) {
  * point on it; w: Russian roulette) and the BSDF sample (xyz: direction and lobe). Light paths take their
  * groups above every camera path's (light_path.cl, PC_LT_*). */
 #define PC_DIM_CAMERA 0u
+/* The first group of a light path's (light_path.cl's PC_LT_*): above every camera path's. */
+inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
 #define PC_DIM_LIGHT(depth) (1u + 2u * (depth))
 #define PC_DIM_BSDF(depth) (2u + 2u * (depth))
 /* The rays of a camera path, numbered for their cut-out seeds (cutout.cl): the camera ray, then per
@@ -114,8 +116,98 @@ inline uint4 pcg4d(uint4 v) {
 #define PC_RAY_SHADOW(depth) (2u * (depth) + 1u)
 #define PC_RAY_NEXT(depth) (2u * (depth) + 2u)
 
-/* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key. */
+#ifdef PC_MLT
+/* Metropolis (mlt.cl): a state holds four numbers for each group a BDPT sample of max_depth D reads, in
+ * slots: the camera subpath's groups 0 .. 2 D, the light subpath's light_group_base .. + 2 D + 1, then the
+ * strategy's (group PC_MLT_STRATEGY_GROUP, the one after the light subpath's). */
+inline uint mlt_slots(__constant const SceneHeader* h) { return 4u * h->max_depth + 4u; }
+#define PC_MLT_STRATEGY_GROUP(h) (light_group_base(h) + 2u * (h)->max_depth + 2u)
+inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
+  uint base = light_group_base(h);
+  if (group <= 2u * h->max_depth) return group;
+  if (group >= base && group - base <= 2u * h->max_depth + 2u) return 2u * h->max_depth + 1u + (group - base);
+  return PC_INVALID;
+}
+
+/* A state's numbers, mutated lazily (pbrt-v4's MLTSampler): a slot is brought to the current iteration
+ * when read. Either fresh (every slot uniform from hash (a, b, its index): bootstrap candidates, a chain's
+ * full BDPT samples) or a chain's step (a = chain, b = step): a large step takes uniform numbers from (a,
+ * b); a small step moves a slot last changed n iterations ago by Kelemen's exponential mutation, its size
+ * times sqrt(n) (the n steps it missed, as if each had moved it: a symmetric move all the same), after
+ * resetting it to its value at the last accepted large step if it was last changed before it. The slots a
+ * step changes are kept to be put back if the proposal is rejected; iterations count accepted steps. */
+typedef struct MltSampler {
+  float* x;                 /* 4 per slot */
+  uint* modified;           /* per slot: the iteration of its last change */
+  float* backup;            /* 4 per slot: its numbers before this step changed them */
+  uint* backup_modified;
+  uint* changed;            /* the slots this step changed, changed_count of them */
+  uint changed_count;
+  uint iteration;           /* accepted steps (the step's: one more) */
+  uint last_large;          /* the iteration of the last accepted large step, its step last_large_step */
+  uint last_large_step;
+  uint large;               /* this step is a large step */
+  uint fresh;
+  uint a, b, seed;
+  float size;               /* a small step's largest move */
+} MltSampler;
+
+inline float mlt_uniform(uint a, uint b, uint k, uint seed) { return uint_to_unit(hash4(a, b, k, seed ^ 0x70737321u)); }
+
+/* Kelemen's mutation of one number: moved up or down by s2 e^(-ln(16) u), s2 = size, wrapped into [0, 1). */
+inline float mlt_mutate(float x, float size, uint bits) {
+  float dv = size * pc_exp(-2.7725887f * uint_to_unit(bits)); /* ln 16 */
+  float y = (bits & 1u) ? x + dv : x - dv;
+  y -= floor(y);
+  return y < 1.0f ? y : 0.0f;
+}
+
+/* Slot `slot` at the sampler's iteration. */
+inline void mlt_ensure_ready(MltSampler* m, uint slot) {
+  if (m->modified[slot] == m->iteration) return;
+  if (m->fresh) {
+    for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->b, 4u * slot + k, m->seed);
+    m->modified[slot] = m->iteration;
+    return;
+  }
+  for (uint k = 0; k < 4u; ++k) m->backup[4u * slot + k] = m->x[4u * slot + k];
+  m->backup_modified[slot] = m->modified[slot];
+  m->changed[m->changed_count++] = slot;
+  if (m->large) {
+    for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->b, 4u * slot + k, m->seed);
+  } else {
+    if (m->modified[slot] < m->last_large) {
+      for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->last_large_step, 4u * slot + k, m->seed);
+      m->modified[slot] = m->last_large;
+    }
+    float size = m->size * sqrt((float)(m->iteration - m->modified[slot]));
+    for (uint k = 0; k < 4u; ++k)
+      m->x[4u * slot + k] = mlt_mutate(m->x[4u * slot + k], size, hash4(m->a, m->b, 4u * slot + k, m->seed ^ 0x6d757421u));
+  }
+  m->modified[slot] = m->iteration;
+}
+
+/* Slot `slot`'s four numbers at the sampler's iteration. */
+inline float4 mlt_numbers(MltSampler* m, uint slot) {
+  mlt_ensure_ready(m, slot);
+  return vload4(slot, m->x);
+}
+#endif
+
+/* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key (a Metropolis chain's:
+ * its state's; the camera group's image position there is the pixel's, within the pixel the state takes). */
 inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
+#ifdef PC_MLT
+  uint slot = mlt_slot(h, group);
+  if (slot != PC_INVALID) {
+    float4 u = mlt_numbers(key.mlt, slot);
+    if (group == PC_DIM_CAMERA) {
+      float2 raster = u.xy * (float2)((float)h->width, (float)h->height);
+      u.xy = raster - min(floor(raster), (float2)((float)(h->width - 1u), (float)(h->height - 1u)));
+    }
+    return u;
+  }
+#endif
   float x, y, z, w;
   sample4_lanes(h, key.pixel, key.sample, key.seed, group, &x, &y, &z, &w);
   return (float4)(x, y, z, w);

@@ -134,5 +134,5 @@ Film read_checkpoint(const std::string& path, const DeviceScene& scene, const Re
   const Technique& technique = technique_named(options.integrator, "integrator");
   const uint32_t width = scene.header.width, height = scene.header.height;
   return read_checkpoint(path, options.checkpoint_key, width, height, technique,
-                         make_film_layout(technique.layers, options.aovs, width * height));
+                         make_film_layout(technique_layers(technique, options.max_depth), options.aovs, width * height));
 }

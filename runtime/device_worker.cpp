@@ -51,7 +51,8 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     emission_cdf_ = upload(cl, lt.emission_cdf);
   }
   TechniqueSizes sizes{layout_.pixels, settings.max_depth, 0, &cl.info,
-                       settings.light ? settings.light->header.light_paths : 0, header.prim_count};
+                       settings.light ? settings.light->header.light_paths : 0, header.prim_count,
+                       settings.light ? settings.light->header.bootstrap : 0};
   sizes.unit_items = unit_items_ = technique_unit_items(t, sizes);
   for (const TechniqueBuffer& b : t.buffers) {
     const cl_uint zero = 0;

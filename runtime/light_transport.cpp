@@ -89,6 +89,10 @@ LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp
 }
 
 void develop_splats(Film& f, const LightTransportHeader& lt, uint64_t* overflows) {
+  develop_splat_layer(f, lt, overflows, "splats");
+}
+
+void develop_splat_layer(Film& f, const LightTransportHeader& lt, uint64_t* overflows, const char* layer) {
   size_t pixels = size_t(f.width) * f.height;
   const uint32_t spp = f.spp;
   f.mean.assign(3 * pixels, 0.0f);
@@ -97,7 +101,7 @@ void develop_splats(Film& f, const LightTransportHeader& lt, uint64_t* overflows
   f.odd_mean.assign(3 * pixels, 0.0f);
   double n_even = (spp + 1) / 2, n_odd = spp / 2, paths = double(pixels);
   double unit = 1.0 / lt.splat_scale, unit2 = 1.0 / lt.square_scale;
-  const uint32_t* plane = f.layer(size_t(f.layout.find("splats")));
+  const uint32_t* plane = f.layer(size_t(f.layout.find(layer)));
   for (size_t p = 0; p < pixels; ++p) {
     uint64_t s[PC_SPLAT_WORDS];
     std::memcpy(s, plane + 2 * PC_SPLAT_WORDS * p, sizeof s);

@@ -24,11 +24,12 @@ struct LightTransportSetup {
 // same for its square.
 LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp);
 
-// The `splats` layer (PC_SPLAT_WORDS 64-bit sums per pixel) as the film's means, variances and half images
-// at film.spp: mean = (even + odd) / (scale spp); variance of the mean from the squares
-// (kernels/light_integrator.cl). overflows: sums at or above 2^63 (a hazard) are counted there.
+// The `splats` layer (PC_SPLAT_WORDS 64-bit sums per pixel; or the splat layer of that name) as the film's
+// means, variances and half images at film.spp: mean = (even + odd) / (scale spp); variance of the mean from
+// the squares (kernels/light_integrator.cl). overflows: sums at or above 2^63 (a hazard) are counted there.
 struct Film;
 void develop_splats(Film& film, const LightTransportHeader& lt, uint64_t* overflows);
+void develop_splat_layer(Film& film, const LightTransportHeader& lt, uint64_t* overflows, const char* layer);
 
 // The splat film's -D flags on a device: 64-bit atomics where it has them (cl_khr_int64_base_atomics),
 // unless the build asks for word pairs.

@@ -179,7 +179,7 @@ RenderResult render_on(const std::vector<WorkerSource>& workers, const DeviceSce
   header.spp = options.spp;
   const uint32_t pixels = header.width * header.height;
   const size_t n = workers.size();
-  const FilmLayout layout = make_film_layout(technique.layers, options.aovs, pixels);
+  const FilmLayout layout = make_film_layout(technique_layers(technique, options.max_depth), options.aovs, pixels);
 
   uint32_t start_spp = options.resume ? options.resume->spp : 0;
   if (options.resume && !(options.resume->layout == layout))

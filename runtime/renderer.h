@@ -62,6 +62,11 @@ struct RenderOptions {
   uint32_t light_paths = 0;
   double clamp = 0;
   bool final_gather = true;
+  // Metropolis (mlt; kernels/mlt.cl): bootstrap states per depth, the probability of a large step and the
+  // largest move of a small one.
+  uint32_t bootstrap = 32768;
+  double large_step = 0.3;
+  double mutation_size = 1.0 / 64;
 
   // Several devices.
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's

@@ -15,7 +15,7 @@ std::vector<Technique>& registry() {
   // The registry: one line per technique.
   static std::vector<Technique> list = {path_technique(), light_technique(), bdpt_technique(),
                                          vcm_technique(),  bpm_technique(),   sppm_technique(),
-                                         instant_radiosity_technique(), radiosity_technique()};
+                                         instant_radiosity_technique(), radiosity_technique(), mlt_technique()};
   return list;
 }
 }  // namespace
@@ -56,6 +56,10 @@ uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes) {
   sizes.unit_items = 0;
   const uint32_t n = t.max_unit_items ? t.max_unit_items(sizes) : sizes.pixels;
   return std::max(1u, std::min(n, sizes.pixels));
+}
+
+std::vector<FilmLayer> technique_layers(const Technique& t, uint32_t max_depth) {
+  return t.layers_at_depth ? t.layers_at_depth(max_depth) : t.layers;
 }
 
 const Technique* technique_with_id(uint32_t id) {

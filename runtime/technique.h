@@ -63,6 +63,7 @@ struct TechniqueSizes {
   const DeviceInfo* device = nullptr;
   uint32_t light_paths = 0;  // LightTransportHeader.light_paths (the gathering integrators' per iteration)
   uint32_t prims = 0;        // the scene's primitives (SceneHeader.prim_count)
+  uint32_t bootstrap = 0;    // LightTransportHeader.bootstrap (mlt's bootstrap states per depth)
 };
 
 // A device buffer of the technique's own, made at set-up, cleared to zero once, and kept for the whole
@@ -83,12 +84,15 @@ struct TechniqueOption {
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
   uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2, vcm 3, bpm 4,
-                        // sppm 5, instant_radiosity 6, radiosity 7); never reused
+                        // sppm 5, instant_radiosity 6, radiosity 7, mlt 8); never reused
   std::string summary;  // one line for --help and the docs
   std::string kernel_file;             // its program's main file under kernels/
   std::vector<TechniquePhase> phases;  // what a unit runs
   std::vector<TechniqueBuffer> buffers;
   std::vector<FilmLayer> layers;  // its own film layers
+  // Where a layer's size depends on the render's max_depth (mlt's chain states): its layers for a depth, the
+  // same names as `layers`; may be empty.
+  std::function<std::vector<FilmLayer>(uint32_t max_depth)> layers_at_depth;
   UnitKind units = UnitKind::pixels;
   bool lanes = false;        // runs over 8 or 16 SIMD lanes on CPU devices (--lanes)
   uint32_t max_depth_limit = 1024;  // largest max_depth it takes
@@ -118,7 +122,7 @@ struct Technique {
 };
 
 // Every registered technique, in registration order (path, light, bdpt, vcm, bpm, sppm, instant_radiosity,
-// radiosity, then any a test adds).
+// radiosity, mlt, then any a test adds).
 const std::vector<Technique>& techniques();
 // Adds one (tests: a technique of their own, with a kernel from register_kernel_source); the name and id
 // must be new.
@@ -130,9 +134,11 @@ const Technique& technique_named(const std::string& name, const std::string& whe
 bool uses_emission(const Technique& t);
 // The largest unit a device takes (Technique::max_unit_items), at least 1, at most the film's pixels.
 uint32_t technique_unit_items(const Technique& t, TechniqueSizes sizes);
+// Its film layers for a render of this max_depth (Technique::layers, or layers_at_depth's).
+std::vector<FilmLayer> technique_layers(const Technique& t, uint32_t max_depth);
 // By id (checkpoints); nullptr if none has it.
 const Technique* technique_with_id(uint32_t id);
-// "path, light, bdpt, vcm, bpm, sppm, instant_radiosity or radiosity"
+// "path, light, bdpt, vcm, bpm, sppm, instant_radiosity, radiosity or mlt"
 std::string technique_list();
 
 // Refuses options that do not apply to the technique or exceed its limits (UsageError naming them).
@@ -151,3 +157,4 @@ Technique bpm_technique();
 Technique sppm_technique();
 Technique instant_radiosity_technique();
 Technique radiosity_technique();
+Technique mlt_technique();

@@ -113,7 +113,7 @@ std::string with_integrator(const std::string& file, const std::string& name, co
 const std::string kEveryAov = "albedo,normal,depth,position,uv,material_id";
 
 // Each case is a test of its own (CTest runs them in two shards at once: tests/CMakeLists.txt).
-constexpr size_t kCases = 23;
+constexpr size_t kCases = 24;
 
 std::array<Case, kCases> make_cases() {
   // Oclgrind interprets unoptimised code (kernel_program.cpp): a few hundred paths take a second or two.
@@ -139,6 +139,9 @@ std::array<Case, kCases> make_cases() {
                                                                       R"({"type": "instant_radiosity", "light_paths": 4, "clamp": 1})"), ""},
           {"every material and light type, radiosity, thin lens, gaussian filter",
            with_integrator(resized("materials", 6, 4, 1), "radiosity", R"({"type": "radiosity", "light_paths": 16})"),
+           "--max-depth 4"},
+          // Metropolis: the bootstrap's float prefix sum, each chain's lazily mutated numbers carried in the film.
+          {"every material and light type, mlt", with_integrator(resized("materials", 6, 4, 3), "mlt", R"({"type": "mlt", "bootstrap": 32})"),
            "--max-depth 4"},
           {"every material and light, thin lens, gaussian filter", resized("materials", 16, 12, 2), ""},
           // With every AOV (kernels/aov.cl): mirror and glass chains followed for albedo and normal.

@@ -1,5 +1,5 @@
-// What the tests of the light-transport integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`, and the gathering
-// `instant_radiosity` and `radiosity`) share: a render with the options they
+// What the tests of the light-transport integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`, the gathering
+// `instant_radiosity` and `radiosity`, and `mlt`) share: a render with the options they
 // vary, image means over independent seeds, and the per-pixel z-test of two films.
 #pragma once
 #include <cmath>
@@ -25,6 +25,7 @@ struct Options {
   uint32_t light_paths = 0;               // instant_radiosity, radiosity: light paths per iteration (0: the default)
   double clamp = 0;                       // instant_radiosity: the geometry term's clamp (0: none)
   bool final_gather = true;               // radiosity
+  uint32_t bootstrap = 32768;             // mlt: bootstrap candidates per depth
   const Film* resume = nullptr;
 };
 
@@ -47,6 +48,7 @@ inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
   opt.light_paths = o.light_paths;
   opt.clamp = o.clamp;
   opt.final_gather = o.final_gather;
+  opt.bootstrap = o.bootstrap;
   RenderResult r = render(test_device(), scene, opt);
   EXPECT_EQ(r.nan_samples + r.inf_samples + r.negative_samples, 0u);
   EXPECT_EQ(r.splat_overflows, 0u);
@@ -145,6 +147,7 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   partial.light_paths = o.light_paths;
   partial.clamp = o.clamp;
   partial.final_gather = o.final_gather;
+  partial.bootstrap = o.bootstrap;
   Film start;
   {
     // Render o.spp with power-of-two horizons and keep the half-way film from the horizon callback.

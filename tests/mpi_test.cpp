@@ -77,7 +77,7 @@ TEST(MpiRender, AnyNumberOfRanksGivesTheOneProcessBits) {
   // path (ordered units), bdpt (ordered and commutative layers) and vcm (per-sample units: one iteration's
   // light paths and camera paths in one unit) on 1, 2 and 3 ranks; light, bpm, sppm, instant radiosity and
   // radiosity (per-sample pixel units) on 3.
-  for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm", "instant_radiosity", "radiosity"}) {
+  for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm", "instant_radiosity", "radiosity", "mlt"}) {
     const bool all_counts = integrator == "path" || integrator == "bdpt" || integrator == "vcm";
     for (int ranks : {1, 2, 3}) {
       if (!all_counts && ranks != 3) continue;

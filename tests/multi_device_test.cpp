@@ -190,15 +190,17 @@ TEST(MultiDevice, SplatFilmsOnAllDevicesGiveTheOneDeviceBits) {
 }
 
 // The gathering integrators run per-sample pixel units (each unit traces its iteration's light paths, then
-// its pixels gather): any split over the devices, and a failing device, give the one-device bits.
-TEST(MultiDevice, GatheringIntegratorsOnAllDevicesGiveTheOneDeviceBits) {
+// its pixels gather), mlt pixel units of chains whose states move between the devices in the film's ordered
+// layer: any split over the devices, and a failing device, give the one-device bits.
+TEST(MultiDevice, GatheringAndMetropolisOnAllDevicesGiveTheOneDeviceBits) {
   DeviceScene scene = small_cornell();
   std::vector<DeviceInfo> devices = all_devices();
-  for (const char* integrator : {"instant_radiosity", "radiosity"}) {
+  for (const char* integrator : {"instant_radiosity", "radiosity", "mlt"}) {
     SCOPED_TRACE(integrator);
     RenderOptions opt = base_options();
     opt.integrator = integrator;
     opt.light_paths = 24;
+    opt.bootstrap = 256;
     Film one = render({devices.front()}, scene, opt).film;
     for (uint32_t tile : {1u, 37u, 0u}) {
       RenderOptions split = opt;
@@ -208,8 +210,9 @@ TEST(MultiDevice, GatheringIntegratorsOnAllDevicesGiveTheOneDeviceBits) {
       RenderResult r = render(devices, scene, split);
       EXPECT_EQ(r.film.words, one.words) << "tile " << tile;
       EXPECT_EQ(r.determinism, "bitwise");
-      if (tile == 1)
+      if (tile == 1) {
         for (const DeviceReport& d : r.devices) EXPECT_GT(d.units, 0u) << d.name;
+      }
     }
     RenderOptions failing = opt;
     failing.tile_pixels = 16;

@@ -114,7 +114,7 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
     technique_named("lite", "scene.json: render.integrator");
     ADD_FAILURE();
   } catch (const UsageError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm, instant_radiosity, radiosity or test-constant)", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm, instant_radiosity, radiosity, mlt or test-constant)", 0), 0u) << e.what();
   }
   RenderOptions o;
   o.integrator = "light";
@@ -169,6 +169,16 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
             "s.json: render.integrator.light_paths: expected a whole number of light paths per iteration, 1 to 16777216, got 2.5");
   EXPECT_EQ(message("instant_radiosity", R"({"clamp": -1})"),
             "s.json: render.integrator.clamp: expected a number >= 0 (the largest geometry term cos cos / d^2, in 1 / scene units^2; 0: none), got -1");
+  apply_technique_options(technique_named("mlt", "test"), R"({"bootstrap": 1000, "large_step": 0.5, "mutation_size": 0.1})",
+                          "s.json: render.integrator", o);
+  EXPECT_EQ(o.bootstrap, 1000u);
+  EXPECT_EQ(o.large_step, 0.5);
+  EXPECT_EQ(o.mutation_size, 0.1);
+  EXPECT_EQ(message("mlt", R"({"large_step": 2})"), "s.json: render.integrator.large_step: expected a probability in [0, 1], got 2");
+  EXPECT_EQ(message("mlt", R"({"bootstrap": 0})"),
+            "s.json: render.integrator.bootstrap: expected a whole number of bootstrap states per depth, 1 to 1048576, got 0");
+  EXPECT_EQ(message("mlt", R"({"mutation_size": 0})"),
+            "s.json: render.integrator.mutation_size: expected a number in (0, 1] (the largest move of a small step), got 0");
   EXPECT_EQ(message("radiosity", R"({"clamp": 1})"),
             "s.json: render.integrator.clamp: the radiosity integrator has no option \"clamp\" (it has light_paths, final_gather)");
 

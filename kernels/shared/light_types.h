@@ -16,6 +16,7 @@
 #define PC_INTEGRATOR_SPPM 5u
 #define PC_INTEGRATOR_INSTANT_RADIOSITY 6u
 #define PC_INTEGRATOR_RADIOSITY 7u
+#define PC_INTEGRATOR_MLT 8u
 
 /* The strategies of the merging integrators (LightTransportHeader.vcm_mode; kernels/vcm.cl). */
 #define PC_VCM_CONNECT 1u /* vertex connection: BDPT's strategies */
@@ -43,9 +44,11 @@
  * The gathering integrators (kernels/gather.cl): light_paths per iteration, instant radiosity's clamp of
  * the geometry term (0: none), radiosity's fixed-point scale of its per-triangle power sums and whether its
  * camera paths gather (final_gather) or show each triangle's radiosity.
+ * Metropolis (kernels/mlt.cl): bootstrap states per depth, the large steps' probability and the small
+ * steps' largest move.
  * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + only_strategy (4) + radius (4) +
- * alpha (4) + vcm_mode (4) + light_paths (4) + clamp (4) + bin_scale (4) + final_gather (4) + pad (4) = 64
- * bytes. */
+ * alpha (4) + vcm_mode (4) + light_paths (4) + clamp (4) + bin_scale (4) + final_gather (4) + bootstrap (4)
+ * + large_step (4) + mutation_size (4) + pad (8) = 80 bytes. */
 typedef struct {
   pc_float4 bounds;   /* xyz: centre of the scene's bounding sphere (device coordinates), w: its radius */
   float splat_scale;  /* fixed-point units per unit of pixel value (a power of two) */
@@ -59,7 +62,10 @@ typedef struct {
   float clamp;         /* instant radiosity: the largest geometry term cos cos / d^2 (0: unclamped) */
   float bin_scale;     /* radiosity: fixed-point units per unit of power (a power of two) */
   pc_uint final_gather;
-  pc_uint pad;
+  pc_uint bootstrap;     /* mlt */
+  float large_step;
+  float mutation_size;
+  pc_uint pad[2];
 } LightTransportHeader;
 
 /* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
@@ -97,12 +103,13 @@ typedef struct {
   X(LightTransportHeader, bounds) X(LightTransportHeader, splat_scale) X(LightTransportHeader, square_scale) \
   X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(LightTransportHeader, radius) \
   X(LightTransportHeader, alpha) X(LightTransportHeader, vcm_mode) X(LightTransportHeader, light_paths)       \
-  X(LightTransportHeader, clamp) X(LightTransportHeader, bin_scale) X(LightTransportHeader, final_gather) X(LightVertex, wl) X(LightVertex, material) \
+  X(LightTransportHeader, clamp) X(LightTransportHeader, bin_scale) X(LightTransportHeader, final_gather)         \
+  X(LightTransportHeader, bootstrap) X(LightTransportHeader, large_step) X(LightTransportHeader, mutation_size) X(LightVertex, wl) X(LightVertex, material) \
   X(LightVertex, length) X(SplatStats, light_vertices) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
   X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
 
 #ifndef __OPENCL_VERSION__
-static_assert(sizeof(LightTransportHeader) == 64, "LightTransportHeader is 64 bytes");
+static_assert(sizeof(LightTransportHeader) == 80, "LightTransportHeader is 80 bytes");
 static_assert(sizeof(SplatStats) == 32, "SplatStats is 32 bytes");
 static_assert(sizeof(LightVertex) == 112, "LightVertex is 112 bytes");
 #endif

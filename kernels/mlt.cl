@@ -1,0 +1,409 @@
+/* Metropolis light transport (`mlt`, lane width 1) in primary sample space over BDPT's strategies: Kelemen
+ * et al. 2002's mutations, Hachisuka et al. 2014's multiplexing (pbrt-v4's MLTIntegrator). A state is a
+ * path depth d (its scattering events, fixed per chain) and the uniform numbers a BDPT sample reads
+ * (sampler.cl's slots: the camera and light subpaths' groups, and the strategy's). Its contribution: the
+ * strategy (s, t) its strategy number picks among the d + 2 that make paths of depth d, that strategy alone
+ * (bdpt.cl, light_path.cl with PC_MLT: the subpaths stop where it needs no more), weighted by the balance
+ * heuristic and times d + 2; a camera subpath's value goes to the pixel its image position is in, a light
+ * tracing connection's (t = 1) is splatted through the filter where it lands. Its importance I is the
+ * luminance of that value.
+ *
+ * Paths of depths 0 and 1 (emitters seen directly, direct light) are left to each pixel's own BDPT sample,
+ * one a step (stratified over the image: a lamp in view would otherwise hold a large share of the chains on
+ * a flat region, and direct light is what next-event estimation does best); the chains take the rest.
+ *
+ * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
+ * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
+ * checkpoints and resumes carry it), the splats in the commutative layer "splats" (fixed point, the same bits
+ * in any order). The first step of a chain starts it: B bootstrap candidates per depth 2 .. D (B =
+ * lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a prefix sum of
+ * fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
+ * takes a candidate in proportion to its importance (by its own number). Each step proposes a state: a large
+ * step (probability lt->large_step) takes fresh numbers and a uniform depth, a small step keeps the depth and
+ * moves each number by Kelemen's exponential mutation of size up to lt->mutation_size. It is accepted with
+ * probability a = min(1, I' / I). Numbers are mutated lazily, when the evaluation reads them (sampler.cl's
+ * MltSampler). Splats (Kelemen et al.'s combination of the two techniques, Metropolis
+ * samples of density I / b and large steps of density 1 / (D - 1) over (depth, numbers),
+ * taken p = lt->large_step times a step, by the balance heuristic; q = p / (D - 1)): the current state's value L
+ * times (1 - a) / (I / b0 + q) and the proposal's times a / (I' / b0 + q) into the "splats" layer, and a large
+ * step's proposal's times 1 / (I' / b0 + q) into "large_steps"; the image is (large_steps + splats b / b0) /
+ * spp. b = (D - 1) E[I] over uniform (depth, numbers)
+ * is the image's mean luminance beyond depth 1; b0 its bootstrap estimate (sum of importances / B), which the
+ * weights take, and b the host's (runtime/technique_mlt.cpp) from full BDPT samples (every strategy of every
+ * depth, weighted) that each chain takes at its own pixel every PC_MLT_B_EVERY steps (stratified over the
+ * image; a full sample costs a few steps), which converges with the render. Where the image is uniform the
+ * large steps carry it, as plain Monte Carlo would; where it is not, the chains. The depths' shares converge
+ * with the chains: their states move between depths through large steps (pbrt-v4's chains keep theirs, its
+ * b is the bootstrap's, and its image keeps the bootstrap's error in the scale and in each depth's share;
+ * here a render's bootstrap error was 4 % on the Cornell box, its importance being heavy-tailed).
+ *
+ * Start-up bias: a chain starts from a bootstrap candidate drawn in proportion to its importance, an
+ * approximation of the stationary distribution with B (D - 1) candidates; the estimate is consistent as the
+ * steps grow. Every random number of a chain is a function of (chain, step, seed): the image is the same bits
+ * for any split into units, device set and implementation. */
+#define PC_BDPT 1
+#define PC_MLT 1
+#include "light_path.cl"
+#include "direct_light.cl"
+#include "bdpt.cl"
+
+/* The unit's range (pixel units: chains pixel_begin + i pixel_stride, i < pixel_count, steps
+ * [sample_begin, sample_begin + sample_count)). */
+#define PC_MLT_UNIT uint pixel_begin, uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count
+
+/* The largest max_depth (runtime/technique_mlt.cpp's limit): a state's slots in private memory. */
+#define PC_MLT_MAX_DEPTH 16u
+#define PC_MLT_MAX_SLOTS (4u * PC_MLT_MAX_DEPTH + 4u)
+/* A chain's state in the "chains" layer (runtime/technique_mlt.cpp reads it): a header (word 0 its depth, 1
+ * the bootstrap candidates' importance sum, 2 its importance I, 3 its contribution's kind, 4-5 its raster
+ * position, 6-8 its value, 9 its full BDPT samples for b, 10-11 their luminance sum and its compensation, 12
+ * its sampler's iteration, 13-14 its last large step's iteration and step), then 4 numbers per slot, then
+ * each slot's last change (an iteration). */
+#define PC_MLT_HEADER_WORDS 16u
+/* Work items of the bootstrap (runtime/technique_mlt.cpp's bootstrap_items: at most 4096, at most the pixels)
+ * and blocks of its prefix sum. */
+#define PC_MLT_BOOTSTRAP_ITEMS 4096u
+inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC_MLT_BOOTSTRAP_ITEMS, h->width * h->height); }
+/* The bootstrap is the same for every unit: a device computes it once (its buffer is kept for the render),
+ * and marks it done after the candidates' sums, block offsets and total (bootstrap[C + 257]). */
+#define PC_MLT_BOOTSTRAP_DONE 0x444f4e45u
+inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap);
+#define PC_MLT_SCAN_BLOCKS 256u
+/* The keys (b of MltSampler and SampleKey.sample) of fresh states, beyond any step: the bootstrap's
+ * candidates, and (or-ed with the step) a chain's BDPT samples for b and for depths 0 and 1. */
+#define PC_MLT_BOOTSTRAP_SAMPLE 0xfffff000u
+#define PC_MLT_B_SAMPLE 0x80000000u
+#define PC_MLT_NEAR_SAMPLE 0x40000000u
+/* Steps between a chain's full BDPT samples for b. */
+#define PC_MLT_B_EVERY 16u
+
+inline uint mlt_state_words(__constant const SceneHeader* h) { return PC_MLT_HEADER_WORDS + 5u * mlt_slots(h); }
+/* The chains take paths of depth 2 .. D (PC_MLT_FIRST_DEPTH); depths 0 and 1 are each pixel's BDPT sample. */
+#define PC_MLT_FIRST_DEPTH 2u
+inline uint mlt_depths(__constant const SceneHeader* h) { return max(h->max_depth + 1u, PC_MLT_FIRST_DEPTH) - PC_MLT_FIRST_DEPTH; }
+inline uint mlt_candidates(__constant const LightTransportHeader* lt, __constant const SceneHeader* h) {
+  return lt->bootstrap * mlt_depths(h);
+}
+inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap) {
+  return as_uint(bootstrap[mlt_candidates(lt, h) + PC_MLT_SCAN_BLOCKS + 1u]) == PC_MLT_BOOTSTRAP_DONE;
+}
+/* Bootstrap candidate c: depth 2 + c % (D - 1), fresh numbers of key (c, PC_MLT_BOOTSTRAP_SAMPLE). */
+inline uint mlt_candidate_depth(__constant const SceneHeader* h, uint c) { return PC_MLT_FIRST_DEPTH + c % mlt_depths(h); }
+
+/* A state's contribution: where it goes (PC_MLT_PIXEL: the pixel of raster, PC_MLT_SPLAT: through the
+ * filter, PC_MLT_NONE: nowhere) and its value. */
+#define PC_MLT_NONE 0u
+#define PC_MLT_PIXEL 1u
+#define PC_MLT_SPLAT 2u
+typedef struct {
+  uint kind;
+  float2 raster;
+  float3 value;
+} MltContribution;
+
+/* Private arrays for a sampler's slots. */
+typedef struct {
+  float x[4u * PC_MLT_MAX_SLOTS], backup[4u * PC_MLT_MAX_SLOTS];
+  uint modified[PC_MLT_MAX_SLOTS], backup_modified[PC_MLT_MAX_SLOTS], changed[PC_MLT_MAX_SLOTS];
+} MltSlots;
+
+inline void mlt_sampler_on(MltSampler* m, MltSlots* slots, uint seed) {
+  m->x = slots->x;
+  m->backup = slots->backup;
+  m->modified = slots->modified;
+  m->backup_modified = slots->backup_modified;
+  m->changed = slots->changed;
+  m->changed_count = 0u;
+  m->seed = seed;
+}
+
+/* A fresh state's sampler: every slot's numbers from (a, b) when read. */
+inline void mlt_fresh(MltSampler* m, MltSlots* slots, __constant const SceneHeader* h, uint a, uint b) {
+  mlt_sampler_on(m, slots, h->seed);
+  m->fresh = 1u;
+  m->large = 0u;
+  m->a = a;
+  m->b = b;
+  m->iteration = 1u;
+  for (uint k = 0; k < mlt_slots(h); ++k) slots->modified[k] = 0u;
+}
+
+/* The contribution of the state sampler m reads at depth `depth` (key: chain and step, for cut-out seeds),
+ * and its importance (0 where it is nowhere or not a finite non-negative value). With `all`, instead every
+ * strategy of the depths depth .. depth_hi at pixel `pixel` (BDPT's sample, its camera subpath's value there,
+ * its light tracing connection, if one, in *splat), its importance the luminance of the camera subpath's
+ * value and of every light tracing connection. */
+inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                          __global LightVertex* vertices, MltSampler* m, uint depth, bool all, uint depth_hi, uint pixel,
+                          uint sample, SplatCounts* n, MltContribution* out, MltSplat* splat) {
+  __constant const SceneHeader* h = sc->h;
+  SampleKey key;
+  key.pixel = pixel;
+  key.sample = sample;
+  key.seed = h->seed;
+  key.mlt = m;
+  uint strategies = depth + 2u;
+  uint s = all ? PC_INVALID : min((uint)(sample4(h, key, PC_MLT_STRATEGY_GROUP(h)).x * (float)strategies), strategies - 1u);
+  uint t = all ? PC_INVALID : depth + 2u - s;
+  MisFactors mis = {0.0f, 0.0f, true, 1u, s, t, depth, depth_hi};
+  out->kind = PC_MLT_NONE;
+  out->value = (float3)(0.0f);
+  uint count = 0u;
+  splat->value = (float3)(0.0f);
+  splat->luminance = 0.0f;
+  if (all ? depth_hi >= 1u : s >= 2u)
+    trace_light_path(sc, lt, emission_cdf, (__global uint*)0, key, n, &mis, vertices, &count, splat);
+  if (t == 1u) {
+    out->kind = PC_MLT_SPLAT;
+    out->raster = splat->raster;
+    out->value = splat->value * (float)strategies;
+  } else {
+    uint px = pixel % h->width, py = pixel / h->width;
+    if (!all) { /* the pixel the state's image position is in */
+      float2 raster = mlt_numbers(m, 0u).xy * (float2)((float)h->width, (float)h->height);
+      px = min((uint)raster.x, h->width - 1u);
+      py = min((uint)raster.y, h->height - 1u);
+    }
+    out->kind = PC_MLT_PIXEL;
+    out->raster = (float2)((float)px, (float)py);
+    out->value = trace_camera_subpath(sc, lt, emission_cdf, key, px, py, &mis, true, vertices, count, &n->rays) *
+                 (all ? 1.0f : (float)strategies);
+  }
+  if (!splat_is_valid(out->value, n)) out->value = (float3)(0.0f);
+  float importance = luminance(out->value) + (all ? splat->luminance : 0.0f);
+  if (!(importance > 0.0f) || !(importance < INFINITY)) {
+    out->kind = PC_MLT_NONE;
+    return 0.0f;
+  }
+  return importance;
+}
+
+/* The candidates' importances (every unit at step 0; nothing otherwise). */
+__kernel void mlt_bootstrap(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                            __global SplatStats* stats, __global LightVertex* light_vertices, __global float* bootstrap,
+                            PC_MLT_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  uint item = get_global_id(0);
+  if (pixel_count == 0u || sample_begin != 0u || item >= mlt_bootstrap_items(h) || mlt_bootstrapped(lt, h, bootstrap)) return;
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
+  MltSlots slots;
+  MltSampler m;
+  __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
+  for (uint c = item; c < mlt_candidates(lt, h); c += mlt_bootstrap_items(h)) {
+    mlt_fresh(&m, &slots, h, c, PC_MLT_BOOTSTRAP_SAMPLE);
+    MltContribution contribution;
+    MltSplat splat;
+    bootstrap[c] = mlt_evaluate(&sc, lt, emission_cdf, vertices, &m, mlt_candidate_depth(h, c), false, 0u, c,
+                                PC_MLT_BOOTSTRAP_SAMPLE, &n, &contribution, &splat);
+  }
+  add_splat_counts(stats, &n);
+}
+
+/* The candidates' running sums, in three launches (vcm.cl's scan): each block's over its chunk, the blocks'
+ * offsets (one work item; after the candidates, bootstrap[C + block], and the total at bootstrap[C +
+ * PC_MLT_SCAN_BLOCKS]), each chunk's offset added. Float sums in an order fixed by C alone: the same bits on
+ * every device. */
+inline uint mlt_scan_chunk(uint candidates) { return (candidates + PC_MLT_SCAN_BLOCKS - 1u) / PC_MLT_SCAN_BLOCKS; }
+
+__kernel void mlt_scan_blocks(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
+  uint block = get_global_id(0);
+  if (pixel_count == 0u || sample_begin != 0u || block >= PC_MLT_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
+  uint candidates = mlt_candidates(lt, h), chunk = mlt_scan_chunk(candidates);
+  float sum = 0.0f;
+  for (uint c = block * chunk; c < min(candidates, (block + 1u) * chunk); ++c) {
+    sum += bootstrap[c];
+    bootstrap[c] = sum;
+  }
+  bootstrap[candidates + block] = sum;
+}
+
+__kernel void mlt_scan_offsets(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
+  if (get_global_id(0) != 0u || pixel_count == 0u || sample_begin != 0u || mlt_bootstrapped(lt, h, bootstrap)) return;
+  uint candidates = mlt_candidates(lt, h);
+  float total = 0.0f;
+  for (uint block = 0; block < PC_MLT_SCAN_BLOCKS; ++block) {
+    float sum = bootstrap[candidates + block];
+    bootstrap[candidates + block] = total;
+    total += sum;
+  }
+  bootstrap[candidates + PC_MLT_SCAN_BLOCKS] = total;
+}
+
+__kernel void mlt_scan_add(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
+  uint block = get_global_id(0);
+  if (pixel_count == 0u || sample_begin != 0u || block >= PC_MLT_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
+  uint candidates = mlt_candidates(lt, h), chunk = mlt_scan_chunk(candidates);
+  float offset = bootstrap[candidates + block];
+  for (uint c = block * chunk; c < min(candidates, (block + 1u) * chunk); ++c) bootstrap[c] += offset;
+}
+
+__kernel void mlt_bootstrap_done(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
+  if (get_global_id(0) != 0u || pixel_count == 0u || sample_begin != 0u) return;
+  bootstrap[mlt_candidates(lt, h) + PC_MLT_SCAN_BLOCKS + 1u] = as_float(PC_MLT_BOOTSTRAP_DONE);
+}
+
+/* Adds contribution c times `weight` to a splat layer. */
+inline void mlt_splat(__global uint* splats, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
+                      const MltContribution* c, float weight, uint parity, SplatCounts* n) {
+  if (c->kind == PC_MLT_NONE || !(weight > 0.0f)) return;
+  float3 v = c->value * weight;
+  if (c->kind == PC_MLT_PIXEL)
+    n->overflows += splat_pixel(splats, lt, (uint)c->raster.y * h->width + (uint)c->raster.x, parity, v);
+  else
+    splat_filtered(splats, h, lt, c->raster, parity, v, n);
+}
+
+/* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (fresh numbers): emitters seen directly and
+ * direct light, which the chains leave out, into the independent samples' layer at weight 1 (its camera
+ * subpath's value to the pixel, its light tracing connection through the filter). */
+inline void mlt_near_sample(const SceneData* sc, __constant const LightTransportHeader* lt,
+                            __global const float* emission_cdf, __global LightVertex* vertices, MltSlots* slots,
+                            __global uint* independent, uint chain, uint step, SplatCounts* n) {
+  __constant const SceneHeader* h = sc->h;
+  MltSampler m;
+  mlt_fresh(&m, slots, h, chain, PC_MLT_NEAR_SAMPLE | step);
+  MltContribution camera;
+  MltSplat splat;
+  mlt_evaluate(sc, lt, emission_cdf, vertices, &m, 0u, true, min(h->max_depth, PC_MLT_FIRST_DEPTH - 1u), chain,
+               PC_MLT_NEAR_SAMPLE | step, n, &camera, &splat);
+  mlt_splat(independent, h, lt, &camera, 1.0f, step & 1u, n);
+  if (splat.luminance > 0.0f) splat_filtered(independent, h, lt, splat.raster, step & 1u, splat.value, n);
+}
+
+/* Each chain of the unit: started at step 0, then its steps of the unit. */
+__kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                         __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
+                         __global const float* bootstrap, PC_MLT_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  uint item = get_global_id(0);
+  if (item >= pixel_count || sample_count == 0u) return;
+  uint chain = pixel_begin + item * pixel_stride, words = mlt_state_words(h), slot_count = mlt_slots(h);
+  __global uint* state = film + chain * words;
+  __global uint* splats = film + h->width * h->height * words;
+  __global uint* independent = splats + h->width * h->height * 2u * PC_SPLAT_WORDS;
+  __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
+  SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
+  MltSlots slots, scratch;
+  MltSampler m;
+  mlt_sampler_on(&m, &slots, h->seed);
+  m.fresh = 0u;
+  m.a = chain;
+  m.size = lt->mutation_size;
+  MltContribution now = {PC_MLT_NONE, (float2)(0.0f), (float3)(0.0f)};
+  float importance = 0.0f;
+  uint depth = PC_MLT_FIRST_DEPTH;
+  /* The full BDPT samples for b: their count and the sum of their luminances (Kahan's compensated sum). */
+  uint b_samples = 0u;
+  float b_sum = 0.0f, b_error = 0.0f;
+  if (sample_begin == 0u) {
+    /* A bootstrap candidate in proportion to its importance: the first whose running sum exceeds u total. */
+    uint candidates = mlt_candidates(lt, h);
+    float total = bootstrap[candidates + PC_MLT_SCAN_BLOCKS];
+    state[1] = as_uint(total);
+    if (candidates > 0u && total > 0.0f) {
+      float target = uint_to_unit(hash4(chain, h->seed, 0x5354u, 0x41525431u)) * total;
+      uint lo = 0u, hi = candidates - 1u;
+      while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (bootstrap[mid] > target) hi = mid;
+        else lo = mid + 1u;
+      }
+      depth = mlt_candidate_depth(h, lo);
+      /* Its numbers, every slot's, as the bootstrap read them; the chain's iteration 0. */
+      for (uint k = 0; k < 4u * slot_count; ++k) slots.x[k] = mlt_uniform(lo, PC_MLT_BOOTSTRAP_SAMPLE, k, h->seed);
+      MltSampler start;
+      mlt_fresh(&start, &scratch, h, lo, PC_MLT_BOOTSTRAP_SAMPLE);
+      MltSplat splat;
+      importance = mlt_evaluate(&sc, lt, emission_cdf, vertices, &start, depth, false, 0u, lo, PC_MLT_BOOTSTRAP_SAMPLE, &n,
+                                &now, &splat);
+    }
+    for (uint k = 0; k < slot_count; ++k) slots.modified[k] = 0u;
+    m.iteration = m.last_large = m.last_large_step = 0u;
+  } else {
+    depth = state[0];
+    importance = as_float(state[2]);
+    now.kind = state[3];
+    now.raster = (float2)(as_float(state[4]), as_float(state[5]));
+    now.value = (float3)(as_float(state[6]), as_float(state[7]), as_float(state[8]));
+    b_samples = state[9];
+    b_sum = as_float(state[10]);
+    b_error = as_float(state[11]);
+    m.iteration = state[12];
+    m.last_large = state[13];
+    m.last_large_step = state[14];
+    for (uint k = 0; k < 4u * slot_count; ++k) slots.x[k] = as_float(state[PC_MLT_HEADER_WORDS + k]);
+    for (uint k = 0; k < slot_count; ++k) slots.modified[k] = state[PC_MLT_HEADER_WORDS + 4u * slot_count + k];
+  }
+  float b0 = as_float(state[1]) / (float)lt->bootstrap;
+  /* The large steps' density over (depth, numbers), times their share of the steps. */
+  float large_density = lt->large_step / (float)max(mlt_depths(h), 1u);
+  for (uint step = sample_begin; step < sample_begin + sample_count; ++step) {
+    mlt_near_sample(&sc, lt, emission_cdf, vertices, &scratch, independent, chain, step, &n);
+    if (!(importance > 0.0f)) continue; /* a chain that found no light (a black scene) stays */
+    if (step % PC_MLT_B_EVERY == chain % PC_MLT_B_EVERY) { /* spread over the steps and chains */
+      MltSampler fresh;
+      mlt_fresh(&fresh, &scratch, h, chain, PC_MLT_B_SAMPLE | step);
+      MltContribution full;
+      MltSplat splat;
+      ++b_samples;
+      float y = mlt_evaluate(&sc, lt, emission_cdf, vertices, &fresh, PC_MLT_FIRST_DEPTH, true, h->max_depth, chain,
+                             PC_MLT_B_SAMPLE | step, &n, &full, &splat) - b_error;
+      float t = b_sum + y;
+      b_error = (t - b_sum) - y;
+      b_sum = t;
+    }
+    m.large = uint_to_unit(hash4(chain, step, h->seed, 0x6d757461u)) < lt->large_step;
+    m.b = step;
+    m.changed_count = 0u;
+    ++m.iteration;
+    uint next_depth = m.large ? PC_MLT_FIRST_DEPTH + min((uint)(uint_to_unit(hash4(chain, step, h->seed, 0x64707468u)) *
+                                                               (float)mlt_depths(h)),
+                                                         mlt_depths(h) - 1u)
+                              : depth;
+    MltContribution next;
+    MltSplat splat;
+    float next_importance = mlt_evaluate(&sc, lt, emission_cdf, vertices, &m, next_depth, false, 0u, chain, step, &n,
+                                         &next, &splat);
+    float accept = min(1.0f, next_importance / importance);
+    uint parity = step & 1u;
+    mlt_splat(splats, h, lt, &now, (1.0f - accept) / (importance / b0 + large_density), parity, &n);
+    if (next_importance > 0.0f) {
+      float denominator = next_importance / b0 + large_density;
+      mlt_splat(splats, h, lt, &next, accept / denominator, parity, &n);
+      if (m.large) mlt_splat(independent, h, lt, &next, 1.0f / denominator, parity, &n);
+    }
+    if (uint_to_unit(hash4(chain, step, h->seed, 0x61636370u)) < accept) {
+      now = next;
+      importance = next_importance;
+      depth = next_depth;
+      if (m.large) {
+        m.last_large = m.iteration;
+        m.last_large_step = step;
+      }
+    } else { /* the changed slots back, and the iteration */
+      for (uint j = 0; j < m.changed_count; ++j) {
+        uint slot = slots.changed[j];
+        for (uint k = 0; k < 4u; ++k) slots.x[4u * slot + k] = slots.backup[4u * slot + k];
+        slots.modified[slot] = slots.backup_modified[slot];
+      }
+      --m.iteration;
+    }
+  }
+  state[0] = depth;
+  state[2] = as_uint(importance);
+  state[3] = now.kind;
+  state[4] = as_uint(now.raster.x);
+  state[5] = as_uint(now.raster.y);
+  state[6] = as_uint(now.value.x);
+  state[7] = as_uint(now.value.y);
+  state[8] = as_uint(now.value.z);
+  state[9] = b_samples;
+  state[10] = as_uint(b_sum);
+  state[11] = as_uint(b_error);
+  state[12] = m.iteration;
+  state[13] = m.last_large;
+  state[14] = m.last_large_step;
+  for (uint k = 0; k < 4u * slot_count; ++k) state[PC_MLT_HEADER_WORDS + k] = as_uint(slots.x[k]);
+  for (uint k = 0; k < slot_count; ++k) state[PC_MLT_HEADER_WORDS + 4u * slot_count + k] = slots.modified[k];
+  add_splat_counts(stats, &n);
+}

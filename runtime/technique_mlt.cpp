@@ -1,0 +1,130 @@
+// Metropolis light transport in primary sample space over BDPT's strategies (kernels/mlt.cl): a chain per
+// pixel index, its state in the film's ordered "chains" layer, its splats in the commutative "splats" layer.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "runtime/device.h"
+#include "runtime/film.h"
+#include "runtime/light_transport.h"
+#include "runtime/renderer.h"
+#include "runtime/technique.h"
+#include "scene/device_scene.h"
+
+namespace {
+
+// kernels/mlt.cl's PC_MLT_HEADER_WORDS, PC_MLT_BOOTSTRAP_ITEMS, PC_MLT_SCAN_BLOCKS and PC_MLT_MAX_DEPTH.
+constexpr uint32_t kHeaderWords = 16;
+constexpr size_t kBootstrapItems = 4096;
+// kernels/mlt.cl's mlt_bootstrap_items: the bootstrap's work items for a film of `pixels`.
+size_t bootstrap_items(uint32_t pixels) { return std::min<size_t>(kBootstrapItems, pixels); }
+constexpr size_t kScanBlocks = 256;
+constexpr uint32_t kMaxDepth = 16;
+
+// A chain's state: its header, and 4 numbers and the iteration of their last change for each of the 4 D + 4
+// groups a BDPT sample of depth D reads.
+uint32_t state_words(uint32_t max_depth) { return kHeaderWords + 5 * (4 * max_depth + 4); }
+
+// The chains' states, the Metropolis samples' splats and the independent samples' (the large steps', and the
+// directly seen emitters; kernels/mlt.cl).
+std::vector<FilmLayer> mlt_layers(uint32_t max_depth) {
+  return {{"chains", PC_LAYER_ORDERED, state_words(max_depth)},
+          {"splats", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS},
+          {"independent", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS}};
+}
+
+}  // namespace
+
+Technique mlt_technique() {
+  Technique t;
+  t.name = "mlt";
+  t.id = PC_INTEGRATOR_MLT;
+  t.summary = "Metropolis light transport in primary sample space over BDPT's strategies (multiplexed)";
+  t.kernel_file = "mlt.cl";
+  t.layers = mlt_layers(8);
+  t.layers_at_depth = mlt_layers;
+  t.units = UnitKind::pixels;
+  t.max_depth_limit = kMaxDepth;
+  t.cpu_unit_seconds = 1.0;
+  const std::vector<std::string> scan = {"lt", "bootstrap", "unit"};
+  t.phases = {
+      {"bootstrap", "mlt_bootstrap", {"lt", "emission_cdf", "stats", "light_vertices", "bootstrap", "unit"},
+       [](uint32_t, uint32_t pixels) { return bootstrap_items(pixels); }},
+      {"scan", "mlt_scan_blocks", scan, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan_offsets", "mlt_scan_offsets", scan, [](uint32_t, uint32_t) { return size_t(1); }},
+      {"scan_add", "mlt_scan_add", scan, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"bootstrap_done", "mlt_bootstrap_done", scan, [](uint32_t, uint32_t) { return size_t(1); }},
+      {"chains", "mlt_chains", {"lt", "emission_cdf", "film", "stats", "light_vertices", "bootstrap", "unit"}, {}},
+  };
+  // Light vertex slots for each chain of the largest unit, or each bootstrap work item; the candidates'
+  // importances (B per depth 2 .. D), the prefix sum's block sums and total, and the done mark.
+  t.buffers = {{"light_vertices", [](const TechniqueSizes& s) {
+                  return std::max<size_t>(s.unit_items, bootstrap_items(s.pixels)) * light_vertex_slots(s) * sizeof(LightVertex);
+                }},
+               {"bootstrap", [](const TechniqueSizes& s) {
+                  return (size_t(s.bootstrap) * s.max_depth + kScanBlocks + 2) * sizeof(float);
+                }}};
+  t.max_unit_items = [](const TechniqueSizes& s) { return light_vertex_unit_paths(s, 0); };
+  t.build_options = splat_build_options;
+  t.options = {{"bootstrap", "a whole number of bootstrap states per depth, 1 to 1048576",
+                [](double v, RenderOptions& o) {
+                  if (!(v >= 1 && v <= (1 << 20) && v == std::floor(v))) return false;
+                  o.bootstrap = uint32_t(v);
+                  return true;
+                }},
+               {"large_step", "a probability in [0, 1]",
+                [](double v, RenderOptions& o) {
+                  if (!(v >= 0 && v <= 1)) return false;
+                  o.large_step = v;
+                  return true;
+                }},
+               {"mutation_size", "a number in (0, 1] (the largest move of a small step)",
+                [](double v, RenderOptions& o) {
+                  if (!(v > 0 && v <= 1)) return false;
+                  o.mutation_size = v;
+                  return true;
+                }}};
+  t.key_settings = [](const RenderOptions& o) {
+    return std::vector<double>{double(o.bootstrap), o.large_step, o.mutation_size};
+  };
+  t.setup_light = [](LightTransportSetup& setup, const DeviceScene&, const RenderOptions& o) {
+    LightTransportHeader& lt = setup.header;
+    lt.bootstrap = o.bootstrap;
+    lt.large_step = float(o.large_step);
+    lt.mutation_size = float(o.mutation_size);
+    // The splats are in pixel values (their weights take b0): light tracing's fixed-point scales.
+  };
+  // The independent samples' splats, plus the Metropolis splats times b / b0: b0 the bootstrap's estimate of b, the
+  // image's mean luminance, in their weights (chain header word 1: its candidates' importance sum, over B),
+  // b the chains' full BDPT samples' mean (words 9-11), summed in chain order (before any, b0). The variance
+  // treats the steps as independent: it is too low by the chains' correlation.
+  t.develop = [](Film& film, const LightTransportHeader& lt, uint64_t* overflows) {
+    develop_splat_layer(film, lt, overflows, "independent");
+    const std::vector<float> large_mean = film.mean, large_variance = film.variance, large_even = film.even_mean,
+                             large_odd = film.odd_mean;
+    develop_splat_layer(film, lt, overflows, "splats");
+    const int layer = film.layout.find("chains");
+    const uint32_t words = film.layout.layers[size_t(layer)].words;
+    const uint32_t* chains = film.layer(size_t(layer));
+    auto word_float = [](uint32_t w) {
+      float f;
+      std::memcpy(&f, &w, sizeof f);
+      return double(f);
+    };
+    double sum = 0, samples = 0;
+    for (uint32_t c = 0; film.spp > 0 && c < film.layout.pixels; ++c) {
+      const uint32_t* state = chains + size_t(c) * words;
+      samples += state[9];
+      sum += word_float(state[10]) - word_float(state[11]);
+    }
+    const double b0 = film.spp > 0 && lt.bootstrap > 0 ? word_float(chains[1]) / lt.bootstrap : 0;
+    const double scale = b0 > 0 && samples > 0 ? sum / samples / b0 : 1;
+    for (size_t i = 0; i < film.mean.size(); ++i) {
+      film.mean[i] = float(large_mean[i] + film.mean[i] * scale);
+      film.even_mean[i] = float(large_even[i] + film.even_mean[i] * scale);
+      film.odd_mean[i] = float(large_odd[i] + film.odd_mean[i] * scale);
+      film.variance[i] = float(large_variance[i] + film.variance[i] * scale * scale);
+    }
+  };
+  return t;
+}
