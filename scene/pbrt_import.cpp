@@ -2479,14 +2479,16 @@ json translate_render(Translator& t) {
     const std::string what = in.what();
     const Place& at = in.place;
     const std::string& type = in.type;
-    if (one_of(type, {"ambientocclusion", "mlt", "aov", "function", "directlighting", "whitted"}))
-      fail(at, "Integrator " + in_quotes(type) + " is not supported (supported: volpath, path, bdpt, lightpath, sppm; "
+    if (one_of(type, {"ambientocclusion", "aov", "function", "directlighting", "whitted"}))
+      fail(at, "Integrator " + in_quotes(type) + " is not supported (supported: volpath, path, bdpt, lightpath, sppm, mlt; "
                                              "simplepath, simplevolpath and randomwalk as path)");
     int depth = get_int(ps, what, "maxdepth", 5);
     if (depth < 0) fail(at, what + ": maxdepth " + std::to_string(depth) + " is negative");
-    if (depth > 1024) {
-      warn(t, at, what + ": maxdepth " + std::to_string(depth) + " is beyond pathcl's largest, 1024: 1024 is used");
-      depth = 1024;
+    const int most = type == "mlt" ? 16 : 1024;  // pathcl's mlt keeps a chain's numbers for up to 16 events
+    if (depth > most) {
+      warn(t, at, what + ": maxdepth " + std::to_string(depth) + " is beyond pathcl's largest" +
+                      (type == "mlt" ? " for mlt" : "") + ", " + std::to_string(most) + ": " + std::to_string(most) + " is used");
+      depth = most;
     }
     render["max_depth"] = depth;
     if (type == "volpath" || type == "path") {
@@ -2497,6 +2499,22 @@ json translate_render(Translator& t) {
         if (get_bool(ps, what, name, false)) warn(t, at, what + ": " + name + " ignored (pathcl writes the image)");
     } else if (type == "lightpath") {
       render["integrator"] = "light";
+    } else if (type == "mlt") {
+      // pbrt-v4's MLTIntegrator: multiplexed primary-sample-space MLT over BDPT, as pathcl's; mutationsperpixel
+      // mutations a pixel (the sampler's samples unused), a chain per pixel in pathcl.
+      const int bootstrap = get_int(ps, what, "bootstrapsamples", 100000);
+      const double large = get_float(ps, what, "largestepprobability", 0.3), sigma = get_float(ps, what, "sigma", 0.01);
+      if (bootstrap < 1 || bootstrap > (1 << 20)) fail(at, what + ": bootstrapsamples " + std::to_string(bootstrap) + " is outside 1 to 1048576");
+      if (!(large >= 0 && large <= 1)) fail(at, what + ": largestepprobability " + num(large) + " is outside [0, 1]");
+      if (!(sigma > 0 && sigma <= 1)) fail(at, what + ": sigma " + num(sigma) + " is outside (0, 1]");
+      render["integrator"] = {{"type", "mlt"}, {"bootstrap", bootstrap}, {"large_step", large}, {"mutation_size", sigma}};
+      const int mutations = get_int(ps, what, "mutationsperpixel", 100);
+      if (mutations < 1 || mutations > (1 << 24)) fail(at, what + ": mutationsperpixel " + std::to_string(mutations) + " is outside 1 to 16777216");
+      render["spp"] = mutations;
+      warn(t, at, what + ": sigma " + num(sigma) + " (the standard deviation of pbrt's Gaussian moves) is pathcl's " +
+                      "mutation_size (the largest of Kelemen's exponential moves): other noise, the same image");
+      if (const Param* chains = lookup(ps, what, "chains", {"integer"}))
+        warn(t, chains->place, what + ": chains ignored (pathcl runs a chain per pixel)");
     } else if (type == "sppm") {
       // pbrt's "radius" (default 1) is the first iteration's search radius in scene units, as pathcl's.
       render["integrator"] = {{"type", "sppm"}, {"radius", get_float(ps, what, "radius", 1)}};

@@ -177,6 +177,19 @@ TEST(PbrtImport, FilmFilterSamplerAndIntegratorMapOntoRenderSettings) {
   EXPECT_TRUE(has_warning(p, pbrt_path("sppm.pbrt") + ":4: ", "sobol")) << warnings_of(p);
   EXPECT_TRUE(has_warning(p, pbrt_path("sppm.pbrt") + ":5: ", "photonsperiteration")) << warnings_of(p);
   EXPECT_TRUE(p.warnings.size() == 2) << warnings_of(p);  // the box filter of radius 0.5 is exact
+
+  // pbrt-v4's mlt: mutationsperpixel is the image's spp; maxdepth beyond pathcl's mlt's 16 is clamped.
+  const ImportedScene m = import_file("mlt.pbrt",
+                                      "LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\n"
+                                      "Integrator \"mlt\" \"integer maxdepth\" 20 \"integer mutationsperpixel\" 300 "
+                                      "\"float largestepprobability\" 0.25 \"integer chains\" 500 \"integer bootstrapsamples\" 5000\n"
+                                      "PixelFilter \"box\"\nWorldBegin\n" + kTriangle);
+  EXPECT_EQ(m.scene["render"], json::parse(R"({"spp": 300, "max_depth": 16, "seed": 0, "sampler": "sobol",
+                                               "integrator": {"type": "mlt", "bootstrap": 5000, "large_step": 0.25,
+                                                              "mutation_size": 0.01}})"));
+  EXPECT_TRUE(has_warning(m, pbrt_path("mlt.pbrt") + ":3: ", "maxdepth 20 is beyond pathcl's largest for mlt, 16")) << warnings_of(m);
+  EXPECT_TRUE(has_warning(m, pbrt_path("mlt.pbrt") + ":3: ", "chains ignored")) << warnings_of(m);
+  EXPECT_TRUE(has_warning(m, pbrt_path("mlt.pbrt") + ":3: ", "Kelemen's exponential moves")) << warnings_of(m);
 }
 
 // ---- Transforms
