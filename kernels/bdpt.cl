@@ -39,15 +39,7 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
 #endif
 ) {
   __constant const SceneHeader* h = sc->h;
-  Ray ray;
-  camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
-  ray.tmin = 0.0f;
-  ray.tmax = INFINITY;
-  ray.skip_prim = PC_INVALID;
-  ray.skip_instance = PC_INVALID;
-#ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = cutout_seed(key, PC_RAY_CAMERA);
-#endif
+  Ray ray = camera_path_ray(h, key, px, py);
   float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
   float eta_scale = 1.0f;
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera

@@ -111,17 +111,7 @@ inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray, float
 /* The camera path of `key` at pixel (px, py) to its first non-delta vertex (walk_to_non_delta). */
 inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, uint px, uint py, float3* radiance, uint* rays,
                                 GatherPoint* g) {
-  __constant const SceneHeader* h = sc->h;
-  Ray ray;
-  camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
-  ray.tmin = 0.0f;
-  ray.tmax = INFINITY;
-  ray.skip_prim = PC_INVALID;
-  ray.skip_instance = PC_INVALID;
-#ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = cutout_seed(key, PC_RAY_CAMERA);
-#endif
-  return walk_to_non_delta(sc, key, ray, (float3)(1.0f), 0u, true, radiance, rays, g);
+  return walk_to_non_delta(sc, key, camera_path_ray(sc->h, key, px, py), (float3)(1.0f), 0u, true, radiance, rays, g);
 }
 
 /* Next-event estimation at g (unweighted: the gathering integrators make direct light no other way). */

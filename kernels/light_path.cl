@@ -65,6 +65,20 @@ inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint
   return key;
 }
 
+/* The camera ray of key's camera path at pixel (px, py) (BDPT's camera subpath, the gathering integrators'). */
+inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key, uint px, uint py) {
+  Ray ray;
+  camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
+  ray.tmin = 0.0f;
+  ray.tmax = INFINITY;
+  ray.skip_prim = PC_INVALID;
+  ray.skip_instance = PC_INVALID;
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = cutout_seed(key, PC_RAY_CAMERA);
+#endif
+  return ray;
+}
+
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
 inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
   float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
