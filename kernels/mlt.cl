@@ -22,20 +22,21 @@
  * step (probability lt->large_step) takes fresh numbers and a uniform depth, a small step keeps the depth and
  * moves each number by Kelemen's exponential mutation of size up to lt->mutation_size. It is accepted with
  * probability a = min(1, I' / I). Numbers are mutated lazily, when the evaluation reads them (sampler.cl's
- * MltSampler). Splats (Kelemen et al.'s combination of the two techniques, Metropolis
- * samples of density I / b and large steps of density 1 / (D - 1) over (depth, numbers),
- * taken p = lt->large_step times a step, by the balance heuristic; q = p / (D - 1)): the current state's value L
- * times (1 - a) / (I / b0 + q) and the proposal's times a / (I' / b0 + q) into the "splats" layer, and a large
- * step's proposal's times 1 / (I' / b0 + q) into "large_steps"; the image is (large_steps + splats b / b0) /
- * spp. b = (D - 1) E[I] over uniform (depth, numbers)
- * is the image's mean luminance beyond depth 1; b0 its bootstrap estimate (sum of importances / B), which the
- * weights take, and b the host's (runtime/technique_mlt.cpp) from full BDPT samples (every strategy of every
- * depth, weighted) that each chain takes at its own pixel every PC_MLT_B_EVERY steps (stratified over the
- * image; a full sample costs a few steps), which converges with the render. Where the image is uniform the
- * large steps carry it, as plain Monte Carlo would; where it is not, the chains. The depths' shares converge
- * with the chains: their states move between depths through large steps (pbrt-v4's chains keep theirs, its
- * b is the bootstrap's, and its image keeps the bootstrap's error in the scale and in each depth's share;
- * here a render's bootstrap error was 4 % on the Cornell box, its importance being heavy-tailed).
+ * MltSampler). Splats (Kelemen et al.'s combination of the two techniques, Metropolis samples of density
+ * I / b and large steps of density 1 / (D - 1) over (depth, numbers), taken p = lt->large_step times a step,
+ * by the balance heuristic; q = p / (D - 1)): the current state's value L times (1 - a) / (I / b0 + q) and the
+ * proposal's times a / (I' / b0 + q) into the "splats" layer, and a large step's proposal's times
+ * 1 / (I' / b0 + q) into "independent"; the image is (independent + splats b / b0) / spp. Where the image is
+ * uniform the large steps carry it, as plain Monte Carlo would; where it is not, the chains.
+ * b = (D - 1) E[I] over uniform (depth, numbers) is the image's mean luminance beyond depth 1. b0 is its
+ * bootstrap estimate (the candidates' importance sum over B), which the weights take; b the host's
+ * (runtime/technique_mlt.cpp), from the candidates and every large step's proposal (each an independent
+ * uniform state), so that it converges with the render (without the lamp's pixels, which depth 0 holds, the
+ * importance is not so heavy-tailed: over 4 seeds on the Cornell box the image means were within 1.3 %, as
+ * close as with stratified full BDPT samples for b at a sixth of the steps' cost more). The depths' shares
+ * converge with the chains: their states move between depths through large steps (pbrt-v4's chains keep
+ * theirs, its b is the bootstrap's, and its image keeps the bootstrap's error in the scale and in each depth's
+ * share: 4 % on the Cornell box here, depth 0 included).
  *
  * Start-up bias: a chain starts from a bootstrap candidate drawn in proportion to its importance, an
  * approximation of the stationary distribution with B (D - 1) candidates; the estimate is consistent as the
@@ -56,7 +57,7 @@
 #define PC_MLT_MAX_SLOTS (4u * PC_MLT_MAX_DEPTH + 4u)
 /* A chain's state in the "chains" layer (runtime/technique_mlt.cpp reads it): a header (word 0 its depth, 1
  * the bootstrap candidates' importance sum, 2 its importance I, 3 its contribution's kind, 4-5 its raster
- * position, 6-8 its value, 9 its full BDPT samples for b, 10-11 their luminance sum and its compensation, 12
+ * position, 6-8 its value, 9 its large steps, 10-11 their proposals' importance sum and its compensation, 12
  * its sampler's iteration, 13-14 its last large step's iteration and step), then 4 numbers per slot, then
  * each slot's last change (an iteration). */
 #define PC_MLT_HEADER_WORDS 16u
@@ -70,12 +71,9 @@ inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC
 inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap);
 #define PC_MLT_SCAN_BLOCKS 256u
 /* The keys (b of MltSampler and SampleKey.sample) of fresh states, beyond any step: the bootstrap's
- * candidates, and (or-ed with the step) a chain's BDPT samples for b and for depths 0 and 1. */
+ * candidates, and (or-ed with the step) a chain's BDPT samples of depths 0 and 1. */
 #define PC_MLT_BOOTSTRAP_SAMPLE 0xfffff000u
-#define PC_MLT_B_SAMPLE 0x80000000u
 #define PC_MLT_NEAR_SAMPLE 0x40000000u
-/* Steps between a chain's full BDPT samples for b. */
-#define PC_MLT_B_EVERY 16u
 
 inline uint mlt_state_words(__constant const SceneHeader* h) { return PC_MLT_HEADER_WORDS + 5u * mlt_slots(h); }
 /* The chains take paths of depth 2 .. D (PC_MLT_FIRST_DEPTH); depths 0 and 1 are each pixel's BDPT sample. */
@@ -292,7 +290,7 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   MltContribution now = {PC_MLT_NONE, (float2)(0.0f), (float3)(0.0f)};
   float importance = 0.0f;
   uint depth = PC_MLT_FIRST_DEPTH;
-  /* The full BDPT samples for b: their count and the sum of their luminances (Kahan's compensated sum). */
+  /* The large steps for b: their count and the sum of their proposals' importances (Kahan's compensated sum). */
   uint b_samples = 0u;
   float b_sum = 0.0f, b_error = 0.0f;
   if (sample_begin == 0u) {
@@ -340,18 +338,6 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   for (uint step = sample_begin; step < sample_begin + sample_count; ++step) {
     mlt_near_sample(&sc, lt, emission_cdf, vertices, &scratch, independent, chain, step, &n);
     if (!(importance > 0.0f)) continue; /* a chain that found no light (a black scene) stays */
-    if (step % PC_MLT_B_EVERY == chain % PC_MLT_B_EVERY) { /* spread over the steps and chains */
-      MltSampler fresh;
-      mlt_fresh(&fresh, &scratch, h, chain, PC_MLT_B_SAMPLE | step);
-      MltContribution full;
-      MltSplat splat;
-      ++b_samples;
-      float y = mlt_evaluate(&sc, lt, emission_cdf, vertices, &fresh, PC_MLT_FIRST_DEPTH, true, h->max_depth, chain,
-                             PC_MLT_B_SAMPLE | step, &n, &full, &splat) - b_error;
-      float t = b_sum + y;
-      b_error = (t - b_sum) - y;
-      b_sum = t;
-    }
     m.large = uint_to_unit(hash4(chain, step, h->seed, 0x6d757461u)) < lt->large_step;
     m.b = step;
     m.changed_count = 0u;
@@ -364,6 +350,12 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
     MltSplat splat;
     float next_importance = mlt_evaluate(&sc, lt, emission_cdf, vertices, &m, next_depth, false, 0u, chain, step, &n,
                                          &next, &splat);
+    if (m.large) { /* an independent uniform state: a sample of b / (D - 1) */
+      ++b_samples;
+      float y = next_importance - b_error, t = b_sum + y;
+      b_error = (t - b_sum) - y;
+      b_sum = t;
+    }
     float accept = min(1.0f, next_importance / importance);
     uint parity = step & 1u;
     mlt_splat(splats, h, lt, &now, (1.0f - accept) / (importance / b0 + large_density), parity, &n);

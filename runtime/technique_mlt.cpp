@@ -94,10 +94,12 @@ Technique mlt_technique() {
     lt.mutation_size = float(o.mutation_size);
     // The splats are in pixel values (their weights take b0): light tracing's fixed-point scales.
   };
-  // The independent samples' splats, plus the Metropolis splats times b / b0: b0 the bootstrap's estimate of b, the
-  // image's mean luminance, in their weights (chain header word 1: its candidates' importance sum, over B),
-  // b the chains' full BDPT samples' mean (words 9-11), summed in chain order (before any, b0). The variance
-  // treats the steps as independent: it is too low by the chains' correlation.
+  // The independent samples' splats, plus the Metropolis splats times b / b0 (kernels/mlt.cl): b0 the
+  // bootstrap's estimate of b, the image's mean luminance beyond depth 1, which their weights take (chain
+  // header word 1: the candidates' importance sum, over B); b from the candidates and every chain's large-step
+  // proposals (words 9-11: their count and importance sum), summed in chain order, each an independent
+  // uniform state of mean b / (D - 1). The variance treats the steps as independent: it is too low by the
+  // chains' correlation.
   t.develop = [](Film& film, const LightTransportHeader& lt, uint64_t* overflows) {
     develop_splat_layer(film, lt, overflows, "independent");
     const std::vector<float> large_mean = film.mean, large_variance = film.variance, large_even = film.even_mean,
@@ -118,7 +120,9 @@ Technique mlt_technique() {
       sum += word_float(state[10]) - word_float(state[11]);
     }
     const double b0 = film.spp > 0 && lt.bootstrap > 0 ? word_float(chains[1]) / lt.bootstrap : 0;
-    const double scale = b0 > 0 && samples > 0 ? sum / samples / b0 : 1;
+    const uint32_t depths = ((words - kHeaderWords) / 5 - 4) / 4 - 1;  // D - 1
+    const double b = b0 > 0 ? depths * (word_float(chains[1]) + sum) / (double(lt.bootstrap) * depths + samples) : 0;
+    const double scale = b0 > 0 ? b / b0 : 1;
     for (size_t i = 0; i < film.mean.size(); ++i) {
       film.mean[i] = float(large_mean[i] + film.mean[i] * scale);
       film.even_mean[i] = float(large_even[i] + film.even_mean[i] * scale);
