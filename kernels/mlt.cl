@@ -1,6 +1,6 @@
 /* Metropolis light transport (`mlt`, lane width 1) in primary sample space over BDPT's strategies: Kelemen
  * et al. 2002's mutations, Hachisuka et al. 2014's multiplexing (pbrt-v4's MLTIntegrator). A state is a
- * path depth d (its scattering events, fixed per chain) and the uniform numbers a BDPT sample reads
+ * path depth d (its scattering events, 2 .. D; a large step may change it) and the uniform numbers a BDPT sample reads
  * (sampler.cl's slots: the camera and light subpaths' groups, and the strategy's). Its contribution: the
  * strategy (s, t) its strategy number picks among the d + 2 that make paths of depth d, that strategy alone
  * (bdpt.cl, light_path.cl with PC_MLT: the subpaths stop where it needs no more), weighted by the balance
@@ -14,8 +14,8 @@
  *
  * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
  * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
- * checkpoints and resumes carry it), the splats in the commutative layer "splats" (fixed point, the same bits
- * in any order). The first step of a chain starts it: B bootstrap candidates per depth 2 .. D (B =
+ * checkpoints and resumes carry it), the splats in the commutative layers "splats" and "independent" (fixed
+ * point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth 2 .. D (B =
  * lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a prefix sum of
  * fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
  * takes a candidate in proportion to its importance (by its own number). Each step proposes a state: a large
