@@ -1,6 +1,7 @@
 #include "runtime/technique.h"
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 
 #include <nlohmann/json.hpp>
@@ -29,6 +30,31 @@ void register_technique(Technique technique) {
       throw std::logic_error("technique " + technique.name + ": its name or id is taken by " + t.name);
   // Registration happens before renders start (a test's set-up): the vector is not read meanwhile.
   registry().push_back(std::move(technique));
+}
+
+TechniqueOption flag_option(const std::string& name, bool RenderOptions::*field) {
+  return {name, "true or false", [field](double v, RenderOptions& o) {
+            if (v != 0 && v != 1) return false;
+            o.*field = v != 0;
+            return true;
+          }};
+}
+
+TechniqueOption count_option(const std::string& name, const std::string& what, uint32_t most, uint32_t RenderOptions::*field) {
+  return {name, "a whole number of " + what + ", 1 to " + std::to_string(most), [most, field](double v, RenderOptions& o) {
+            if (!(v >= 1 && v <= most && v == std::floor(v))) return false;
+            o.*field = uint32_t(v);
+            return true;
+          }};
+}
+
+TechniqueOption number_option(const std::string& name, const std::string& expected, std::function<bool(double)> fits,
+                              double RenderOptions::*field) {
+  return {name, expected, [fits, field](double v, RenderOptions& o) {
+            if (!fits(v)) return false;
+            o.*field = v;
+            return true;
+          }};
 }
 
 std::string technique_list() {

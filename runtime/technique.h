@@ -81,6 +81,14 @@ struct TechniqueOption {
   std::function<bool(double value, RenderOptions& options)> set;  // false: not an expected value
 };
 
+// Options of the usual kinds, each stored into a field of RenderOptions: `true` or `false` (flag_option), a
+// whole number from 1 to `most` (count_option: "a whole number of WHAT, 1 to MOST"), a number that `fits`
+// (number_option, `expected` saying which).
+TechniqueOption flag_option(const std::string& name, bool RenderOptions::*field);
+TechniqueOption count_option(const std::string& name, const std::string& what, uint32_t most, uint32_t RenderOptions::*field);
+TechniqueOption number_option(const std::string& name, const std::string& expected, std::function<bool(double)> fits,
+                              double RenderOptions::*field);
+
 struct Technique {
   std::string name;     // as --integrator and render.integrator take it
   uint32_t id = 0;      // stored in checkpoints and hashed into render keys (path 0, light 1, bdpt 2, vcm 3, bpm 4,

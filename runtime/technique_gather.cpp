@@ -21,17 +21,6 @@ constexpr size_t kBinBytes = 6 * sizeof(uint32_t);
 // kernels/gather.cl's shoot_items: the vertex slots of radiosity's shooting, whatever the unit.
 constexpr size_t kShootSlots = size_t(1) << 17;
 
-const std::vector<std::string> kUnit = {"unit"};
-
-// The light paths an iteration takes, 1 to `most`.
-TechniqueOption light_paths_option(uint32_t most) {
-  return {"light_paths", "a whole number of light paths per iteration, 1 to " + std::to_string(most), [most](double v, RenderOptions& o) {
-            if (!(v >= 1 && v <= most && v == std::floor(v))) return false;
-            o.light_paths = uint32_t(v);
-            return true;
-          }};
-}
-
 Technique gather_technique(const char* name, uint32_t id, const char* summary, uint32_t most_light_paths) {
   Technique t;
   t.name = name;
@@ -44,7 +33,7 @@ Technique gather_technique(const char* name, uint32_t id, const char* summary, u
   t.cpu_unit_seconds = 1.0;
   t.build_options = splat_build_options;
   t.develop = [](Film& film, const LightTransportHeader&, uint64_t*) { develop_radiance(film); };
-  t.options = {light_paths_option(most_light_paths)};
+  t.options = {count_option("light_paths", "light paths per iteration", most_light_paths, &RenderOptions::light_paths)};
   return t;
 }
 
@@ -65,12 +54,8 @@ Technique instant_radiosity_technique() {
               {"gather", "ir_gather", {"lt", "film", "stats", "light_vertices", "vertex_counts", "unit"}, {}}};
   t.buffers = {{"light_vertices", [](const TechniqueSizes& s) { return size_t(s.light_paths) * light_vertex_slots(s) * sizeof(LightVertex); }},
                {"vertex_counts", [](const TechniqueSizes& s) { return size_t(s.light_paths) * sizeof(uint32_t); }}};
-  t.options.push_back({"clamp", "a number >= 0 (the largest geometry term cos cos / d^2, in 1 / scene units^2; 0: none)",
-                       [](double v, RenderOptions& o) {
-                         if (!(v >= 0) || !std::isfinite(v)) return false;
-                         o.clamp = v;
-                         return true;
-                       }});
+  t.options.push_back(number_option("clamp", "a number >= 0 (the largest geometry term cos cos / d^2, in 1 / scene units^2; 0: none)",
+                                    [](double v) { return v >= 0 && std::isfinite(v); }, &RenderOptions::clamp));
   t.key_settings = [](const RenderOptions& o) { return std::vector<double>{double(o.light_paths), o.clamp}; };
   t.setup_light = [](LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& o) {
     setup.header.light_paths = light_paths_of(scene, o, 64);
@@ -92,11 +77,7 @@ Technique radiosity_technique() {
                   return std::max<size_t>(1, kShootSlots / slots) * slots * sizeof(LightVertex);
                 }},
                {"bins", [](const TechniqueSizes& s) { return size_t(s.prims) * kBinBytes; }}};
-  t.options.push_back({"final_gather", "true or false", [](double v, RenderOptions& o) {
-                         if (v != 0 && v != 1) return false;
-                         o.final_gather = v != 0;
-                         return true;
-                       }});
+  t.options.push_back(flag_option("final_gather", &RenderOptions::final_gather));
   t.key_settings = [](const RenderOptions& o) { return std::vector<double>{double(o.light_paths), o.final_gather ? 1.0 : 0.0}; };
   t.setup_light = [](LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& o) {
     LightTransportHeader& lt = setup.header;

@@ -16,9 +16,9 @@ namespace {
 // kernels/mlt.cl's PC_MLT_HEADER_WORDS, PC_MLT_BOOTSTRAP_ITEMS, PC_MLT_SCAN_BLOCKS and PC_MLT_MAX_DEPTH.
 constexpr uint32_t kHeaderWords = 16;
 constexpr size_t kBootstrapItems = 4096;
+constexpr size_t kScanBlocks = 256;
 // kernels/mlt.cl's mlt_bootstrap_items: the bootstrap's work items for a film of `pixels`.
 size_t bootstrap_items(uint32_t pixels) { return std::min<size_t>(kBootstrapItems, pixels); }
-constexpr size_t kScanBlocks = 256;
 constexpr uint32_t kMaxDepth = 16;
 
 // A chain's state: its header, and 4 numbers and the iteration of their last change for each of the 4 D + 4
@@ -66,24 +66,11 @@ Technique mlt_technique() {
                 }}};
   t.max_unit_items = [](const TechniqueSizes& s) { return light_vertex_unit_paths(s, 0); };
   t.build_options = splat_build_options;
-  t.options = {{"bootstrap", "a whole number of bootstrap states per depth, 1 to 1048576",
-                [](double v, RenderOptions& o) {
-                  if (!(v >= 1 && v <= (1 << 20) && v == std::floor(v))) return false;
-                  o.bootstrap = uint32_t(v);
-                  return true;
-                }},
-               {"large_step", "a probability in [0, 1]",
-                [](double v, RenderOptions& o) {
-                  if (!(v >= 0 && v <= 1)) return false;
-                  o.large_step = v;
-                  return true;
-                }},
-               {"mutation_size", "a number in (0, 1] (the largest move of a small step)",
-                [](double v, RenderOptions& o) {
-                  if (!(v > 0 && v <= 1)) return false;
-                  o.mutation_size = v;
-                  return true;
-                }}};
+  t.options = {count_option("bootstrap", "bootstrap states per depth", 1u << 20, &RenderOptions::bootstrap),
+               number_option("large_step", "a probability in [0, 1]", [](double v) { return v >= 0 && v <= 1; },
+                             &RenderOptions::large_step),
+               number_option("mutation_size", "a number in (0, 1] (the largest move of a small step)",
+                             [](double v) { return v > 0 && v <= 1; }, &RenderOptions::mutation_size)};
   t.key_settings = [](const RenderOptions& o) {
     return std::vector<double>{double(o.bootstrap), o.large_step, o.mutation_size};
   };

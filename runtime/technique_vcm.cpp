@@ -13,8 +13,6 @@
 
 namespace {
 
-// kernels/vcm.cl's PC_VCM_SCAN_BLOCKS: the grid's prefix sum in blocks of buckets.
-constexpr size_t kScanBlocks = 256;
 
 // kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
 size_t grid_table(uint32_t paths) {
@@ -22,6 +20,9 @@ size_t grid_table(uint32_t paths) {
   while (t < paths) t <<= 1;
   return t;
 }
+
+// kernels/vcm.cl's PC_VCM_SCAN_BLOCKS: the grid's prefix sum in blocks of buckets.
+constexpr size_t kScanBlocks = 256;
 
 Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const char* summary) {
   Technique t = bdpt_technique();
@@ -62,18 +63,9 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
     lt.radius = float(o.radius > 0 ? o.radius : default_merging_radius(scene, lt));
     lt.alpha = float(o.alpha);
   };
-  t.options = {{"radius", "a radius > 0 (scene units)",
-                [](double v, RenderOptions& o) {
-                  if (!(v > 0) || !std::isfinite(v)) return false;
-                  o.radius = v;
-                  return true;
-                }},
-               {"alpha", "a number in (0, 1]",
-                [](double v, RenderOptions& o) {
-                  if (!(v > 0 && v <= 1)) return false;
-                  o.alpha = v;
-                  return true;
-                }}};
+  t.options = {number_option("radius", "a radius > 0 (scene units)", [](double v) { return v > 0 && std::isfinite(v); },
+                             &RenderOptions::radius),
+               number_option("alpha", "a number in (0, 1]", [](double v) { return v > 0 && v <= 1; }, &RenderOptions::alpha)};
   return t;
 }
 
@@ -82,11 +74,7 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
 Technique vcm_technique() {
   Technique t = merging_technique("vcm", PC_INTEGRATOR_VCM, PC_VCM_CONNECT | PC_VCM_MERGE,
                                   "vertex connection and merging: bdpt's strategies and photon merging, weighted by MIS");
-  t.options.push_back({"merge", "true or false", [](double v, RenderOptions& o) {
-                         if (v != 0 && v != 1) return false;
-                         o.merge = v != 0;
-                         return true;
-                       }});
+  t.options.push_back(flag_option("merge", &RenderOptions::merge));
   return t;
 }
 
