@@ -47,6 +47,7 @@
 #include "light_path.cl"
 #include "direct_light.cl"
 #include "bdpt.cl"
+#include "scan.cl"
 
 /* The unit's range (pixel units: chains pixel_begin + i pixel_stride, i < pixel_count, steps
  * [sample_begin, sample_begin + sample_count)). */
@@ -61,15 +62,9 @@
  * its sampler's iteration, 13-14 its last large step's iteration and step), then 4 numbers per slot, then
  * each slot's last change (an iteration). */
 #define PC_MLT_HEADER_WORDS 16u
-/* Work items of the bootstrap (runtime/technique_mlt.cpp's bootstrap_items: at most 4096, at most the pixels)
- * and blocks of its prefix sum. */
+/* Work items of the bootstrap (runtime/technique_mlt.cpp's bootstrap_items: at most 4096, at most the pixels). */
 #define PC_MLT_BOOTSTRAP_ITEMS 4096u
 inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC_MLT_BOOTSTRAP_ITEMS, h->width * h->height); }
-/* The bootstrap is the same for every unit: a device computes it once (its buffer is kept for the render),
- * and marks it done after the candidates' sums, block offsets and total (bootstrap[C + 257]). */
-#define PC_MLT_BOOTSTRAP_DONE 0x444f4e45u
-inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap);
-#define PC_MLT_SCAN_BLOCKS 256u
 /* The keys (b of MltSampler and SampleKey.sample) of fresh states, beyond any step: the bootstrap's
  * candidates, and (or-ed with the step) a chain's BDPT samples of depths 0 and 1. */
 #define PC_MLT_BOOTSTRAP_SAMPLE 0xfffff000u
@@ -82,8 +77,13 @@ inline uint mlt_depths(__constant const SceneHeader* h) { return max(h->max_dept
 inline uint mlt_candidates(__constant const LightTransportHeader* lt, __constant const SceneHeader* h) {
   return lt->bootstrap * mlt_depths(h);
 }
+/* The bootstrap buffer: the candidates' importances, summed in place by scan.cl's prefix sum (the total at
+ * bootstrap[C], the blocks' offsets after it), then a mark. The bootstrap is the same for every unit: a
+ * device computes it once (its buffer is kept for the render) and marks it done (bootstrap[C + 1 +
+ * PC_SCAN_BLOCKS]). */
+#define PC_MLT_BOOTSTRAP_DONE 0x444f4e45u
 inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap) {
-  return as_uint(bootstrap[mlt_candidates(lt, h) + PC_MLT_SCAN_BLOCKS + 1u]) == PC_MLT_BOOTSTRAP_DONE;
+  return as_uint(bootstrap[mlt_candidates(lt, h) + 1u + PC_SCAN_BLOCKS]) == PC_MLT_BOOTSTRAP_DONE;
 }
 /* Bootstrap candidate c: depth 2 + c % (D - 1), fresh numbers of key (c, PC_MLT_BOOTSTRAP_SAMPLE). */
 inline uint mlt_candidate_depth(__constant const SceneHeader* h, uint c) { return PC_MLT_FIRST_DEPTH + c % mlt_depths(h); }
@@ -197,47 +197,27 @@ __kernel void mlt_bootstrap(PC_SCENE_PARAMS, __constant const LightTransportHead
   add_splat_counts(stats, &n);
 }
 
-/* The candidates' running sums, in three launches (vcm.cl's scan): each block's over its chunk, the blocks'
- * offsets (one work item; after the candidates, bootstrap[C + block], and the total at bootstrap[C +
- * PC_MLT_SCAN_BLOCKS]), each chunk's offset added. Float sums in an order fixed by C alone: the same bits on
- * every device. */
-inline uint mlt_scan_chunk(uint candidates) { return (candidates + PC_MLT_SCAN_BLOCKS - 1u) / PC_MLT_SCAN_BLOCKS; }
-
+/* The candidates' running sums (scan.cl), once per device. */
 __kernel void mlt_scan_blocks(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
   uint block = get_global_id(0);
-  if (pixel_count == 0u || sample_begin != 0u || block >= PC_MLT_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
-  uint candidates = mlt_candidates(lt, h), chunk = mlt_scan_chunk(candidates);
-  float sum = 0.0f;
-  for (uint c = block * chunk; c < min(candidates, (block + 1u) * chunk); ++c) {
-    sum += bootstrap[c];
-    bootstrap[c] = sum;
-  }
-  bootstrap[candidates + block] = sum;
+  if (pixel_count == 0u || sample_begin != 0u || block >= PC_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
+  scan_block_float(bootstrap, mlt_candidates(lt, h), block);
 }
 
 __kernel void mlt_scan_offsets(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
   if (get_global_id(0) != 0u || pixel_count == 0u || sample_begin != 0u || mlt_bootstrapped(lt, h, bootstrap)) return;
-  uint candidates = mlt_candidates(lt, h);
-  float total = 0.0f;
-  for (uint block = 0; block < PC_MLT_SCAN_BLOCKS; ++block) {
-    float sum = bootstrap[candidates + block];
-    bootstrap[candidates + block] = total;
-    total += sum;
-  }
-  bootstrap[candidates + PC_MLT_SCAN_BLOCKS] = total;
+  scan_offsets_float(bootstrap, mlt_candidates(lt, h));
 }
 
 __kernel void mlt_scan_add(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
   uint block = get_global_id(0);
-  if (pixel_count == 0u || sample_begin != 0u || block >= PC_MLT_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
-  uint candidates = mlt_candidates(lt, h), chunk = mlt_scan_chunk(candidates);
-  float offset = bootstrap[candidates + block];
-  for (uint c = block * chunk; c < min(candidates, (block + 1u) * chunk); ++c) bootstrap[c] += offset;
+  if (pixel_count == 0u || sample_begin != 0u || block >= PC_SCAN_BLOCKS || mlt_bootstrapped(lt, h, bootstrap)) return;
+  scan_add_float(bootstrap, mlt_candidates(lt, h), block);
 }
 
 __kernel void mlt_bootstrap_done(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float* bootstrap, PC_MLT_UNIT) {
   if (get_global_id(0) != 0u || pixel_count == 0u || sample_begin != 0u) return;
-  bootstrap[mlt_candidates(lt, h) + PC_MLT_SCAN_BLOCKS + 1u] = as_float(PC_MLT_BOOTSTRAP_DONE);
+  bootstrap[mlt_candidates(lt, h) + 1u + PC_SCAN_BLOCKS] = as_float(PC_MLT_BOOTSTRAP_DONE);
 }
 
 /* Adds contribution c times `weight` to a splat layer. */
@@ -296,7 +276,7 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   if (sample_begin == 0u) {
     /* A bootstrap candidate in proportion to its importance: the first whose running sum exceeds u total. */
     uint candidates = mlt_candidates(lt, h);
-    float total = bootstrap[candidates + PC_MLT_SCAN_BLOCKS];
+    float total = bootstrap[candidates];
     state[1] = as_uint(total);
     if (candidates > 0u && total > 0.0f) {
       float target = uint_to_unit(hash4(chain, h->seed, 0x5354u, 0x41525431u)) * total;

@@ -29,6 +29,7 @@
 #define PC_VCM 1
 #include "light_path.cl"
 #include "direct_light.cl"
+#include "scan.cl"
 
 /* The hash grid of a unit's light vertices in iteration i: cells 2 r_i wide about the scene's centre,
  * hashed into `table` buckets (a power of two >= the unit's paths); cells[b] .. cells[b + 1] are bucket
@@ -154,8 +155,6 @@ inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, 
 
 #include "bdpt.cl"
 
-/* Blocks of the grid's prefix sum (vcm_scan_*; runtime/technique_vcm.cpp's kScanBlocks). */
-#define PC_VCM_SCAN_BLOCKS 256u
 
 /* The unit's range: light paths [path_begin, path_begin + path_count) of iteration sample_begin
  * (sample_count is 1: Technique::per_sample). */
@@ -191,40 +190,24 @@ __kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
     atomic_inc(cells + grid_bucket_of(light_vertices[item * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
 }
 
-/* The buckets' ends by a prefix sum in three launches of independent work items (no work-group size assumed;
- * a GPU runs PC_VCM_SCAN_BLOCKS chunks at once instead of one thread over every bucket): each block's
- * running sums over its chunk, the blocks' offsets (one work item, kept after the buckets' end,
- * cells[table + 1 + block]), each chunk's offset added. Integer sums: the same bits however it is split. */
-inline uint scan_chunk(uint table) { return (table + PC_VCM_SCAN_BLOCKS - 1u) / PC_VCM_SCAN_BLOCKS; }
-
+/* The buckets' ends by scan.cl's prefix sum (the blocks' offsets after the buckets' end, cells[table + 1 +
+ * block]; the total at cells[table]). */
 __kernel void vcm_scan_blocks(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   uint block = get_global_id(0);
-  if (path_count == 0u || block >= PC_VCM_SCAN_BLOCKS) return;
-  uint table = grid_table(path_count), chunk = scan_chunk(table), end = 0u;
-  for (uint b = block * chunk; b < min(table, (block + 1u) * chunk); ++b) {
-    end += cells[b];
-    cells[b] = end;
-  }
-  cells[table + 1u + block] = end;
+  if (path_count == 0u || block >= PC_SCAN_BLOCKS) return;
+  scan_block_uint(cells, grid_table(path_count), block);
 }
 
 __kernel void vcm_scan_offsets(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   if (get_global_id(0) != 0u || path_count == 0u) return;
-  uint table = grid_table(path_count), total = 0u;
-  for (uint block = 0; block < PC_VCM_SCAN_BLOCKS; ++block) {
-    uint sum = cells[table + 1u + block];
-    cells[table + 1u + block] = total;
-    total += sum;
-  }
-  cells[table] = total;
+  scan_offsets_uint(cells, grid_table(path_count));
 }
 
 /* After it cells[b] is bucket b's end: vcm_scatter counts it down to the bucket's start. */
 __kernel void vcm_scan_add(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   uint block = get_global_id(0);
-  if (path_count == 0u || block >= PC_VCM_SCAN_BLOCKS) return;
-  uint table = grid_table(path_count), chunk = scan_chunk(table), offset = cells[table + 1u + block];
-  for (uint b = block * chunk; b < min(table, (block + 1u) * chunk); ++b) cells[b] += offset;
+  if (path_count == 0u || block >= PC_SCAN_BLOCKS) return;
+  scan_add_uint(cells, grid_table(path_count), block);
 }
 
 __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,

@@ -13,10 +13,9 @@
 
 namespace {
 
-// kernels/mlt.cl's PC_MLT_HEADER_WORDS, PC_MLT_BOOTSTRAP_ITEMS, PC_MLT_SCAN_BLOCKS and PC_MLT_MAX_DEPTH.
+// kernels/mlt.cl's PC_MLT_HEADER_WORDS, PC_MLT_BOOTSTRAP_ITEMS and PC_MLT_MAX_DEPTH.
 constexpr uint32_t kHeaderWords = 16;
 constexpr size_t kBootstrapItems = 4096;
-constexpr size_t kScanBlocks = 256;
 // kernels/mlt.cl's mlt_bootstrap_items: the bootstrap's work items for a film of `pixels`.
 size_t bootstrap_items(uint32_t pixels) { return std::min<size_t>(kBootstrapItems, pixels); }
 constexpr uint32_t kMaxDepth = 16;
@@ -50,19 +49,19 @@ Technique mlt_technique() {
   t.phases = {
       {"bootstrap", "mlt_bootstrap", {"lt", "emission_cdf", "stats", "light_vertices", "bootstrap", "unit"},
        [](uint32_t, uint32_t pixels) { return bootstrap_items(pixels); }},
-      {"scan", "mlt_scan_blocks", scan, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan", "mlt_scan_blocks", scan, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
       {"scan_offsets", "mlt_scan_offsets", scan, [](uint32_t, uint32_t) { return size_t(1); }},
-      {"scan_add", "mlt_scan_add", scan, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan_add", "mlt_scan_add", scan, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
       {"bootstrap_done", "mlt_bootstrap_done", scan, [](uint32_t, uint32_t) { return size_t(1); }},
       {"chains", "mlt_chains", {"lt", "emission_cdf", "film", "stats", "light_vertices", "bootstrap", "unit"}, {}},
   };
   // Light vertex slots for each chain of the largest unit, or each bootstrap work item; the candidates'
-  // importances (B per depth 2 .. D), the prefix sum's block sums and total, and the done mark.
+  // importances (B per depth 2 .. D), the prefix sum's total and block offsets (kernels/scan.cl), the done mark.
   t.buffers = {{"light_vertices", [](const TechniqueSizes& s) {
                   return std::max<size_t>(s.unit_items, bootstrap_items(s.pixels)) * light_vertex_slots(s) * sizeof(LightVertex);
                 }},
                {"bootstrap", [](const TechniqueSizes& s) {
-                  return (size_t(s.bootstrap) * s.max_depth + kScanBlocks + 2) * sizeof(float);
+                  return (size_t(s.bootstrap) * s.max_depth + 1 + PC_SCAN_BLOCKS + 1) * sizeof(float);
                 }}};
   t.max_unit_items = [](const TechniqueSizes& s) { return light_vertex_unit_paths(s, 0); };
   t.build_options = splat_build_options;

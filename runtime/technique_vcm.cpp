@@ -21,9 +21,6 @@ size_t grid_table(uint32_t paths) {
   return t;
 }
 
-// kernels/vcm.cl's PC_VCM_SCAN_BLOCKS: the grid's prefix sum in blocks of buckets.
-constexpr size_t kScanBlocks = 256;
-
 Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const char* summary) {
   Technique t = bdpt_technique();
   t.name = name;
@@ -36,7 +33,7 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   // and entries.
   t.buffers = {{"light_vertices", light_vertex_bytes},
                {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
-               {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + kScanBlocks) * sizeof(uint32_t); }},
+               {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + PC_SCAN_BLOCKS) * sizeof(uint32_t); }},
                {"entries", [](const TechniqueSizes& s) { return s.unit_items * light_vertex_slots(s) * sizeof(uint32_t); }}};
   t.max_unit_items = [](const TechniqueSizes& s) {
     return light_vertex_unit_paths(s, light_vertex_slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
@@ -46,9 +43,9 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
       {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t) { return grid_table(count) + 1; }},
       {"light", "vcm_light", paths, {}},
       {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}, {}},
-      {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
       {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
-      {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t) { return kScanBlocks; }},
+      {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
       {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}, {}},
       {"camera", "vcm_camera",
        {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "entries", "unit"},

@@ -23,6 +23,10 @@
 #define PC_VCM_MERGE 2u   /* vertex merging */
 #define PC_VCM_SPPM 4u    /* progressive photon mapping: merge at the first non-delta camera vertex only */
 
+/* Blocks of the device's prefix sums (kernels/scan.cl: vcm's grid, mlt's bootstrap); an array of n entries
+ * takes n + 1 + PC_SCAN_BLOCKS. */
+#define PC_SCAN_BLOCKS 256u
+
 /* The splat film: per pixel PC_SPLAT_WORDS unsigned 64-bit fixed-point sums (each two uint words, low
  * word first), added with integer atomics in any order to the same bits:
  *   [0, 3)  RGB of the even-numbered samples' splats, in units of 1 / splat_scale
