@@ -158,9 +158,9 @@ inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHe
   } else {
     uint px = pixel % h->width, py = pixel / h->width;
     if (!all) { /* the pixel the state's image position is in */
-      float2 raster = mlt_numbers(m, 0u).xy * (float2)((float)h->width, (float)h->height);
-      px = min((uint)raster.x, h->width - 1u);
-      py = min((uint)raster.y, h->height - 1u);
+      uint2 p = mlt_pixel(h, mlt_numbers(m, 0u).xy);
+      px = p.x;
+      py = p.y;
     }
     out->kind = PC_MLT_PIXEL;
     out->raster = (float2)((float)px, (float)py);
@@ -287,10 +287,10 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
         else lo = mid + 1u;
       }
       depth = mlt_candidate_depth(h, lo);
-      /* Its numbers, every slot's, as the bootstrap read them; the chain's iteration 0. */
-      for (uint k = 0; k < 4u * slot_count; ++k) slots.x[k] = mlt_uniform(lo, PC_MLT_BOOTSTRAP_SAMPLE, k, h->seed);
+      /* Its numbers, every slot's, as the bootstrap read them (then the chain's, at iteration 0). */
       MltSampler start;
-      mlt_fresh(&start, &scratch, h, lo, PC_MLT_BOOTSTRAP_SAMPLE);
+      mlt_fresh(&start, &slots, h, lo, PC_MLT_BOOTSTRAP_SAMPLE);
+      for (uint slot = 0; slot < slot_count; ++slot) mlt_ensure_ready(&start, slot);
       MltSplat splat;
       importance = mlt_evaluate(&sc, lt, emission_cdf, vertices, &start, depth, false, 0u, lo, PC_MLT_BOOTSTRAP_SAMPLE, &n,
                                 &now, &splat);
@@ -352,13 +352,8 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
         m.last_large = m.iteration;
         m.last_large_step = step;
       }
-    } else { /* the changed slots back, and the iteration */
-      for (uint j = 0; j < m.changed_count; ++j) {
-        uint slot = slots.changed[j];
-        for (uint k = 0; k < 4u; ++k) slots.x[4u * slot + k] = slots.backup[4u * slot + k];
-        slots.modified[slot] = slots.backup_modified[slot];
-      }
-      --m.iteration;
+    } else {
+      mlt_reject(&m);
     }
   }
   state[0] = depth;

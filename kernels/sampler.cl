@@ -131,11 +131,12 @@ inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
 
 /* A state's numbers, mutated lazily (pbrt-v4's MLTSampler): a slot is brought to the current iteration
  * when read. Either fresh (every slot uniform from hash (a, b, its index): bootstrap candidates, a chain's
- * full BDPT samples) or a chain's step (a = chain, b = step): a large step takes uniform numbers from (a,
- * b); a small step moves a slot last changed n iterations ago by Kelemen's exponential mutation, its size
- * times sqrt(n) (the n steps it missed, as if each had moved it: a symmetric move all the same), after
- * resetting it to its value at the last accepted large step if it was last changed before it. The slots a
- * step changes are kept to be put back if the proposal is rejected; iterations count accepted steps. */
+ * BDPT samples of depths 0 and 1) or a chain's step (a = chain, b = step): a large step takes uniform
+ * numbers from (a, b); a small step moves a slot last changed n iterations ago by Kelemen's exponential
+ * mutation, its size times sqrt(n) (the n steps it missed, as if each had moved it: a symmetric move all the
+ * same), after resetting it to its value at the last accepted large step if it was last changed before it.
+ * The slots a step changes are kept to be put back if the proposal is rejected (mlt_reject); iterations count
+ * accepted steps. */
 typedef struct MltSampler {
   float* x;                 /* 4 per slot */
   uint* modified;           /* per slot: the iteration of its last change */
@@ -162,22 +163,24 @@ inline float mlt_mutate(float x, float size, uint bits) {
   return y < 1.0f ? y : 0.0f;
 }
 
+/* Slot `slot`'s numbers uniform from hash (a, b). */
+inline void mlt_uniform_slot(MltSampler* m, uint slot, uint b) {
+  for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, b, 4u * slot + k, m->seed);
+}
+
 /* Slot `slot` at the sampler's iteration. */
 inline void mlt_ensure_ready(MltSampler* m, uint slot) {
   if (m->modified[slot] == m->iteration) return;
-  if (m->fresh) {
-    for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->b, 4u * slot + k, m->seed);
-    m->modified[slot] = m->iteration;
-    return;
+  if (!m->fresh) {
+    for (uint k = 0; k < 4u; ++k) m->backup[4u * slot + k] = m->x[4u * slot + k];
+    m->backup_modified[slot] = m->modified[slot];
+    m->changed[m->changed_count++] = slot;
   }
-  for (uint k = 0; k < 4u; ++k) m->backup[4u * slot + k] = m->x[4u * slot + k];
-  m->backup_modified[slot] = m->modified[slot];
-  m->changed[m->changed_count++] = slot;
-  if (m->large) {
-    for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->b, 4u * slot + k, m->seed);
+  if (m->fresh || m->large) {
+    mlt_uniform_slot(m, slot, m->b);
   } else {
     if (m->modified[slot] < m->last_large) {
-      for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, m->last_large_step, 4u * slot + k, m->seed);
+      mlt_uniform_slot(m, slot, m->last_large_step);
       m->modified[slot] = m->last_large;
     }
     float size = m->size * sqrt((float)(m->iteration - m->modified[slot]));
@@ -185,6 +188,22 @@ inline void mlt_ensure_ready(MltSampler* m, uint slot) {
       m->x[4u * slot + k] = mlt_mutate(m->x[4u * slot + k], size, hash4(m->a, m->b, 4u * slot + k, m->seed ^ 0x6d757421u));
   }
   m->modified[slot] = m->iteration;
+}
+
+/* A rejected proposal: the slots it changed back as they were, and the iteration. */
+inline void mlt_reject(MltSampler* m) {
+  for (uint j = 0; j < m->changed_count; ++j) {
+    uint slot = m->changed[j];
+    for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = m->backup[4u * slot + k];
+    m->modified[slot] = m->backup_modified[slot];
+  }
+  --m->iteration;
+}
+
+/* The pixel a state's image position u (its camera group's xy, in [0, 1)) lies in. */
+inline uint2 mlt_pixel(__constant const SceneHeader* h, float2 u) {
+  float2 raster = u * (float2)((float)h->width, (float)h->height);
+  return min(convert_uint2(raster), (uint2)(h->width - 1u, h->height - 1u));
 }
 
 /* Slot `slot`'s four numbers at the sampler's iteration. */
@@ -201,10 +220,7 @@ inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group
   uint slot = mlt_slot(h, group);
   if (slot != PC_INVALID) {
     float4 u = mlt_numbers(key.mlt, slot);
-    if (group == PC_DIM_CAMERA) {
-      float2 raster = u.xy * (float2)((float)h->width, (float)h->height);
-      u.xy = raster - min(floor(raster), (float2)((float)(h->width - 1u), (float)(h->height - 1u)));
-    }
+    if (group == PC_DIM_CAMERA) u.xy = u.xy * (float2)((float)h->width, (float)h->height) - convert_float2(mlt_pixel(h, u.xy));
     return u;
   }
 #endif
