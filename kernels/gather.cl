@@ -108,10 +108,10 @@ inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray, float
   }
 }
 
-/* The camera path of `key` at pixel (px, py) to its first non-delta vertex (walk_to_non_delta). */
-inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, uint px, uint py, float3* radiance, uint* rays,
-                                GatherPoint* g) {
-  return walk_to_non_delta(sc, key, camera_path_ray(sc->h, key, px, py), (float3)(1.0f), 0u, true, radiance, rays, g);
+/* The camera path of `key` (at its pixel) to its first non-delta vertex (walk_to_non_delta). */
+inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, float3* radiance, uint* rays, GatherPoint* g) {
+  Ray ray = camera_path_ray(sc->h, key, key.pixel % sc->h->width, key.pixel / sc->h->width);
+  return walk_to_non_delta(sc, key, ray, (float3)(1.0f), 0u, true, radiance, rays, g);
 }
 
 /* Next-event estimation at g (unweighted: the gathering integrators make direct light no other way). */
@@ -175,7 +175,7 @@ __kernel void ir_gather(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   float3 L = (float3)(0.0f);
   GatherPoint g;
-  if (camera_to_non_delta(&sc, key, pixel % h->width, pixel / h->width, &L, &n.rays, &g)) {
+  if (camera_to_non_delta(&sc, key, &L, &n.rays, &g)) {
     L += gather_direct(&sc, key, &g, &n.rays);
     float3 indirect = (float3)(0.0f);
     uint slots = light_vertex_slots(h), paths = lt->light_paths;
@@ -262,8 +262,7 @@ inline float hit_area(const SceneData* sc, const Hit* hit) {
 inline float3 radiosity_at(const SceneData* sc, __constant const LightTransportHeader* lt, __global const uint* bins,
                            const GatherPoint* g) {
   __global const uint* bin = bins + PC_BIN_WORDS * g->s.prim;
-  float3 power = (float3)((float)((ulong)bin[0] | (ulong)bin[1] << 32), (float)((ulong)bin[2] | (ulong)bin[3] << 32),
-                          (float)((ulong)bin[4] | (ulong)bin[5] << 32));
+  float3 power = (float3)((float)splat_word_pair(bin), (float)splat_word_pair(bin + 2), (float)splat_word_pair(bin + 4));
   float area = hit_area(sc, &g->hit);
   if (!(area > 0.0f)) return (float3)(0.0f);
   return g->m.color.xyz * power / (lt->bin_scale * (float)lt->light_paths * area * PC_PI);
@@ -279,7 +278,7 @@ __kernel void rad_display(PC_SCENE_PARAMS, __constant const LightTransportHeader
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   float3 L = (float3)(0.0f);
   GatherPoint x;
-  if (camera_to_non_delta(&sc, key, pixel % h->width, pixel / h->width, &L, &n.rays, &x)) {
+  if (camera_to_non_delta(&sc, key, &L, &n.rays, &x)) {
     if (!lt->final_gather) {
       L += x.throughput * radiosity_at(&sc, lt, bins, &x);
     } else if (x.depth < h->max_depth) {

@@ -26,6 +26,9 @@ inline void splat_add_u64(volatile __global uint* word, ulong q) {
 #endif
 }
 
+/* The 64-bit sum of a word pair (low word first), once no more is added to it. */
+inline ulong splat_word_pair(__global const uint* word) { return (ulong)word[0] | (ulong)word[1] << 32; }
+
 /* v (>= 0, finite) in fixed point with `scale` units per unit: false (nothing added) when too large. */
 inline bool splat_add(volatile __global uint* word, float v, float scale) {
   float q = v * scale;
