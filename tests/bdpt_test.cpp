@@ -3,27 +3,14 @@
 // pixel, a point light inside glass that path tracing cannot see at all, and the splat film's
 // determinism. Tolerances are in standard errors, from independent seeds or the films' variances.
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "light_transport_support.h"
 
 using namespace light_transport_test;
 
 namespace {
-
-// The Szirmay-Kalos sphere (scripts/make-cap-sphere) and its exact values after n reflections.
-DeviceScene cap_sphere(std::vector<double>* exact) {
-  std::string dir = temp_dir() + "/bdpt-cap";
-  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir +
-                    " --level 5 --size 16 >/dev/null";
-  EXPECT_EQ(std::system(cmd.c_str()), 0);
-  *exact = nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
-  return load_device_scene(dir + "/scene.json");
-}
 
 // A checker-textured floor and back wall, a textured plastic ball and a small emitting sphere above.
 std::string textured_scene() {

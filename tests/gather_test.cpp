@@ -56,12 +56,8 @@ std::map<uint32_t, std::pair<double, double>> per_shape_sums(const Film& ids, co
 // after n reflections. Instant radiosity without a clamp is unbiased anywhere; radiosity's per-triangle
 // irradiance is exact wherever the irradiance is uniform, with and without final gather.
 TEST(Gather, CapSphereExact) {
-  std::string dir = temp_dir() + "/gather-cap";
-  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir + " --level 5 --size 16 >/dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  const std::vector<double> exact =
-      nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
-  DeviceScene scene = load_device_scene(dir + "/scene.json");
+  std::vector<double> exact;
+  DeviceScene scene = cap_sphere(&exact);
   struct Case {
     const char* integrator;
     bool final_gather;

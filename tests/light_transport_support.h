@@ -1,14 +1,17 @@
 // What the tests of the light-transport integrators (`light`, `bdpt`, `vcm`, `bpm`, `sppm`, the gathering
 // `instant_radiosity` and `radiosity`, and `mlt`) share: a render with the options they
-// vary, image means over independent seeds, and the per-pixel z-test of two films.
+// vary, image means over independent seeds, the cap sphere and the furnace, and the per-pixel z-test of two films.
 #pragma once
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "test_support.h"
 
@@ -73,6 +76,17 @@ inline MeanStd seeded_mean(const DeviceScene& scene, Options o, int seeds) {
 
 inline DeviceScene scene_from(const std::string& name, const std::string& json) {
   return load_device_scene(write_temp_file(name, json));
+}
+
+// The Szirmay-Kalos sphere (scripts/make-cap-sphere: level 5, 16 x 16 pixels) and its exact values after n
+// reflections: every wall pixel is f Le rho (1 - rho^n) / (1 - rho).
+inline DeviceScene cap_sphere(std::vector<double>* exact) {
+  std::string dir = temp_dir() + "/cap-sphere";
+  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir +
+                    " --level 5 --size 16 >/dev/null";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+  *exact = nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
+  return load_device_scene(dir + "/scene.json");
 }
 
 // The closed furnace of tests/furnace_test.cpp at 16 x 16: a sphere of radius 2 seen from inside, whose

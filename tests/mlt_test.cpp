@@ -3,11 +3,8 @@
 // variance from independent seeds: a chain's steps are correlated, so a render's own variance estimate is
 // too low), and bitwise determinism over every split, a resume from a checkpoint's chains included.
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "light_transport_support.h"
 
@@ -41,12 +38,8 @@ TEST(Mlt, FurnaceExact) {
 // The Szirmay-Kalos cap sphere (scripts/make-cap-sphere): every wall pixel is f Le rho (1 - rho^n) / (1 - rho)
 // after n reflections.
 TEST(Mlt, CapSphereExact) {
-  std::string dir = temp_dir() + "/mlt-cap";
-  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir + " --level 5 --size 16 >/dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  const std::vector<double> exact =
-      nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
-  DeviceScene scene = load_device_scene(dir + "/scene.json");
+  std::vector<double> exact;
+  DeviceScene scene = cap_sphere(&exact);
   for (uint32_t depth : {1u, 4u}) {
     MeanStd m = seeded_mean(scene, metropolis(32, depth, 4096), 4);
     // The icosphere's tessellation bias is about 0.1 % (docs/accuracy.md): added to the tolerance.

@@ -3,11 +3,8 @@
 // render black, vcm without merging is bdpt bit for bit, agreement with path tracing per pixel, and the
 // splat film's determinism over any split of an iteration into units. Tolerances are in standard errors.
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "light_transport_support.h"
 #include "runtime/light_transport.h"
@@ -62,12 +59,8 @@ std::string sds_unfolded_scene() {
 // / (1 - rho) after n reflections, for each merging integrator (the default radius, and one of a fifth of
 // the sphere's radius, whose ball reaches well across the tessellation's triangles).
 TEST(Vcm, CapSphereExactForEveryMergingIntegrator) {
-  std::string dir = temp_dir() + "/vcm-cap";
-  std::string cmd = std::string("python3 ") + PATHCL_SOURCE_DIR + "/scripts/make-cap-sphere " + dir + " --level 5 --size 16 >/dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  const std::vector<double> exact =
-      nlohmann::json::parse(std::ifstream(dir + "/exact.json"))["exact_sphere_value"].get<std::vector<double>>();
-  DeviceScene scene = load_device_scene(dir + "/scene.json");
+  std::vector<double> exact;
+  DeviceScene scene = cap_sphere(&exact);
   for (const char* integrator : kMerging)
     for (uint32_t depth : {1u, 4u})
       for (double radius : {0.0, 0.2}) {
