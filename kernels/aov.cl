@@ -162,12 +162,14 @@ inline void aov_sample_lanes(const SceneData* sc, ShapeTables shapes, LaneU pixe
 /* One work unit: samples [sample_begin, sample_begin + sample_count) of pixels pixel_begin + i * pixel_stride,
  * i < pixel_count, PC_LANES of them a work item, added to the AOV planes of film that aov->offset names
  * (the others are not rendered). */
-__kernel void aov_pass(PC_SCENE_PARAMS, __constant const AovHeader* aov, __global const uint* prim_shapes,
-                       __global const uint* instance_shapes, __global uint* film, uint pixel_begin, uint pixel_count,
-                       uint pixel_stride, uint sample_begin, uint sample_count) {
-  SceneData sc = PC_SCENE_DATA;
+PC_KERNEL_BODY void aov_pass_item(const SceneData* scene, __constant const AovHeader* aov,
+                                  __global const uint* prim_shapes, __global const uint* instance_shapes,
+                                  __global uint* film, uint pixel_begin, uint pixel_count, uint pixel_stride,
+                                  uint sample_begin, uint sample_count, uint global_id) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   ShapeTables shapes = {prim_shapes, instance_shapes};
-  uint first = get_global_id(0) * PC_LANES;
+  uint first = global_id * PC_LANES;
   if (first >= pixel_count) return;
   uint lanes = min((uint)PC_LANES, pixel_count - first);
   uint pixel_of[PC_LANES];
@@ -197,4 +199,11 @@ __kernel void aov_pass(PC_SCENE_PARAMS, __constant const AovHeader* aov, __globa
       for (uint w = 0; w < aov_words(a); ++w)
         for (uint j = 0; j < lanes; ++j)
           film[aov->offset[a] + aov_words(a) * pixel_of[j] + w] = as_uint(pc_lane(sum[aov_first_float(a) + w], j));
+}
+__kernel void aov_pass(PC_SCENE_PARAMS, __constant const AovHeader* aov, __global const uint* prim_shapes,
+                       __global const uint* instance_shapes, __global uint* film, uint pixel_begin, uint pixel_count,
+                       uint pixel_stride, uint sample_begin, uint sample_count) {
+  SceneData sc = PC_SCENE_DATA;
+  aov_pass_item(&sc, aov, prim_shapes, instance_shapes, film, pixel_begin, pixel_count, pixel_stride, sample_begin,
+                sample_count, get_global_id(0));
 }

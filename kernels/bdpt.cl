@@ -188,11 +188,12 @@ inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTr
  * path_count) (a light subpath and a camera subpath each) for samples [sample_begin, sample_begin +
  * sample_count), into the splat film (cleared by the host per unit); work item i keeps its light subpath's
  * vertices in light_vertices[i max_depth ..). */
-__kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                        __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
-                        uint path_begin, uint path_count, uint sample_begin, uint sample_count) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
+                                   __global LightVertex* light_vertices, uint path_begin, uint path_count,
+                                   uint sample_begin, uint sample_count, uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= path_count) return;
   uint pixel = path_begin + item;
   SampleKey key = light_path_key(h, pixel, sample_begin);
@@ -208,5 +209,12 @@ __kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
     if (splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, s & 1u, L);
   }
   add_splat_counts(stats, &n);
+}
+__kernel void bdpt_pass(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                        __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
+                        uint path_begin, uint path_count, uint sample_begin, uint sample_count) {
+  SceneData sc = PC_SCENE_DATA;
+  bdpt_pass_item(&sc, lt, emission_cdf, film, stats, light_vertices, path_begin, path_count, sample_begin, sample_count,
+                 get_global_id(0));
 }
 #endif

@@ -144,11 +144,12 @@ inline void add_to_pixel(__global float4* film, uint pixel, uint sample, float3 
 
 /* The iteration's light paths j < M: work item i traces j = i, i + pixel_count, ..., each into its slots
  * j max_depth of light_vertices (never an atomic counter), their count into vertex_counts[j]. */
-__kernel void ir_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                       __global SplatStats* stats, __global LightVertex* light_vertices, __global uint* vertex_counts,
-                       PC_GATHER_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void ir_light_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                  __global const float* emission_cdf, __global SplatStats* stats,
+                                  __global LightVertex* light_vertices, __global uint* vertex_counts, PC_GATHER_UNIT,
+                                  uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= pixel_count) return;
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, false, 1u};
@@ -161,14 +162,22 @@ __kernel void ir_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* l
   }
   add_splat_counts(stats, &n);
 }
+__kernel void ir_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                       __global SplatStats* stats, __global LightVertex* light_vertices, __global uint* vertex_counts,
+                       PC_GATHER_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  ir_light_item(&sc, lt, emission_cdf, stats, light_vertices, vertex_counts, pixel_begin, pixel_count, pixel_stride,
+                sample_begin, sample_count, get_global_id(0));
+}
 
 /* Each pixel of the unit: its camera path, next-event estimation and a connection to every virtual point
  * light at its first non-delta vertex. */
-__kernel void ir_gather(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float4* film,
-                        __global SplatStats* stats, __global const LightVertex* light_vertices,
-                        __global const uint* vertex_counts, PC_GATHER_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void ir_gather_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                   __global float4* film, __global SplatStats* stats,
+                                   __global const LightVertex* light_vertices, __global const uint* vertex_counts,
+                                   PC_GATHER_UNIT, uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= pixel_count) return;
   uint pixel = pixel_begin + item * pixel_stride;
   SampleKey key = light_path_key(h, pixel, sample_begin);
@@ -205,6 +214,13 @@ __kernel void ir_gather(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   add_to_pixel(film, pixel, sample_begin, L, &n);
   add_splat_counts(stats, &n);
 }
+__kernel void ir_gather(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float4* film,
+                        __global SplatStats* stats, __global const LightVertex* light_vertices,
+                        __global const uint* vertex_counts, PC_GATHER_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  ir_gather_item(&sc, lt, film, stats, light_vertices, vertex_counts, pixel_begin, pixel_count, pixel_stride,
+                 sample_begin, sample_count, get_global_id(0));
+}
 
 /* ---- radiosity -------------------------------------------------------------------------------------- */
 
@@ -224,11 +240,13 @@ __kernel void rad_clear(PC_SCENE_PARAMS, __global uint* bins, PC_GATHER_UNIT) {
 }
 
 /* The iteration's light paths, each vertex's arriving power added to its primitive's sums. */
-__kernel void rad_shoot(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                        __global SplatStats* stats, __global LightVertex* light_vertices, __global uint* bins,
-                        PC_GATHER_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0), items = shoot_items(h, pixel_count);
+PC_KERNEL_BODY void rad_shoot_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, __global SplatStats* stats,
+                                   __global LightVertex* light_vertices, __global uint* bins, PC_GATHER_UNIT,
+                                   uint global_id) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
+  uint item = global_id, items = shoot_items(h, pixel_count);
   if (item >= items) return;
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, false, 1u};
@@ -247,6 +265,13 @@ __kernel void rad_shoot(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
     }
   }
   add_splat_counts(stats, &n);
+}
+__kernel void rad_shoot(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                        __global SplatStats* stats, __global LightVertex* light_vertices, __global uint* bins,
+                        PC_GATHER_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  rad_shoot_item(&sc, lt, emission_cdf, stats, light_vertices, bins, pixel_begin, pixel_count, pixel_stride,
+                 sample_begin, sample_count, get_global_id(0));
 }
 
 /* The area of the primitive a hit found (leaf-ordered prims: triangles in device coordinates; the
@@ -268,10 +293,11 @@ inline float3 radiosity_at(const SceneData* sc, __constant const LightTransportH
   return g->m.color.xyz * power / (lt->bin_scale * (float)lt->light_paths * area * PC_PI);
 }
 
-__kernel void rad_display(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float4* film,
-                          __global SplatStats* stats, __global const uint* bins, PC_GATHER_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void rad_display_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                     __global float4* film, __global SplatStats* stats, __global const uint* bins,
+                                     PC_GATHER_UNIT, uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= pixel_count) return;
   uint pixel = pixel_begin + item * pixel_stride;
   SampleKey key = light_path_key(h, pixel, sample_begin);
@@ -300,4 +326,10 @@ __kernel void rad_display(PC_SCENE_PARAMS, __constant const LightTransportHeader
   }
   add_to_pixel(film, pixel, sample_begin, L, &n);
   add_splat_counts(stats, &n);
+}
+__kernel void rad_display(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global float4* film,
+                          __global SplatStats* stats, __global const uint* bins, PC_GATHER_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  rad_display_item(&sc, lt, film, stats, bins, pixel_begin, pixel_count, pixel_stride, sample_begin, sample_count,
+                   get_global_id(0));
 }

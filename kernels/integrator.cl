@@ -217,10 +217,12 @@ inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_sample
 #define PC_ITEM_PIXELS 1u
 #define PC_RESULTS 1u
 #endif
-__kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats, uint pixel_begin,
-                          uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
-  SceneData sc = PC_SCENE_DATA;
-  uint first = get_global_id(0) * PC_ITEM_PIXELS;
+PC_KERNEL_BODY void render_pass_item(const SceneData* scene, __global float4* film, __global UnitStats* stats,
+                                     uint pixel_begin, uint pixel_count, uint pixel_stride, uint sample_begin,
+                                     uint sample_count, uint global_id) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
+  uint first = global_id * PC_ITEM_PIXELS;
   if (first >= pixel_count || sample_count == 0u) return;
   uint tasks = (min(first + PC_ITEM_PIXELS, pixel_count) - first) * sample_count;
   uint rays = 0u, nan_samples = 0u, inf_samples = 0u, negative_samples = 0u;
@@ -297,4 +299,10 @@ __kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitS
     }
   }
   add_unit_stats(stats, rays, nan_samples, inf_samples, negative_samples);
+}
+__kernel void render_pass(PC_SCENE_PARAMS, __global float4* film, __global UnitStats* stats, uint pixel_begin,
+                          uint pixel_count, uint pixel_stride, uint sample_begin, uint sample_count) {
+  SceneData sc = PC_SCENE_DATA;
+  render_pass_item(&sc, film, stats, pixel_begin, pixel_count, pixel_stride, sample_begin, sample_count,
+                   get_global_id(0));
 }

@@ -8,6 +8,14 @@
 #define PC_INV_PI 0.31830988618379067154f
 #define PC_MACHINE_EPSILON (FLT_EPSILON * 0.5f)
 
+/* A large function with several callers, or a kernel's body (scene.cl's PC_KERNEL_BODY), compiled once and
+ * called on x86 CPU devices (PoCL), where its inlined copies cost build time; GPU compilers decide. */
+#ifdef __x86_64__
+#define PC_OUT_OF_LINE __attribute__((noinline))
+#else
+#define PC_OUT_OF_LINE inline
+#endif
+
 /* pbrt's gamma(n): bound on the relative error of n floating-point operations. */
 inline float error_gamma(int n) { return (n * PC_MACHINE_EPSILON) / (1.0f - n * PC_MACHINE_EPSILON); }
 

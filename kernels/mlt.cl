@@ -177,11 +177,12 @@ inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHe
 }
 
 /* The candidates' importances (every unit at step 0; nothing otherwise). */
-__kernel void mlt_bootstrap(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                            __global SplatStats* stats, __global LightVertex* light_vertices, __global float* bootstrap,
-                            PC_MLT_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void mlt_bootstrap_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                       __global const float* emission_cdf, __global SplatStats* stats,
+                                       __global LightVertex* light_vertices, __global float* bootstrap, PC_MLT_UNIT,
+                                       uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (pixel_count == 0u || sample_begin != 0u || item >= mlt_bootstrap_items(h) || mlt_bootstrapped(lt, h, bootstrap)) return;
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MltSlots slots;
@@ -195,6 +196,13 @@ __kernel void mlt_bootstrap(PC_SCENE_PARAMS, __constant const LightTransportHead
                                 PC_MLT_BOOTSTRAP_SAMPLE, &n, &contribution, &splat);
   }
   add_splat_counts(stats, &n);
+}
+__kernel void mlt_bootstrap(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt,
+                            __global const float* emission_cdf, __global SplatStats* stats,
+                            __global LightVertex* light_vertices, __global float* bootstrap, PC_MLT_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  mlt_bootstrap_item(&sc, lt, emission_cdf, stats, light_vertices, bootstrap, pixel_begin, pixel_count, pixel_stride,
+                     sample_begin, sample_count, get_global_id(0));
 }
 
 /* The candidates' running sums (scan.cl), once per device. */
@@ -249,11 +257,12 @@ inline void mlt_near_sample(const SceneData* sc, __constant const LightTransport
 }
 
 /* Each chain of the unit: started at step 0, then its steps of the unit. */
-__kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                         __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
-                         __global const float* bootstrap, PC_MLT_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
+                                    __global LightVertex* light_vertices, __global const float* bootstrap, PC_MLT_UNIT,
+                                    uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= pixel_count || sample_count == 0u) return;
   uint chain = pixel_begin + item * pixel_stride, words = mlt_state_words(h), slot_count = mlt_slots(h);
   __global uint* state = film + chain * words;
@@ -373,4 +382,11 @@ __kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   for (uint k = 0; k < 4u * slot_count; ++k) state[PC_MLT_HEADER_WORDS + k] = as_uint(slots.x[k]);
   for (uint k = 0; k < slot_count; ++k) state[PC_MLT_HEADER_WORDS + 4u * slot_count + k] = slots.modified[k];
   add_splat_counts(stats, &n);
+}
+__kernel void mlt_chains(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                         __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
+                         __global const float* bootstrap, PC_MLT_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  mlt_chains_item(&sc, lt, emission_cdf, film, stats, light_vertices, bootstrap, pixel_begin, pixel_count, pixel_stride,
+                  sample_begin, sample_count, get_global_id(0));
 }

@@ -165,11 +165,12 @@ __kernel void vcm_clear(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   if (path_count > 0u && i <= grid_table(path_count)) cells[i] = 0u;
 }
 
-__kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                        __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
-                        __global uint* vertex_counts, PC_VCM_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint item = get_global_id(0);
+PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
+                                   __global LightVertex* light_vertices, __global uint* vertex_counts, PC_VCM_UNIT,
+                                   uint item) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (item >= path_count) return;
   SampleKey key = light_path_key(h, path_begin + item, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
@@ -178,6 +179,13 @@ __kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
   trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, light_vertices + item * light_vertex_slots(h), &count);
   vertex_counts[item] = count;
   add_splat_counts(stats, &n);
+}
+__kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                        __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
+                        __global uint* vertex_counts, PC_VCM_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  vcm_light_item(&sc, lt, emission_cdf, film, stats, light_vertices, vertex_counts, path_begin, path_count,
+                 sample_begin, sample_count, get_global_id(0));
 }
 
 __kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,
@@ -224,12 +232,12 @@ __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader
 }
 
 /* One work item per pixel of the image. */
-__kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                         __global uint* film, __global SplatStats* stats, __global const LightVertex* light_vertices,
-                         __global const uint* vertex_counts, __global const uint* cells, __global const uint* entries,
-                         PC_VCM_UNIT) {
-  SceneData sc = PC_SCENE_DATA;
-  uint pixel = get_global_id(0);
+PC_KERNEL_BODY void vcm_camera_item(const SceneData* scene, __constant const LightTransportHeader* lt,
+                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
+                                    __global const LightVertex* light_vertices, __global const uint* vertex_counts,
+                                    __global const uint* cells, __global const uint* entries, PC_VCM_UNIT, uint pixel) {
+  SceneData sc = *scene;
+  __constant const SceneHeader* h = sc.h;
   if (path_count == 0u || pixel >= h->width * h->height) return;
   SampleKey key = light_path_key(h, pixel, sample_begin);
   float radius2 = iteration_radius2(lt, sample_begin);
@@ -260,4 +268,12 @@ __kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader*
   }
   n.overflows += merged.overflows;
   add_splat_counts(stats, &n);
+}
+__kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                         __global uint* film, __global SplatStats* stats, __global const LightVertex* light_vertices,
+                         __global const uint* vertex_counts, __global const uint* cells, __global const uint* entries,
+                         PC_VCM_UNIT) {
+  SceneData sc = PC_SCENE_DATA;
+  vcm_camera_item(&sc, lt, emission_cdf, film, stats, light_vertices, vertex_counts, cells, entries, path_begin,
+                  path_count, sample_begin, sample_count, get_global_id(0));
 }
