@@ -39,8 +39,9 @@ typedef struct {
   LaneF area, cos_inner, cos_outer;
 } LightLanes;
 
-/* lights[index] for the lanes in m (the others get the first such lane's). */
-PC_LANE_INLINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
+/* lights[index] for the lanes in m (the others get the first such lane's). Out of line (math.cl): fifteen
+ * gathers, and three callers in the path program. */
+PC_OUT_OF_LINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
   LaneGroups at;
   lane_groups(index, m, &at);
   out->emission = lane_group_gather3(PC_FIELD_F(lights, emission), &at);
