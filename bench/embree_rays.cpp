@@ -1,6 +1,6 @@
 // Embree 3 ray throughput on the same triangles and ray files as `pathcl rays` (scripts/bench/peers).
 //   embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] [--compare PATHCL_HITS] [--packet 1|8|16]
-//               [--robust 0|1]
+//               [--robust 0|1] [--isa NAME]
 // SCENE.obj is `pathcl info --dump-obj` output: all faces in file order form one triangle geometry, so
 // Embree's primID is pathcl's primitive index (scenes without spheres). Rays and hits use pathcl's
 // 32- and 16-byte records (docs/scene-format.md). Traces with rtcIntersect1 (or, with --packet, rtcIntersect8
@@ -8,6 +8,7 @@
 // repetitions, and prints one JSON line: rays, hits, build and per-repetition times, median rays/s, and
 // with --compare the fraction of rays whose primitive (or miss) agrees with pathcl's. --robust 1 sets
 // RTC_SCENE_FLAG_ROBUST (conservative node tests and watertight triangle tests, as pathcl's always are).
+// --isa avx2 (or sse4.2, avx, avx512) caps the instruction set Embree's code uses.
 // Built by scripts/bench/peers (not part of the CMake build, which does not depend on Embree).
 #include <embree3/rtcore.h>
 
@@ -143,8 +144,8 @@ void trace_with(int packet, RTCScene scene, const std::vector<Ray>& rays, std::v
 int main(int argc, char** argv) {
   try {
     if (argc < 3) throw std::runtime_error("usage: embree_rays SCENE.obj RAYS [--threads N] [--repeat R] [--hits OUT] "
-                                           "[--compare PATHCL_HITS] [--packet 1|8|16] [--robust 0|1]");
-    std::string obj = argv[1], ray_path = argv[2], hits_out, compare;
+                                           "[--compare PATHCL_HITS] [--packet 1|8|16] [--robust 0|1] [--isa NAME]");
+    std::string obj = argv[1], ray_path = argv[2], hits_out, compare, isa;
     int threads = 1, repeat = 5, packet = 1, robust = 0;
     for (int i = 3; i + 1 < argc; i += 2) {
       std::string k = argv[i];
@@ -154,6 +155,7 @@ int main(int argc, char** argv) {
       else if (k == "--compare") compare = argv[i + 1];
       else if (k == "--packet") packet = std::atoi(argv[i + 1]);
       else if (k == "--robust") robust = std::atoi(argv[i + 1]);
+      else if (k == "--isa") isa = argv[i + 1];
       else throw std::runtime_error("unknown option " + k);
     }
     if (packet != 1 && packet != 8 && packet != 16) throw std::runtime_error("--packet: 1, 8 or 16 rays");
@@ -163,7 +165,9 @@ int main(int argc, char** argv) {
     std::vector<Ray> rays = read_records<Ray>(ray_path);
 
     auto t0 = std::chrono::steady_clock::now();
-    RTCDevice device = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
+    // isa=avx2 (Embree's device configuration) keeps an AVX-512 machine to Embree's AVX2 code.
+    std::string config = "threads=" + std::to_string(threads) + (isa.empty() ? "" : ",isa=" + isa);
+    RTCDevice device = rtcNewDevice(config.c_str());
     if (!device) throw std::runtime_error("rtcNewDevice failed");
     RTCScene scene = rtcNewScene(device);
     if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);

@@ -19,6 +19,8 @@ import statistics
 import subprocess
 import sys
 
+from avx2 import AVX2_ENV
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 BUILD = os.path.join(ROOT, "build")
 PATHCL = os.path.join(BUILD, "pathcl")
@@ -27,6 +29,10 @@ EMBREE_RAYS = os.path.join(BUILD, "embree_rays")
 BVH_VISITS = os.path.join(BUILD, "bvh_visits")
 WIDTHS = (4, 8, 16)
 BAR_WIDTH = 16  # the layout that the bar and the packets measure: the CPU default with AVX-512
+# --avx2: AVX2 code on an AVX-512 machine (scripts/bench/avx2.py; Embree runs its AVX2 code, the bar measures
+# the 8-wide tree that pathcl picks without AVX-512); main() sets these.
+AVX2 = False
+EMBREE_ISA = None
 
 
 def run(cmd, env=None):
@@ -54,11 +60,17 @@ def embree_rays(obj, rays, threads, compare=None, robust=False):
     """embree_rays' JSON for the ray file with `threads` threads (5 repetitions); compare: pathcl's hit file;
     robust: RTC_SCENE_FLAG_ROBUST (watertight, like pathcl's tests)."""
     cmd = [EMBREE_RAYS, obj, rays, "--threads", str(threads), "--repeat", "5", "--robust", str(int(robust))]
+    if EMBREE_ISA:
+        cmd += ["--isa", EMBREE_ISA]
     return json.loads(run(cmd + (["--compare", compare] if compare else [])))
 
 
 def with_width(width):
-    return dict(os.environ, PATHCL_BVH_WIDTH=str(width))
+    env = dict(os.environ)
+    if AVX2:
+        env.update(AVX2_ENV)
+    env["PATHCL_BVH_WIDTH"] = str(width)
+    return env
 
 
 def pathcl_rays(scene, rays, width, work, hits=None, lanes=1):
@@ -96,7 +108,13 @@ def main():
     ap.add_argument("--bar", type=int, default=0, metavar="ROUNDS",
                     help="only the diffuse-bounce bar: the 16-wide single ray against Embree with 2 threads, alternated "
                          "ROUNDS times (the per-round ratios narrow the figure on a noisy machine)")
+    ap.add_argument("--avx2", action="store_true",
+                    help="AVX2 code on an AVX-512 machine (scripts/bench/avx2.py), Embree with isa=avx2, the bar and "
+                         "packets on the 8-wide tree: a stand-in where no AVX2 machine is at hand")
     args = ap.parse_args()
+    global AVX2, EMBREE_ISA, BAR_WIDTH
+    if args.avx2:
+        AVX2, EMBREE_ISA, BAR_WIDTH = True, "avx2", 8
     work = os.path.join(BUILD, "bench-layouts")
     os.makedirs(work, exist_ok=True)
     scenes = os.path.join(work, "scenes")
@@ -109,7 +127,7 @@ def main():
     run([PATHCL, "rays", big, "--rays", cam, "--hits", cam_hits, "--repeat", "1"], with_width(4))
     run([MAKE_RAYS, "bounce", big, cam, cam_hits, bounce])
 
-    result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
+    result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(), "avx2": args.avx2,
               "pathcl": run([PATHCL, "--version"]).splitlines()[0], "rounds": args.rounds, "rays": {}, "samples": {}}
     if args.bar:
         result["bar"] = bar(big, obj, bounce, work, args.bar)
