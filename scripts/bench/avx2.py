@@ -7,3 +7,8 @@ the vector width are an AVX2 machine's; the caches, clock and memory are this ma
 
 AVX2_ENV = {"POCL_KERNELLIB_NAME": "avx2", "POCL_LLVM_CPU_NAME": "haswell", "PATHCL_LANES": "8",
             "PATHCL_BVH_WIDTH": "8"}
+
+# Mitsuba 3's LLVM variants on AVX2 code (scripts/bench/peer_runners.py --avx2): Dr.Jit's jit_llvm_set_target
+# (libdrjit-core), Haswell without AVX-512 and 8-wide vectors, as Dr.Jit picks on an AVX2 CPU.
+DRJIT_AVX2_TARGET = ("haswell", "-avx512f,-avx512vl,-avx512bw,-avx512dq,-avx512cd,+avx,+avx2,+fma,+f16c,+bmi,+bmi2,"
+                     "+lzcnt,+popcnt", 8)

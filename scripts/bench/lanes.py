@@ -13,7 +13,8 @@ caches) and from the cache (kernel_build_ms of --stats), and reads the stack fra
 kernel (`sub $N, %rsp` of each function of PoCL's shared object, objdump from Debian's binutils): PoCL
 reports 1024 bytes of private memory for every kernel, so the frames are the measure of a work item's
 private memory there (the largest frame, and the sum of all as a bound on the deepest call chain).
-Usage: scripts/bench/lanes [--rounds N] [--scenes cornell,glass-metal,terrain] [--lanes 1,8,16] [--builds]
+Usage: scripts/bench/lanes [--rounds N] [--scenes cornell,glass-metal,terrain] [--lanes 1,8,16] [--builds] [--avx2]
+--avx2: both renderers run AVX2 code on an AVX-512 machine (scripts/bench/avx2.py), 8-wide vectors each.
 Writes bench/results/lanes/<date>T<hhmm>.json and prints a table.
 """
 import argparse
@@ -33,11 +34,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 import export_mitsuba  # noqa: E402
+from avx2 import AVX2_ENV  # noqa: E402
 import scene_model  # noqa: E402
 
 BUILD = os.path.join(ROOT, os.environ.get("PATHCL_BUILD", "build"))
 PATHCL = os.path.join(BUILD, "pathcl")
 WORK = os.path.join(ROOT, "build", "bench-lanes")
+AVX2 = False  # --avx2 (main sets it)
 SCENES = {"cornell": os.path.join(ROOT, "scenes", "cornell-official.json"),
           "glass-metal": os.path.join(ROOT, "scenes", "glass-metal.json")}
 
@@ -62,6 +65,10 @@ def scene_path(name):
     sys.exit("unknown scene %s (cornell, glass-metal, terrain)" % name)
 
 
+def pathcl_env():
+    return dict(os.environ, **AVX2_ENV) if AVX2 else None
+
+
 def mitsuba_env():
     env = dict(os.environ)
     found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM*.so*"))
@@ -73,14 +80,15 @@ def mitsuba_env():
 def pathcl_samples(scene, lanes, spp):
     stats = os.path.join(WORK, "stats.json")
     run([PATHCL, "render", scene, "-o", os.path.join(WORK, "pathcl.exr"), "--quiet", "--sampler", "independent",
-         "--lanes", str(lanes), "--spp", str(spp), "--stats", stats])
+         "--lanes", str(lanes), "--spp", str(spp), "--stats", stats], pathcl_env())
     with open(stats) as f:
         return json.load(f)["samples_per_second"]
 
 
 def mitsuba_samples(xml, variant, spp, pixels):
     out = run([sys.executable, os.path.join(HERE, "peer_runners.py"), "mitsuba", variant, xml, "--spp-series",
-               "%d,%d" % (spp, spp), "--seed", "1", "--out", os.path.join(WORK, "mitsuba-{spp}.exr")], mitsuba_env())
+               "%d,%d" % (spp, spp), "--seed", "1", "--out", os.path.join(WORK, "mitsuba-{spp}.exr")]
+              + (["--avx2"] if AVX2 else []), mitsuba_env())
     lines = [json.loads(l[len("PATHCL_BENCH "):]) for l in out.splitlines() if l.startswith("PATHCL_BENCH ")]
     return pixels * spp / lines[-1]["render_seconds"], lines[-1]["version"]
 
@@ -89,7 +97,8 @@ def builds(scene, lanes):
     """Cold and cached kernel build (ms) of the scene's path program at `lanes`, and the stack frames of its
     compiled kernel on PoCL: (largest frame, its function, sum of all frames)."""
     tmp = tempfile.mkdtemp(prefix="pathcl-builds-")
-    env = dict(os.environ, POCL_CACHE_DIR=os.path.join(tmp, "pocl"), PATHCL_KERNEL_CACHE=os.path.join(tmp, "pathcl"))
+    env = dict(pathcl_env() or os.environ, POCL_CACHE_DIR=os.path.join(tmp, "pocl"),
+               PATHCL_KERNEL_CACHE=os.path.join(tmp, "pathcl"))
     stats = os.path.join(tmp, "stats.json")
     times = []
     for _ in range(2):
@@ -121,12 +130,15 @@ def main():
     ap.add_argument("--lanes", default="1,8,16")
     ap.add_argument("--mitsuba", default="llvm_ad_rgb", help="Mitsuba variants, comma-separated ('' for none)")
     ap.add_argument("--builds", action="store_true", help="also cold and cached build times and stack frames per W")
+    ap.add_argument("--avx2", action="store_true", help="AVX2 code for both renderers (scripts/bench/avx2.py)")
     args = ap.parse_args()
+    global AVX2
+    AVX2 = args.avx2
     os.makedirs(WORK, exist_ok=True)
     lanes = [int(x) for x in args.lanes.split(",") if x]
     variants = [v for v in args.mitsuba.split(",") if v]
     result = {"date": datetime.datetime.now().isoformat(timespec="seconds"), "host": platform.node(),
-              "cpu": platform.processor() or platform.machine(), "rounds": args.rounds,
+              "cpu": platform.processor() or platform.machine(), "rounds": args.rounds, "avx2": args.avx2,
               "pathcl": run([PATHCL, "--version"]).splitlines()[0], "scenes": {}}
     for name in [s for s in args.scenes.split(",") if s]:
         scene = scene_path(name)
@@ -140,7 +152,7 @@ def main():
                                     sampler="independent")
         for l in lanes:  # kernel builds into the cache before the timed rounds
             run([PATHCL, "render", scene, "-o", os.path.join(WORK, "warm.exr"), "--quiet", "--lanes", str(l),
-                 "--spp", "1", "--sampler", "independent"])
+                 "--spp", "1", "--sampler", "independent"], pathcl_env())
         runs = {"pathcl-%d" % l: [] for l in lanes}
         runs.update({"mitsuba-" + v: [] for v in variants})
         version = None

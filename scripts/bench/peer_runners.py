@@ -1,7 +1,7 @@
 """Runs one peer render in this process and prints `PATHCL_BENCH {json}` lines (called by peers.py in a
 subprocess, so that each renderer has the machine to itself and a crash is reported, not fatal).
 
-  peer_runners.py mitsuba VARIANT SCENE.xml --spp-series 1,4,16 --seed S --out PATTERN [--timeout T]
+  peer_runners.py mitsuba VARIANT SCENE.xml --spp-series 1,4,16 --seed S --out PATTERN [--timeout T] [--avx2]
   peer_runners.py luxcore ENGINE DIR --spp-series 1,4,16 --seed S --out PATTERN [--time T]
 
 PATTERN gets {spp} replaced. Mitsuba renders each sample count separately (the scene is loaded once);
@@ -28,10 +28,24 @@ def write_exr(path, rgb):
     OpenEXR.File(header, {c: np.ascontiguousarray(rgb[..., k], dtype=np.float32) for k, c in enumerate("RGB")}).write(path)
 
 
+def drjit_target(dr, cpu, features, width):
+    """Dr.Jit's LLVM backend compiles for cpu with features and width-wide vectors from here on (its C++
+    jit_llvm_set_target; the backend must have started, so a first kernel runs before)."""
+    import ctypes
+    dr.eval(dr.llvm.Float(0) + 1)
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    set_target = getattr(core, "_Z19jit_llvm_set_targetPKcS0_j")
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    set_target(cpu.encode(), features.encode(), width)
+
+
 def mitsuba(args):
     import mitsuba as mi
     mi.set_variant(args.variant)
     import drjit as dr
+    if args.avx2:
+        from avx2 import DRJIT_AVX2_TARGET
+        drjit_target(dr, *DRJIT_AVX2_TARGET)
     params = {"seed": str(args.seed)}
     if args.timeout:
         params["timeout"] = str(args.timeout)
@@ -104,6 +118,7 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--timeout", type=float, default=0, help="Mitsuba: integrator timeout in seconds")
     ap.add_argument("--time", type=float, default=0, help="LuxCore: halt time in seconds")
+    ap.add_argument("--avx2", action="store_true", help="Mitsuba's LLVM variants: AVX2 code (scripts/bench/avx2.py)")
     args = ap.parse_args()
     (mitsuba if args.peer == "mitsuba" else luxcore)(args)
 
