@@ -34,21 +34,6 @@ typedef Bvh4Node WideNode;
 #ifdef PC_BVH_WIDE
 #define wide_load(p) PC_CAT(vload, PC_BVH_WIDE)(0, p)
 #define wide_store(v, p) PC_CAT(vstore, PC_BVH_WIDE)(v, 0, p)
-/* Element i of v (a hit child's entry distance): one vpermps on x86 CPUs, where a store and a load of the
- * element waited for the store to forward (bounce rays 5 % faster on AVX2 code, 3 % on AVX-512). */
-#if PC_BVH_WIDE == 8 && defined(__clang__) && defined(__AVX2__)
-inline float wide_lane(WideF v, uint i) {
-  WideF r = __builtin_ia32_permvarsf256(v, (int8)((int)i));
-  return r.s0;
-}
-#elif PC_BVH_WIDE == 16 && defined(__clang__) && defined(__AVX512F__)
-inline float wide_lane(WideF v, uint i) {
-  WideF r = __builtin_ia32_permvarsf512(v, (int16)((int)i));
-  return r.s0;
-}
-#else
-inline float wide_lane(WideF v, uint i) { float d[PC_BVH_WIDE]; wide_store(v, d); return d[i]; }
-#endif
 #endif
 
 typedef struct {
@@ -571,7 +556,7 @@ __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut,
         uint i = pc_lowest_bit(mask);
         mask &= mask - 1u;
         uint near_ref = n->child[i];
-        float near_d = wide_lane(entry, i);
+        float near_d = pc_lane(entry, i);
         if (mask == 0u) {
           ref = near_ref;
           continue;
@@ -579,7 +564,7 @@ __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut,
         i = pc_lowest_bit(mask);
         mask &= mask - 1u;
         uint far_ref = n->child[i];
-        float far_d = wide_lane(entry, i);
+        float far_d = pc_lane(entry, i);
         order_pair(&near_d, &near_ref, &far_d, &far_ref);
         if (mask == 0u) {
           prefetch_subtree(nodes, blocks, far_ref);
@@ -600,7 +585,7 @@ __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut,
         while (mask != 0u) {
           i = pc_lowest_bit(mask);
           mask &= mask - 1u;
-          float di = wide_lane(entry, i);
+          float di = pc_lane(entry, i);
           uint ri = n->child[i];
           prefetch_subtree(nodes, blocks, ri);
           int j = sp;
