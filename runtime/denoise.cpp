@@ -11,6 +11,15 @@
 
 #include "runtime/errors.h"
 
+// AddressSanitizer's build: gcc says so with __SANITIZE_ADDRESS__, clang 14 only through __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+#define PATHCL_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PATHCL_ASAN 1
+#endif
+#endif
+
 namespace {
 
 // The parts of OIDN 2.x's C API that pathcl calls, declared here rather than taken from
@@ -106,7 +115,7 @@ OidnApi load_oidn() {
   get(api.executeFilter, "oidnExecuteFilter");
   get(api.releaseFilter, "oidnReleaseFilter");
   if (!missing.empty()) api.error = std::string(how_to_get_it) + " (" + loaded + " is not: it lacks " + missing + ")";
-#if defined(__SANITIZE_ADDRESS__)
+#ifdef PATHCL_ASAN
   // OIDN's device starts oneTBB, which opens libtbbbind with RTLD_DEEPBIND: ASan's runtime refuses that by
   // ending the process (google/sanitizers issue 611), so a sanitizer build finds the library and stops there.
   else

@@ -553,7 +553,7 @@ TEST(PbrtImport, AnImageLightsIlluminanceIsPbrtsUpperHemisphereEstimate) {
   // A map of 1 above the horizon and 7 below: only the upper texels count; for 64 x 64 texels their sum
   // comes to about pi / 2 (half the texels, cos theta 1/2 on average).
   const int n = 64;
-  auto upper = [n](int x, int y) { return std::abs(2 * (x + 0.5) / n - 1) + std::abs(2 * (y + 0.5) / n - 1) < 1; };
+  auto upper = [&](int x, int y) { return std::abs(2 * (x + 0.5) / n - 1) + std::abs(2 * (y + 0.5) / n - 1) < 1; };
   double sum = 0;
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {

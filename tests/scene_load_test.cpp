@@ -180,7 +180,6 @@ TEST(SceneLoad, SubdivideKeepsTheSurfaceWatertight) {
     const auto& [a, b, c] = m.triangles[t];
     return glm::cross(m.positions[b] - m.positions[a], m.positions[c] - m.positions[a]) * 0.5;
   };
-  glm::dvec3 plain_sum(0), fine_sum(0);
   double plain_area = 0, fine_area = 0;
   for (size_t t = 0; t < plain.triangles.size(); ++t) {
     plain_area += glm::length(area_and_normal(plain, t));

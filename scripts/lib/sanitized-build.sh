@@ -1,0 +1,31 @@
+# Sourced by scripts/sanitize and scripts/fuzz: installs clang with libFuzzer and the sanitizer runtimes, and
+# configures build-asan/, the one instrumented build of both. Every source is compiled once with ASan, UBSan
+# (every report fatal) and the fuzzer's coverage instrumentation: the tests link it (the coverage hooks are
+# the sanitizer runtime's no-ops there) and so do the fuzzers (-DPATHCL_FUZZ=ON; fuzz/CMakeLists.txt).
+# -O1 and NDEBUG as in Release (CGAL's precondition checks are off there too), libstdc++'s own checks on
+# (_GLIBCXX_ASSERTIONS), line tables for reports; the tests' own code at -O0 (tests/CMakeLists.txt).
+# clang rather than the Release build's gcc: a second compiler's view of the same code, and 0.6 times gcc's
+# compile time for these flags (scene_load_test.cpp: 11 s against 19 s), which the suite's time needs.
+packages=(clang-14 libclang-rt-14-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing ${missing[*]}" >&2
+  SUDO=""
+  [ "$(id -u)" = 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+# A build-asan/ of the gcc days (or of any other flags) is configured again from scratch.
+sanitized_flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -D_GLIBCXX_ASSERTIONS"
+if [ -f build-asan/CMakeCache.txt ] && ! grep -qF "CMAKE_CXX_FLAGS:STRING=$sanitized_flags" build-asan/CMakeCache.txt; then
+  rm -rf build-asan
+fi
+if [ ! -f build-asan/build.ninja ]; then
+  cmake -S . -B build-asan -G Ninja -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" -DCMAKE_CXX_FLAGS="$sanitized_flags" \
+    -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DPATHCL_SANITIZED=ON -DPATHCL_FUZZ=ON \
+    -DPATHCL_TEST_CODE_OPTIMIZATION=-O0 >/dev/null
+fi
