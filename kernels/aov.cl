@@ -52,15 +52,15 @@ typedef struct {
 } ShapeTables;
 
 /* Where AOV a's float words start in AovLanes.v, and its words a pixel. */
-inline uint aov_first_float(uint a) {
+static inline uint aov_first_float(uint a) {
   return a == PC_AOV_ALBEDO ? 0u : a == PC_AOV_NORMAL ? 3u : a == PC_AOV_DEPTH ? 6u : a == PC_AOV_POSITION ? 7u : 10u;
 }
-inline uint aov_words(uint a) {
+static inline uint aov_words(uint a) {
   return a == PC_AOV_DEPTH || a >= PC_AOV_SHAPE_ID ? 1u : a == PC_AOV_UV ? 2u : 3u;
 }
 
 /* The reflectance the albedo AOV takes at a non-delta surface. */
-inline Lane3 material_albedo_lanes(const MaterialLanes* m) {
+static inline Lane3 material_albedo_lanes(const MaterialLanes* m) {
   Lane3 c = m->color;
   Lane3 phong = lane3(fmin(c.x + m->specular.x, 1.0f), fmin(c.y + m->specular.y, 1.0f), fmin(c.z + m->specular.z, 1.0f));
   Lane3 metal = fresnel_conductor((LaneF)(1.0f), m->specular, m->k);
@@ -69,8 +69,8 @@ inline Lane3 material_albedo_lanes(const MaterialLanes* m) {
 
 /* The AOVs of sample `sample` of each lane's pixel, for the lanes in m (the others get 0); origin: the world
  * position of the device coordinates' origin. */
-inline void aov_sample_lanes(const SceneData* sc, ShapeTables shapes, LaneU pixel, LaneU sample, LaneI m, float3 origin,
-                             AovLanes* a) {
+static inline void aov_sample_lanes(const SceneData* sc, ShapeTables shapes, LaneU pixel, LaneU sample, LaneI m, float3 origin,
+                                    AovLanes* a) {
   __constant const SceneHeader* h = sc->h;
   for (uint k = 0; k < PC_AOV_FLOATS; ++k) a->v[k] = (LaneF)(0.0f);
   a->shape_id = a->material_id = (LaneU)(0u);

@@ -30,10 +30,10 @@
  * the grid's light vertices, into *merged); without connections (bpm, sppm) an emitter counts only where
  * the path to it is specular (merging makes the others), and SPPM stops at its first non-delta vertex,
  * after next-event estimation and merging there, unweighted. */
-inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
-                                   __global const float* emission_cdf, SampleKey key, uint px, uint py,
-                                   const MisFactors* mis, bool own, __global const LightVertex* lv, uint lv_count,
-                                   uint* rays
+static inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                          __global const float* emission_cdf, SampleKey key, uint px, uint py,
+                                          const MisFactors* mis, bool own, __global const LightVertex* lv, uint lv_count,
+                                          uint* rays
 #ifdef PC_VCM
                                    , const MergeGrid* grid, MergeSums* merged, SplatCounts* counts
 #endif

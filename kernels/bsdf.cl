@@ -59,16 +59,16 @@ typedef struct {
   LaneI delta;
 } BsdfSampleLanes;
 
-inline LaneI bsdf_is_delta_lanes(LaneU type) {
+static inline LaneI bsdf_is_delta_lanes(LaneU type) {
   return (type == PC_MAT_MIRROR) | (type == PC_MAT_DIELECTRIC) | (type == PC_MAT_THIN_DIELECTRIC);
 }
 
 /* Where wo is on the back of a two-sided material: the lanes whose directions are mirrored to the front. */
-inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
+static inline LaneI bsdf_flipped_lanes(const MaterialLanes* m, Lane3 wo) { return (wo.z < 0.0f) & (m->type != PC_MAT_DIELECTRIC); }
 
-inline Lane3 flip_z_lanes(Lane3 w, LaneI flip) { return lane3(w.x, w.y, select(w.z, -w.z, flip)); }
+static inline Lane3 flip_z_lanes(Lane3 w, LaneI flip) { return lane3(w.x, w.y, select(w.z, -w.z, flip)); }
 
-inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+static inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   wi = flip_z_lanes(wi, flip);
@@ -96,7 +96,7 @@ inline Lane3 bsdf_eval_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI m
   return f;
 }
 
-inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
+static inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI mask) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   wi = flip_z_lanes(wi, flip);
@@ -124,8 +124,8 @@ inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, LaneI ma
 }
 
 /* u0, u1 for the direction, u2 to choose a lobe. Returns the lanes of mask with a valid sample. */
-inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
-                               BsdfSampleLanes* s) {
+PC_OUT_OF_LINE LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
+                                      BsdfSampleLanes* s) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   LaneI ok = (LaneI)(0), is, valid;
@@ -206,7 +206,7 @@ inline LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF
 
 #if PC_LANES == 1
 /* A Material's BSDF parameters as one lane. */
-inline MaterialLanes material_lanes_of(Material m) {
+static inline MaterialLanes material_lanes_of(Material m) {
   MaterialLanes l;
   l.type = m.type;
   l.color = m.color.xyz;
@@ -220,20 +220,20 @@ inline MaterialLanes material_lanes_of(Material m) {
 }
 
 /* Materials whose every lobe is a delta: light sampling is useless there. */
-inline bool bsdf_is_delta(Material m) { return bsdf_is_delta_lanes(m.type) != 0; }
+static inline bool bsdf_is_delta(Material m) { return bsdf_is_delta_lanes(m.type) != 0; }
 
-inline float3 bsdf_eval(Material m, float3 wo, float3 wi) {
+static inline float3 bsdf_eval(Material m, float3 wo, float3 wi) {
   MaterialLanes l = material_lanes_of(m);
   return bsdf_eval_lanes(&l, wo, wi, 1);
 }
 
-inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
+static inline float bsdf_pdf(Material m, float3 wo, float3 wi) {
   MaterialLanes l = material_lanes_of(m);
   return bsdf_pdf_lanes(&l, wo, wi, 1);
 }
 
 /* u: three numbers, xy for the direction, z to choose a lobe. */
-inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
+static inline bool bsdf_sample(Material m, float3 wo, float3 u, BsdfSample* s) {
   MaterialLanes l = material_lanes_of(m);
   BsdfSampleLanes b;
   bool ok = bsdf_sample_lanes(&l, wo, u.x, u.y, u.z, 1, &b) != 0;

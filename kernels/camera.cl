@@ -16,7 +16,7 @@
 #include "templates/camera.cl"
 
 /* u.xy: position in the pixel (through the filter), u.zw: position on the lens. */
-inline void camera_ray(__constant const SceneHeader* h, uint px, uint py, float4 u, float3* o, float3* d) {
+static inline void camera_ray(__constant const SceneHeader* h, uint px, uint py, float4 u, float3* o, float3* d) {
   lane3f lo, ld;
   camera_ray_lanes(h, px, py, u.x, u.y, u.z, u.w, &lo, &ld);
   *o = (float3)(lo.x, lo.y, lo.z);

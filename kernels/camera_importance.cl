@@ -14,7 +14,7 @@
 #include "camera.cl"
 
 /* The density of sample_filter_1d at offset x (pixels) from the pixel centre. */
-inline float filter_density_1d(__constant const SceneHeader* h, float x) {
+static inline float filter_density_1d(__constant const SceneHeader* h, float x) {
   float r = h->filter_radius, ax = fabs(x);
   if (h->filter == PC_FILTER_TENT) return ax < r ? (r - ax) / (r * r) : 0.0f;
   if (h->filter == PC_FILTER_GAUSSIAN) {
@@ -26,13 +26,13 @@ inline float filter_density_1d(__constant const SceneHeader* h, float x) {
   return ax < 0.5f ? 1.0f : 0.0f;
 }
 
-inline float camera_image_area(__constant const SceneHeader* h) {
+static inline float camera_image_area(__constant const SceneHeader* h) {
   return 4.0f * pc_length(h->cam_right.xyz) * pc_length(h->cam_up.xyz);
 }
 
 /* The image position (pixels, fractional) of the camera ray from lens point o (device coordinates) in unit
  * direction d; false when d points behind the camera. *cos_theta: d's cosine with the axis. */
-inline bool camera_raster(__constant const SceneHeader* h, float3 o, float3 d, float2* raster, float* cos_theta) {
+static inline bool camera_raster(__constant const SceneHeader* h, float3 o, float3 d, float2* raster, float* cos_theta) {
   float3 fwd = h->cam_forward.xyz; /* unit length */
   float c = pc_dot(d, fwd);
   *cos_theta = c;
@@ -51,7 +51,7 @@ inline bool camera_raster(__constant const SceneHeader* h, float3 o, float3 d, f
 /* Importance of the ray from lens point o in direction d summed over the filter, without the filter
  * (pixel count times the directional part): W H / (A cos^4 theta), over pi r^2 for a lens. 0 outside the
  * image (whose border the filter may reach past: rays that land within filter_radius still count). */
-inline float camera_we(__constant const SceneHeader* h, float3 o, float3 d, float2* raster) {
+static inline float camera_we(__constant const SceneHeader* h, float3 o, float3 d, float2* raster) {
   float c;
   if (!camera_raster(h, o, d, raster, &c)) return 0.0f;
   float r = h->filter_radius;
@@ -64,14 +64,14 @@ inline float camera_we(__constant const SceneHeader* h, float3 o, float3 d, floa
 
 /* The density per solid angle of camera ray direction d (unit) from any lens point, the image position
  * uniform over the whole image plane extended past its border (filter excluded): 1 / (A cos^3 theta). */
-inline float camera_direction_pdf(__constant const SceneHeader* h, float3 d) {
+static inline float camera_direction_pdf(__constant const SceneHeader* h, float3 d) {
   float c = pc_dot(d, h->cam_forward.xyz);
   return c > 0.0f ? 1.0f / (camera_image_area(h) * c * c * c) : 0.0f;
 }
 
 /* Densities of the camera ray (o, d): the lens point per area (1 for a pinhole: a delta) and the direction
  * per solid angle, pixel position uniform over the image: camera_direction_pdf inside it, 0 outside. */
-inline void camera_pdf_we(__constant const SceneHeader* h, float3 o, float3 d, float* pdf_pos, float* pdf_dir) {
+static inline void camera_pdf_we(__constant const SceneHeader* h, float3 o, float3 d, float* pdf_pos, float* pdf_dir) {
   float2 raster;
   float c;
   *pdf_pos = h->lens_radius > 0.0f ? 1.0f / (PC_PI * h->lens_radius * h->lens_radius) : 1.0f;
@@ -92,7 +92,7 @@ typedef struct {
 } CameraWiSample;
 
 /* Connects scene point x to the lens: u chooses the lens point. False when the camera cannot see x. */
-inline bool camera_sample_wi(__constant const SceneHeader* h, float3 x, float2 u, CameraWiSample* out) {
+static inline bool camera_sample_wi(__constant const SceneHeader* h, float3 x, float2 u, CameraWiSample* out) {
   float3 p = h->cam_position.xyz;
   if (h->lens_radius > 0.0f) {
     float2 lens = h->lens_radius * sample_concentric_disk(u);

@@ -9,8 +9,8 @@
 
 /* The contribution of connecting camera vertex s (material m, shading frame f, wo_local towards the
  * previous camera vertex; dvcm, dvc its partial sums) to light vertex y, unweighted sums in *others. */
-inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
-                               float wo_ng, float dvcm, float dvc, float vm, __global const LightVertex* y, float* others) {
+static inline float3 connect_vertices(const SceneData* sc, const Surface* s, Material m, const FrameLanes* f, float3 wo_local,
+                                      float wo_ng, float dvcm, float dvc, float vm, __global const LightVertex* y, float* others) {
   float3 d = y->p.xyz - s->p;
   float dist2 = pc_dot(d, d);
   if (!(dist2 > 0.0f)) return (float3)(0.0f);

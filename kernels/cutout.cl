@@ -16,12 +16,12 @@
 
 /* The cutout_seed of a path's ray_index-th ray (PC_RAY_* of sampler.cl: the camera ray, then the shadow
  * ray and the next ray of each scattering event). */
-inline uint cutout_seed(SampleKey key, uint ray_index) {
+static inline uint cutout_seed(SampleKey key, uint ray_index) {
   return hash4(key.pixel, key.sample, key.seed ^ 0x3c6ef372u, ray_index);
 }
 
 /* Whether prim stops a ray with this seed at (u, v). sc == 0: no cut-outs (ray files, test kernels). */
-inline bool cutout_stops(const SceneData* sc, uint prim, float u, float v, uint seed) {
+static inline bool cutout_stops(const SceneData* sc, uint prim, float u, float v, uint seed) {
   if (sc == 0) return true;
   uint material = sc->shading[prim].material;
   float opacity = sc->materials[material].opacity;

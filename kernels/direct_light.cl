@@ -45,7 +45,7 @@ PC_LANE_INLINE LaneI direct_light_lanes(const SceneData* sc, const SurfaceLanes*
 
 /* What the light sample adds where its shadow ray is not blocked, with MIS weight w: throughput f Le |cos| w
  * over the sample's density. */
-inline Lane3 direct_contribution_lanes(Lane3 throughput, const DirectLanes* d, LaneF w) {
+static inline Lane3 direct_contribution_lanes(Lane3 throughput, const DirectLanes* d, LaneF w) {
   return lane3_scale(lane3_mul(lane3_mul(throughput, d->f), d->ls.Le), fabs(d->wi_local.z) * w / d->ls.pdf);
 }
 

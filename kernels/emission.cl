@@ -36,17 +36,17 @@ typedef struct {
 } EmissionSample;
 
 /* A direction in the cone about +z of half-angle acos(cos_max), uniform in solid angle. */
-inline float3 sample_uniform_cone(float2 u, float cos_max) {
+static inline float3 sample_uniform_cone(float2 u, float cos_max) {
   float cos_theta = 1.0f - u.x * (1.0f - cos_max);
   float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
   float c, s = pc_sincos(2.0f * PC_PI * u.y, &c);
   return (float3)(sin_theta * c, sin_theta * s, cos_theta);
 }
 
-inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * PC_PI * (1.0f - cos_max)); }
+static inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * PC_PI * (1.0f - cos_max)); }
 
 /* A point of the disk of radius r about c facing w (w its normal). */
-inline float3 sample_disk_facing(float3 c, float r, float3 w, float2 u) {
+static inline float3 sample_disk_facing(float3 c, float r, float3 w, float2 u) {
   float3 t, b;
   make_frame(w, &t, &b);
   float2 q = r * sample_concentric_disk(u);
@@ -54,13 +54,13 @@ inline float3 sample_disk_facing(float3 c, float r, float3 w, float2 u) {
 }
 
 /* The probability that the power distribution chooses light index. */
-inline float emission_choice_pdf(__global const float* emission_cdf, uint index) {
+static inline float emission_choice_pdf(__global const float* emission_cdf, uint index) {
   return emission_cdf[index + 1] - emission_cdf[index];
 }
 
 /* Directional density of emitting d from a point of an area light with normal n (flags of its
  * primitive): cosine-weighted on the side(s) it emits. */
-inline float area_emission_pdf_dir(uint flags, float3 n, float3 d) {
+static inline float area_emission_pdf_dir(uint flags, float3 n, float3 d) {
   float c = pc_dot(n, d);
   if (flags & PC_FLAG_TWO_SIDED) return 0.5f * fabs(c) * PC_INV_PI;
   return c > 0.0f ? c * PC_INV_PI : 0.0f;
@@ -68,8 +68,8 @@ inline float area_emission_pdf_dir(uint flags, float3 n, float3 d) {
 
 /* Positional and directional densities of light `index` emitting direction d from point p (normal n
  * for area lights), choice excluded. For lights at infinity, d is the direction of travel. */
-inline void light_emission_pdf(const SceneData* sc, __constant const LightTransportHeader* lt, uint index, float3 p,
-                               float3 n, float3 d, float* pdf_pos, float* pdf_dir) {
+static inline void light_emission_pdf(const SceneData* sc, __constant const LightTransportHeader* lt, uint index, float3 p,
+                                      float3 n, float3 d, float* pdf_pos, float* pdf_dir) {
   Light light = sc->lights[index];
   float r = lt->bounds.w;
   *pdf_pos = 0.0f;
@@ -115,9 +115,9 @@ inline void light_emission_pdf(const SceneData* sc, __constant const LightTransp
 
 /* Samples the start of a light path: u_choice chooses the light, u_pos.xy the point (u_pos.z the side of a
  * two-sided emitter), u_dir the direction. False when nothing is emitted. */
-inline bool sample_emission(const SceneData* sc, __constant const LightTransportHeader* lt,
-                            __global const float* emission_cdf, float u_choice, float3 u_pos, float2 u_dir,
-                            EmissionSample* out) {
+static inline bool sample_emission(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, float u_choice, float3 u_pos, float2 u_dir,
+                                   EmissionSample* out) {
   uint index = find_interval(emission_cdf, lt->light_count, u_choice);
   Light light = sc->lights[index];
   out->light = index;
@@ -211,7 +211,7 @@ inline bool sample_emission(const SceneData* sc, __constant const LightTransport
 }
 
 /* The light path's initial throughput: Le |cos| / (choice pos dir) (the cosine of area lights only). */
-inline float3 emission_weight(const EmissionSample* e) {
+static inline float3 emission_weight(const EmissionSample* e) {
   float cos_term = e->delta_pos || e->delta_dir ? 1.0f : fabs(pc_dot(e->n, e->d));
   return e->Le * (cos_term / (e->pdf_choice * e->pdf_pos * e->pdf_dir));
 }

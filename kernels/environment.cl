@@ -18,7 +18,7 @@
 #include "texture.cl"
 #include "lanes.cl"
 
-inline float3 env_direction(float2 uv) {
+static inline float3 env_direction(float2 uv) {
   float phi = 2.0f * PC_PI * uv.x, theta = PC_PI * uv.y;
   float2 c, s = pc_sincos((float2)(theta, phi), &c); /* one call for both angles */
   return (float3)(s.x * c.y, c.x, s.x * s.y);
@@ -26,7 +26,7 @@ inline float3 env_direction(float2 uv) {
 
 /* theta from atan2, not acos(d.y): near a pole a float d.y keeps few digits of theta (within 0.05 degrees
  * of it, sin(theta) and with it env_pdf came out 1 % off), while d.x and d.z keep sin(theta) exactly. */
-inline float2 env_uv(float3 d) {
+static inline float2 env_uv(float3 d) {
   float u = pc_atan2(d.z, d.x) * (0.5f * PC_INV_PI);
   if (u < 0.0f) u += 1.0f;
   return (float2)(fmin(u, 1.0f), pc_atan2(sqrt(d.x * d.x + d.z * d.z), d.y) * PC_INV_PI);
@@ -35,21 +35,21 @@ inline float2 env_uv(float3 d) {
 /* A map placed by a rotation (the environment's `transform`): light.position holds the unit quaternion
  * (x, y, z, w) that takes the map's directions to the world's, or is all 0 for the map as it is, which
  * then stays bit for bit untouched. q v q* written out as v + 2 w (q x v) + 2 q x (q x v). */
-inline float3 env_rotated(float3 axis, float w, float3 v) {
+static inline float3 env_rotated(float3 axis, float w, float3 v) {
   float3 t = 2.0f * (float3)(axis.y * v.z - axis.z * v.y, axis.z * v.x - axis.x * v.z, axis.x * v.y - axis.y * v.x);
   return v + w * t + (float3)(axis.y * t.z - axis.z * t.y, axis.z * t.x - axis.x * t.z, axis.x * t.y - axis.y * t.x);
 }
-inline bool env_is_rotated(Light light) {
+static inline bool env_is_rotated(Light light) {
   return light.position.x != 0.0f || light.position.y != 0.0f || light.position.z != 0.0f || light.position.w != 0.0f;
 }
-inline float3 env_to_map(Light light, float3 world) {
+static inline float3 env_to_map(Light light, float3 world) {
   return env_is_rotated(light) ? env_rotated(-light.position.xyz, light.position.w, world) : world;
 }
-inline float3 env_to_world(Light light, float3 map) {
+static inline float3 env_to_world(Light light, float3 map) {
   return env_is_rotated(light) ? env_rotated(light.position.xyz, light.position.w, map) : map;
 }
 
-inline uint2 env_texel(Texture t, float2 uv) {
+static inline uint2 env_texel(Texture t, float2 uv) {
   return (uint2)(min((uint)(uv.x * (float)t.width), t.width - 1u), min((uint)(uv.y * (float)t.height), t.height - 1u));
 }
 
@@ -62,7 +62,7 @@ inline uint2 env_texel(Texture t, float2 uv) {
 
 /* The direction at (u, v); r = |u'| + |v'| near +z and 2 - (|u'| + |v'|) near -z (u' = 2u - 1, v' = 2v - 1):
  * pbrt's 1 - |1 - (|u'| + |v'|)|, without the subtraction from 1 that loses r's digits where it is small. */
-inline float3 env_square_to_sphere(float2 p) {
+static inline float3 env_square_to_sphere(float2 p) {
   float u = 2.0f * p.x - 1.0f, v = 2.0f * p.y - 1.0f;
   float up = fabs(u), vp = fabs(v), sum = up + vp;
   float signed_distance = 1.0f - sum; /* > 0: the northern hemisphere (+z) */
@@ -78,7 +78,7 @@ inline float3 env_square_to_sphere(float2 p) {
  * sqrt(1 - |z|) is 0 for every direction within 2e-4 of +z, up to a third of a texel of a 4096^2 map
  * off), while x and y keep r. phi = atan(min / max of |x|, |y|) (pc_atan2), where pbrt-v4 evaluates a
  * polynomial within 4e-6 of it. */
-inline float2 env_sphere_to_square(float3 d) {
+static inline float2 env_sphere_to_square(float3 d) {
   float x = fabs(d.x), y = fabs(d.y), z = fabs(d.z);
   float q = x * x + y * y, len = sqrt(q + z * z);
   float r = len > 0.0f ? fmin(sqrt(q / (len * (len + z))), 1.0f) : 0.0f;
@@ -99,7 +99,7 @@ inline float2 env_sphere_to_square(float3 d) {
  * texel beyond a corner is the opposite corner's. The lookup is then continuous across every edge.
  * (pbrt-v4's WrapMode::OctahedralSphere takes column 1, not 0, beyond the left edge and row 1 above the
  * top: a texel off at those two edges.) */
-inline float3 env_octahedral_texel(__global const uint* texels, Texture t, int x, int y) {
+static inline float3 env_octahedral_texel(__global const uint* texels, Texture t, int x, int y) {
   int w = (int)t.width, h = (int)t.height;
   if (x < 0 || x >= w) {
     x = x < 0 ? -1 - x : 2 * w - 1 - x;
@@ -114,7 +114,7 @@ inline float3 env_octahedral_texel(__global const uint* texels, Texture t, int x
 
 /* The map's radiance at (u, v), scale included: bilinear between texel centres (the same blend as
  * texture_bilinear), or the texel (u, v) lies in. */
-inline float3 env_equal_area_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
+static inline float3 env_equal_area_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
   if (light.slot == PC_ENV_EQUAL_AREA_NEAREST) {
     uint2 c = env_texel(t, uv);
     return light.emission.xyz * texel_at(texels, t, (int)c.x, (int)c.y);
@@ -130,26 +130,26 @@ inline float3 env_equal_area_radiance(Light light, Texture t, __global const uin
           ay * ((1.0f - ax) * env_octahedral_texel(texels, t, x0, y0 + 1) + ax * env_octahedral_texel(texels, t, x0 + 1, y0 + 1)));
 }
 
-inline bool env_is_equal_area(Light light) { return light.slot != PC_ENV_LAT_LONG; }
+static inline bool env_is_equal_area(Light light) { return light.slot != PC_ENV_LAT_LONG; }
 
 /* The density of the map's cell c: its row's probability times its own within the row, over the cell's
  * area in the square (1 / (w h)) and 4 pi. env_sample computes the same expression from the same floats. */
-inline float env_equal_area_pdf(float p_row, float p_column, Texture t) {
+static inline float env_equal_area_pdf(float p_row, float p_column, Texture t) {
   return p_row * p_column * (float)(t.width * t.height) / (4.0f * PC_PI);
 }
 
 /* sin(theta) from the direction itself: near the -y pole v is close to 1, where a float keeps few digits
  * of pi - theta (at 1e-4 of the pole, pc_sin(PC_PI * v) came out 0.2 % off). pc_dot: dot() may fuse or
  * reorder. */
-inline float env_sin_theta(float3 d) { return sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); }
+static inline float env_sin_theta(float3 d) { return sqrt((d.x * d.x + d.z * d.z) / pc_dot(d, d)); }
 
 /* The map's bilinear radiance at (u, v), scale included. */
-inline float3 env_map_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
+static inline float3 env_map_radiance(Light light, Texture t, __global const uint* texels, float2 uv) {
   return light.emission.xyz * texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, uv.y * (float)t.height - 0.5f,
                                                PC_WRAP_REPEAT, PC_WRAP_CLAMP);
 }
 
-inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
+static inline float3 env_radiance(Light light, __global const Texture* textures, __global const uint* texels, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     if (env_is_equal_area(light))
@@ -161,7 +161,7 @@ inline float3 env_radiance(Light light, __global const Texture* textures, __glob
 }
 
 /* Solid-angle density of direction d, light choice excluded. */
-inline float env_pdf(Light light, __global const Texture* textures, __global const float* dist, float3 d) {
+static inline float env_pdf(Light light, __global const Texture* textures, __global const float* dist, float3 d) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
@@ -187,8 +187,8 @@ inline float env_pdf(Light light, __global const Texture* textures, __global con
  * the radiance at the (u, v) drawn. Neither is looked up again from the direction: the float direction of
  * a sample at a cell's edge may lie in the neighbouring cell, whose density need not bound this radiance
  * (the bilinear radiance itself is continuous across the edge). */
-inline float3 env_sample(Light light, __global const Texture* textures, __global const uint* texels,
-                         __global const float* dist, float2 u, float* pdf, float3* le) {
+static inline float3 env_sample(Light light, __global const Texture* textures, __global const uint* texels,
+                                __global const float* dist, float2 u, float* pdf, float3* le) {
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
     Texture t = textures[light.texture];
@@ -221,8 +221,8 @@ inline float3 env_sample(Light light, __global const Texture* textures, __global
 
 /* env_radiance and env_pdf by lane (kernels/lanes.cl), for the lanes in m: a constant for all lanes at
  * once, a map lane by lane. */
-inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, __global const uint* texels, Lane3 d,
-                                LaneI m) {
+static inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, __global const uint* texels, Lane3 d,
+                                       LaneI m) {
   Lane3 le = lane3_splat(light.emission.xyz);
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {
@@ -232,8 +232,8 @@ inline Lane3 env_radiance_lanes(Light light, __global const Texture* textures, _
   return le;
 }
 
-inline LaneF env_pdf_lanes(Light light, __global const Texture* textures, __global const float* dist, Lane3 d,
-                           LaneI m) {
+static inline LaneF env_pdf_lanes(Light light, __global const Texture* textures, __global const float* dist, Lane3 d,
+                                  LaneI m) {
   LaneF pdf = (LaneF)(0.25f * PC_INV_PI);
 #ifdef PC_HAS_ENVIRONMENT_MAP
   if (light.texture != PC_INVALID) {

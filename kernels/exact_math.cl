@@ -39,9 +39,9 @@
 #define PC_INV_LN2_HI 0x1.715476p+0f
 #define PC_INV_LN2_LO 0x1.4ae0cp-26f
 
-inline PC_OVL int pc_any_(int m) { return m != 0; }
+static inline PC_OVL int pc_any_(int m) { return m != 0; }
 #define PC_EM_ANY(I) \
-  inline PC_OVL int pc_any_(I m) { return any(m); }
+  static inline PC_OVL int pc_any_(I m) { return any(m); }
 
 /* pi/2 in pieces (the reduction of sin and cos, templates/exact_math.cl): four of at most 12 bits (k * piece
  * is exact for k < 4096), the last one 24 bits. */
@@ -58,30 +58,30 @@ PC_EM_ANY(int3)
  * bits, which the compiler takes straight from the comparison's mask register (one kmov); also
  * kernels/lanes.cl's pc_lane_bits. */
 #define PC_SIGN_BIT_MASKS 1
-inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_cvtd2mask128(m); }
-inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
-inline PC_OVL uint pc_sign_bits_(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
-inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
-inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
-inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_cvtd2mask128(m); }
+static inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_cvtd2mask256(m); }
+static inline PC_OVL uint pc_sign_bits_(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+static inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
 #elif defined(__clang__) && defined(__AVX__)
 /* x86 CPUs with AVX and without AVX-512 (PoCL on AVX2 CPUs): the sign bits by vmovmskps (which LLVM 15 lowers
  * to a pack and a vpmovmskb: still fewer instructions than the byte narrowing and multiplication below). The
  * path integrator's 8 lanes on AVX2 code: Cornell box 8 %, glass-metal 5 % more samples/s. */
 #define PC_SIGN_BIT_MASKS 1
-inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
-inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
-inline PC_OVL uint pc_sign_bits_(int16 m) { return pc_sign_bits_(m.lo) | pc_sign_bits_(m.hi) << 8; }
-inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
-inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
-inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL uint pc_sign_bits_(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
+static inline PC_OVL uint pc_sign_bits_(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+static inline PC_OVL uint pc_sign_bits_(int16 m) { return pc_sign_bits_(m.lo) | pc_sign_bits_(m.hi) << 8; }
+static inline PC_OVL int pc_any_(int4 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL int pc_any_(int8 m) { return pc_sign_bits_(m) != 0u; }
+static inline PC_OVL int pc_any_(int16 m) { return pc_sign_bits_(m) != 0u; }
 #else
 /* Masks of 4, 8 and 16 lanes (-1 or 0 each) narrowed to bytes and read as one or two integers: a few vector
  * instructions, where PoCL's any() is a loop over the lanes (it took a tenth of the 16-lane path kernel's
  * time). */
-inline PC_OVL int pc_any_(int4 m) { return as_uint(convert_char4(m)) != 0u; }
-inline PC_OVL int pc_any_(int8 m) { return as_ulong(convert_char8(m)) != 0ul; }
-inline PC_OVL int pc_any_(int16 m) {
+static inline PC_OVL int pc_any_(int4 m) { return as_uint(convert_char4(m)) != 0u; }
+static inline PC_OVL int pc_any_(int8 m) { return as_ulong(convert_char8(m)) != 0ul; }
+static inline PC_OVL int pc_any_(int16 m) {
   ulong2 b = as_ulong2(convert_char16(m));
   return (b.x | b.y) != 0ul;
 }
@@ -107,24 +107,24 @@ inline PC_OVL int pc_any_(int16 m) {
  * pc_cross (float3; float4 with w = 0): a.y b.z - a.z b.y, ... the same way.
  * Denormal inputs are zeros, products at most FLT_MIN and sums below it are zeros of their sign, so a
  * device that flushes denormals gets the same bits. */
-inline PC_OVL float pc_dot(float2 a, float2 b) {
+static inline PC_OVL float pc_dot(float2 a, float2 b) {
   float2 p = pc_flush_product_(pc_flush_(a) * pc_flush_(b));
   return pc_flush_(p.x + p.y);
 }
-inline PC_OVL float pc_dot(float3 a, float3 b) {
+static inline PC_OVL float pc_dot(float3 a, float3 b) {
   float3 p = pc_flush_product_(pc_flush_(a) * pc_flush_(b));
   return pc_flush_(pc_flush_(p.x + p.y) + p.z);
 }
-inline PC_OVL float pc_dot(float4 a, float4 b) {
+static inline PC_OVL float pc_dot(float4 a, float4 b) {
   float4 p = pc_flush_product_(pc_flush_(a) * pc_flush_(b));
   return pc_flush_(pc_flush_(pc_flush_(p.x + p.y) + p.z) + p.w);
 }
-inline PC_OVL float3 pc_cross(float3 a, float3 b) {
+static inline PC_OVL float3 pc_cross(float3 a, float3 b) {
   a = pc_flush_(a);
   b = pc_flush_(b);
   return pc_flush_(pc_flush_product_(a.yzx * b.zxy) - pc_flush_product_(a.zxy * b.yzx));
 }
-inline PC_OVL float4 pc_cross(float4 a, float4 b) { return (float4)(pc_cross(a.xyz, b.xyz), 0.0f); }
+static inline PC_OVL float4 pc_cross(float4 a, float4 b) { return (float4)(pc_cross(a.xyz, b.xyz), 0.0f); }
 
 /* pc_length: sqrt of the sum of squares, error <= (n + 2) / 2 ulp for n components (a priori: n roundings
  * in the sum, halved by the square root, plus its own; 1.1 to 1.4 ulp measured); a zero vector has length
@@ -138,15 +138,15 @@ inline PC_OVL float4 pc_cross(float4 a, float4 b) { return (float4)(pc_cross(a.x
  * cannot change the sum), otherwise after an exact scaling by a power of two that brings it to [2, 4).
  * A component is divided by length 2^-24, so a quotient below FLT_MIN is recognised while it is still
  * normal (2^24 times larger), then scaled back exactly. */
-inline PC_OVL uint pc_max_component_(uint2 a) { return max(a.x, a.y); }
-inline PC_OVL uint pc_max_component_(uint3 a) { return max(max(a.x, a.y), a.z); }
-inline PC_OVL uint pc_max_component_(uint4 a) { return max(max(max(a.x, a.y), a.z), a.w); }
-inline PC_OVL float pc_sum_of_squares_(float2 v) { return v.x * v.x + v.y * v.y; }
-inline PC_OVL float pc_sum_of_squares_(float3 v) { return v.x * v.x + v.y * v.y + v.z * v.z; }
-inline PC_OVL float pc_sum_of_squares_(float4 v) { return v.x * v.x + v.y * v.y + v.z * v.z + v.w * v.w; }
+static inline PC_OVL uint pc_max_component_(uint2 a) { return max(a.x, a.y); }
+static inline PC_OVL uint pc_max_component_(uint3 a) { return max(max(a.x, a.y), a.z); }
+static inline PC_OVL uint pc_max_component_(uint4 a) { return max(max(max(a.x, a.y), a.z), a.w); }
+static inline PC_OVL float pc_sum_of_squares_(float2 v) { return v.x * v.x + v.y * v.y; }
+static inline PC_OVL float pc_sum_of_squares_(float3 v) { return v.x * v.x + v.y * v.y + v.z * v.z; }
+static inline PC_OVL float pc_sum_of_squares_(float4 v) { return v.x * v.x + v.y * v.y + v.z * v.z + v.w * v.w; }
 
 #define PC_EM_GEOMETRIC(V, U, N)                                                                          \
-  inline PC_OVL float pc_length(V v) {                                                                    \
+  static inline PC_OVL float pc_length(V v) {                                                             \
     U ab = as_uint##N(v) & 0x7fffffffu;                                                                   \
     ab = select(ab, (U)0u, ab < 0x00800000u);                                                             \
     V va = as_float##N(ab);                                                                               \
@@ -158,7 +158,7 @@ inline PC_OVL float pc_sum_of_squares_(float4 v) { return v.x * v.x + v.y * v.y 
     float s = as_float((255u - (mb >> 23)) << 23); /* max * s in [2, 4) */                                \
     return sqrt(pc_sum_of_squares_(va * s)) / s;                                                          \
   }                                                                                                       \
-  inline PC_OVL V pc_normalize(V v) {                                                                     \
+  static inline PC_OVL V pc_normalize(V v) {                                                              \
     U b = as_uint##N(v), ab = b & 0x7fffffffu;                                                            \
     ab = select(ab, (U)0u, ab < 0x00800000u);                                                             \
     V v0 = as_float##N(ab | (b & 0x80000000u)), vs = v0;                                                  \
@@ -187,25 +187,25 @@ PC_EM_GEOMETRIC(float4, uint4, 4)
 /* One lane is a float3: its operations are the float3 functions above (on CPU devices one SSE register
  * per vector, on GPUs scalars), with lane3(x, y, z) its constructor. */
 typedef float3 lane3f;
-inline PC_OVL float3 lane3(float x, float y, float z) { return (float3)(x, y, z); }
+static inline PC_OVL float3 lane3(float x, float y, float z) { return (float3)(x, y, z); }
 typedef struct { float8 x, y, z; } lane3f8;
 typedef struct { float16 x, y, z; } lane3f16;
 
 #define PC_EM_LANES3(V3, F, I, U, N)                                                                      \
-  inline PC_OVL V3 lane3(F x, F y, F z) {                                                                 \
+  static inline PC_OVL V3 lane3(F x, F y, F z) {                                                          \
     V3 v;                                                                                                 \
     v.x = x;                                                                                              \
     v.y = y;                                                                                              \
     v.z = z;                                                                                              \
     return v;                                                                                             \
   }                                                                                                       \
-  inline PC_OVL F pc_dot(V3 a, V3 b) {                                                                    \
+  static inline PC_OVL F pc_dot(V3 a, V3 b) {                                                             \
     F px = pc_flush_product_(pc_flush_(a.x) * pc_flush_(b.x));                                            \
     F py = pc_flush_product_(pc_flush_(a.y) * pc_flush_(b.y));                                            \
     F pz = pc_flush_product_(pc_flush_(a.z) * pc_flush_(b.z));                                            \
     return pc_flush_(pc_flush_(px + py) + pz);                                                            \
   }                                                                                                       \
-  inline PC_OVL V3 pc_cross(V3 a, V3 b) {                                                                 \
+  static inline PC_OVL V3 pc_cross(V3 a, V3 b) {                                                          \
     F ax = pc_flush_(a.x), ay = pc_flush_(a.y), az = pc_flush_(a.z);                                      \
     F bx = pc_flush_(b.x), by = pc_flush_(b.y), bz = pc_flush_(b.z);                                      \
     return lane3(pc_flush_(pc_flush_product_(ay * bz) - pc_flush_product_(az * by)),                      \
@@ -213,15 +213,15 @@ typedef struct { float16 x, y, z; } lane3f16;
                  pc_flush_(pc_flush_product_(ax * by) - pc_flush_product_(ay * bx)));                     \
   }                                                                                                       \
   /* |component| bits with denormals as zeros, and the largest of them. */                               \
-  inline PC_OVL U pc_lane_abs_bits_(F x) {                                                                \
+  static inline PC_OVL U pc_lane_abs_bits_(F x) {                                                         \
     U a = as_uint##N(x) & 0x7fffffffu;                                                                    \
     return select(a, (U)(0u), a < 0x00800000u);                                                           \
   }                                                                                                       \
-  inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }
+  static inline PC_OVL F pc_lane_sum_of_squares_(F x, F y, F z) { return x * x + y * y + z * z; }
 /* pc_length and pc_normalize of 8 or 16 lanes; those of one lane are the float3 functions, whose early
  * returns are faster than these selects and give the same bits. */
 #define PC_EM_LANES3_LENGTH(V3, F, I, U, N)                                                               \
-  inline PC_OVL F pc_length(V3 v) {                                                                       \
+  static inline PC_OVL F pc_length(V3 v) {                                                                \
     U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
     F vx = as_float##N(ax), vy = as_float##N(ay), vz = as_float##N(az);                                   \
     U mb = max(max(ax, ay), az);                                                                          \
@@ -233,7 +233,7 @@ typedef struct { float16 x, y, z; } lane3f16;
     r = select(r, as_float##N((U)(PC_NAN_BITS)), mb > 0x7f800000u);                                       \
     return select(r, (F)(INFINITY), mb == 0x7f800000u);                                                   \
   }                                                                                                       \
-  inline PC_OVL V3 pc_normalize(V3 v) {                                                                   \
+  static inline PC_OVL V3 pc_normalize(V3 v) {                                                            \
     U bx = as_uint##N(v.x), by = as_uint##N(v.y), bz = as_uint##N(v.z);                                   \
     U ax = pc_lane_abs_bits_(v.x), ay = pc_lane_abs_bits_(v.y), az = pc_lane_abs_bits_(v.z);              \
     F v0x = as_float##N(ax | (bx & 0x80000000u)), v0y = as_float##N(ay | (by & 0x80000000u));             \

@@ -53,8 +53,8 @@ typedef struct {
 /* Follows `ray` (throughput, `depth` scattering events before it) through delta scattering to the first
  * non-delta vertex, into *g; emitters it hits are added to *radiance, the first one only if count_first
  * (a gather from a vertex that took next-event estimation leaves it to that). False: none is reached. */
-inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray, float3 throughput, uint depth,
-                              bool count_first, float3* radiance, uint* rays, GatherPoint* g) {
+static inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray, float3 throughput, uint depth,
+                                     bool count_first, float3* radiance, uint* rays, GatherPoint* g) {
   __constant const SceneHeader* h = sc->h;
   float eta_scale = 1.0f;
   for (bool first = true;; first = false) {
@@ -109,13 +109,13 @@ inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray, float
 }
 
 /* The camera path of `key` (at its pixel) to its first non-delta vertex (walk_to_non_delta). */
-inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, float3* radiance, uint* rays, GatherPoint* g) {
+static inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, float3* radiance, uint* rays, GatherPoint* g) {
   Ray ray = camera_path_ray(sc->h, key, key.pixel % sc->h->width, key.pixel / sc->h->width);
   return walk_to_non_delta(sc, key, ray, (float3)(1.0f), 0u, true, radiance, rays, g);
 }
 
 /* Next-event estimation at g (unweighted: the gathering integrators make direct light no other way). */
-inline float3 gather_direct(const SceneData* sc, SampleKey key, const GatherPoint* g, uint* rays) {
+static inline float3 gather_direct(const SceneData* sc, SampleKey key, const GatherPoint* g, uint* rays) {
   if (g->depth >= sc->h->max_depth) return (float3)(0.0f);
   float4 u = sample4(sc->h, key, PC_DIM_LIGHT(g->depth));
   MaterialLanes ml = material_lanes_of(g->m);
@@ -131,7 +131,7 @@ inline float3 gather_direct(const SceneData* sc, SampleKey key, const GatherPoin
 }
 
 /* Adds sample `sample`'s radiance L to pixel `pixel` of the pixel film (pixel_film.cl), counting hazards. */
-inline void add_to_pixel(__global float4* film, uint pixel, uint sample, float3 L, SplatCounts* n) {
+static inline void add_to_pixel(__global float4* film, uint pixel, uint sample, float3 L, SplatCounts* n) {
   uint at = 3u * pixel;
   float4 half_sum[2] = {film[at], film[at + 1u]}, squares = film[at + 2u];
   accumulate_sample(L, sample, half_sum, &squares, &n->nan_splats, &n->inf_splats, &n->negative_splats);
@@ -229,7 +229,7 @@ __kernel void ir_gather(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
 
 /* Work items of a unit's shooting: each traces light paths i, i + items, ... into its own vertex slots,
  * so that the slots take at most 2^17 vertices (14.7 MB) whatever the unit. */
-inline uint shoot_items(__constant const SceneHeader* h, uint pixel_count) {
+static inline uint shoot_items(__constant const SceneHeader* h, uint pixel_count) {
   return min(pixel_count, max(1u, (1u << 17) / light_vertex_slots(h)));
 }
 
@@ -276,7 +276,7 @@ __kernel void rad_shoot(PC_SCENE_PARAMS, __constant const LightTransportHeader* 
 
 /* The area of the primitive a hit found (leaf-ordered prims: triangles in device coordinates; the
  * radiosity technique takes no instanced meshes). */
-inline float hit_area(const SceneData* sc, const Hit* hit) {
+static inline float hit_area(const SceneData* sc, const Hit* hit) {
   Primitive p = sc->prims[hit->slot];
   if (as_uint(p.b.w) == PC_PRIM_SPHERE) return 4.0f * PC_PI * p.b.x * p.b.x;
   return 0.5f * length(cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz));
@@ -284,8 +284,8 @@ inline float hit_area(const SceneData* sc, const Hit* hit) {
 
 /* Radiance leaving non-delta vertex g towards its camera side by the iteration's radiosity: rho E / pi,
  * E the irradiance of its primitive (rho: the material's colour there). */
-inline float3 radiosity_at(const SceneData* sc, __constant const LightTransportHeader* lt, __global const uint* bins,
-                           const GatherPoint* g) {
+static inline float3 radiosity_at(const SceneData* sc, __constant const LightTransportHeader* lt, __global const uint* bins,
+                                  const GatherPoint* g) {
   __global const uint* bin = bins + PC_BIN_WORDS * g->s.prim;
   float3 power = (float3)((float)splat_word_pair(bin), (float)splat_word_pair(bin + 2), (float)splat_word_pair(bin + 4));
   float area = hit_area(sc, &g->hit);

@@ -26,8 +26,8 @@
 
 /* Light along the rays of the lanes in m that escaped: the environment, weighted against light sampling
  * by MIS. */
-inline Lane3 escaped_radiance_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneF prev_bsdf_pdf, LaneI prev_delta,
-                                    LaneI m) {
+static inline Lane3 escaped_radiance_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneF prev_bsdf_pdf, LaneI prev_delta,
+                                           LaneI m) {
 #ifdef PC_HAS_ENVIRONMENT
   if (sc->h->env_light != PC_INVALID) {
     Light env = sc->lights[sc->h->env_light];
@@ -55,7 +55,7 @@ typedef struct {
 } PathLanes;
 
 /* New paths: the camera rays of sample `sample` of each lane's pixel, taken where m is set. */
-inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
+static inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
   __constant const SceneHeader* h = sc->h;
   LaneF u0, u1, u2, u3;
   sample4_lanes(h, pixel, sample, h->seed, (LaneU)(PC_DIM_CAMERA), &u0, &u1, &u2, &u3);
@@ -102,8 +102,8 @@ inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Lan
  * there; where a light sample wants a shadow ray, sets *shadow, st->nee and the lane in *has_shadow (the
  * caller adds st->nee where the shadow ray is not blocked, before the next bounce); samples the BSDF for
  * st->ray's successor. Returns the lanes whose paths go on. */
-inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, PathLanes* st, LaneI m, LaneI found,
-                              const HitLanes* hit, RayLanes* shadow, LaneI* has_shadow) {
+static inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, PathLanes* st, LaneI m, LaneI found,
+                                     const HitLanes* hit, RayLanes* shadow, LaneI* has_shadow) {
   __constant const SceneHeader* h = sc->h;
   *has_shadow = (LaneI)(0);
   LaneI escaped = m & !found;
@@ -190,8 +190,8 @@ inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sample, Pa
 }
 
 /* The unit's counters into stats (UnitStats) with integer atomics. */
-inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_samples, uint inf_samples,
-                           uint negative_samples) {
+static inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan_samples, uint inf_samples,
+                                  uint negative_samples) {
   volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
   add_counter64(counters, rays);
   if (nan_samples) atomic_add(counters + 2, nan_samples);

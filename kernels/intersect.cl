@@ -53,7 +53,7 @@ typedef struct {
 } Hit;
 
 /* A ray of a ray file (pathcl rays). */
-inline Ray ray_from_record(__global const RayRecord* record) {
+static inline Ray ray_from_record(__global const RayRecord* record) {
   __global const float* r = (__global const float*)record;
   Ray ray;
   ray.o = vload3(0, r);
@@ -76,9 +76,9 @@ typedef struct {
   uint kz;
 } RayPrecomp;
 
-inline float axis_component(float3 v, uint k) { return k == 0u ? v.x : k == 1u ? v.y : v.z; }
+static inline float axis_component(float3 v, uint k) { return k == 0u ? v.x : k == 1u ? v.y : v.z; }
 
-inline RayPrecomp ray_precompute(float3 d) {
+static inline RayPrecomp ray_precompute(float3 d) {
   RayPrecomp p;
   p.inv_d = 1.0f / d; /* +-inf for axis-parallel rays; ray_box handles the NaNs that may follow */
   float3 ad = fabs(d);
@@ -99,12 +99,12 @@ inline RayPrecomp ray_precompute(float3 d) {
  * instructions). That axis then does not limit the interval, and a ray lying in a box face counts as
  * inside. An empty box (lo = +inf, hi = -inf) is always missed. */
 /* The factor 1 + 2 gamma(3) by which the slab tests widen a box's far distance. */
-inline float slab_widening(void) { return 1.0f + 2.0f * error_gamma(3); }
+static inline float slab_widening(void) { return 1.0f + 2.0f * error_gamma(3); }
 #define PC_DEFINE_SLAB(F, I)                                                                                    \
   /* Whether each box is hit within [tmin, tmax], from the near (nx, ny, nz) and far (fx, fy, fz) plane    \
    * distances of each axis; *enter_out: its entry distance (of a missed box: any value). Also the packet  \
    * traversal's, per lane (kernels/packet.cl). */                                                          \
-  inline PC_OVL I slab_hits(F nx, F fx, F ny, F fy, F nz, F fz, F tmin, F tmax, F* enter_out) {             \
+  static inline PC_OVL I slab_hits(F nx, F fx, F ny, F fy, F nz, F fz, F tmin, F tmax, F* enter_out) {      \
     F enter = tmin, exit = tmax;                                                                                     \
     enter = select(enter, nx, nx > enter);                                                                           \
     enter = select(enter, ny, ny > enter);                                                                           \
@@ -121,9 +121,9 @@ PC_DEFINE_SLAB(float16, int16)
 #undef PC_DEFINE_SLAB
 #define PC_DEFINE_RAY_BOXES(N)                                                                                  \
   /* Whether each box is hit; *enter: its entry distance (of a missed box: any value). */                   \
-  inline int##N ray_boxes_hit##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x,        \
-                                 float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z,         \
-                                 float##N* enter) {                                                                  \
+  static inline int##N ray_boxes_hit##N(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float##N lo_x, \
+                                        float##N lo_y, float##N lo_z, float##N hi_x, float##N hi_y, float##N hi_z,  \
+                                        float##N* enter) {                                                           \
     float##N lx = (lo_x - o.x) * inv_d.x, hx = (hi_x - o.x) * inv_d.x;                                               \
     float##N ly = (lo_y - o.y) * inv_d.y, hy = (hi_y - o.y) * inv_d.y;                                               \
     float##N lz = (lo_z - o.z) * inv_d.z, hz = (hi_z - o.z) * inv_d.z;                                               \
@@ -166,7 +166,7 @@ typedef struct {
  * a far plane's at least t (1 + 2 gamma(3)) (1 - u)^3, with inv_far = fl(inv_d (1 + 2 gamma(3))), which
  * bound the true interval more tightly than pbrt's t (1 + gamma(3)) and t (1 - gamma(3)) (1 + 2 gamma(3))
  * that slab_hits relies on. (4u |q| is exact, a power of two times q, unless q is subnormal.) */
-inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
+static inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
   FusedSlabs f;
   f.inv_near = inv_d;
   f.inv_far = inv_d * slab_widening();
@@ -188,8 +188,8 @@ inline FusedSlabs fused_slabs(float3 o, float3 inv_d) {
 }
 
 /* ray_boxes_hit8 or 16 by FusedSlabs (f->usable), the boxes of node n; tmax_far: tmax * (1 + 2 gamma(3)). */
-inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const WideNode* n,
-                                      WideF* enter_out) {
+static inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tmax_far, __global const WideNode* n,
+                                             WideF* enter_out) {
   __global const float* planes = n->lo_x;
   WideF nx = fma(wide_load(planes + f->near_at.x), (WideF)(f->inv_near.x), (WideF)(f->off_near.x));
   WideF ny = fma(wide_load(planes + f->near_at.y), (WideF)(f->inv_near.y), (WideF)(f->off_near.y));
@@ -207,8 +207,8 @@ inline WideI ray_boxes_hit_wide_fused(const FusedSlabs* f, float tmin, float tma
 #endif /* PC_BVH_WIDE */
 
 /* Each of four boxes' entry distance, or INFINITY when it is missed within [tmin, tmax]. */
-inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
-                         float4 lo_z, float4 hi_x, float4 hi_y, float4 hi_z) {
+static inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, float tmax, float4 lo_x, float4 lo_y,
+                                float4 lo_z, float4 hi_x, float4 hi_y, float4 hi_z) {
   float4 enter;
   int4 hit = ray_boxes_hit4(o, inv_d, negative, tmin, tmax, lo_x, lo_y, lo_z, hi_x, hi_y, hi_z, &enter);
   return select((float4)(INFINITY), enter, hit);
@@ -216,7 +216,7 @@ inline float4 ray_boxes4(float3 o, float3 inv_d, int3 negative, float tmin, floa
 
 /* Watertight ray/triangle test. Edge functions of a shared edge are computed from the same sheared
  * vertex coordinates in both triangles, so a ray through the edge hits at least one of them. */
-__attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPrecomp* rp, uint kz, float tmin, float tmax, float3 a, float3 b,
+static __attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPrecomp* rp, uint kz, float tmin, float tmax, float3 a, float3 b,
                          float3 c, float* t_out, float* u_out, float* v_out) {
   uint kx = kz == 2u ? 0u : kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
   float3 A = a - o, B = b - o, C = c - o;
@@ -251,8 +251,8 @@ __attribute__((always_inline)) inline bool ray_triangle(float3 o, const RayPreco
 
 /* Ray/sphere with pbrt-v4's accurate discriminant. A ray leaving the sphere itself (from_surface) can
  * only meet it again at the far root, and only when it points inwards. */
-inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center, float radius,
-                       bool from_surface, float* t_out) {
+static inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center, float radius,
+                              bool from_surface, float* t_out) {
   float3 oc = o - center;
   float a = pc_dot(d, d);
   float b = 2.0f * pc_dot(d, oc);
@@ -279,14 +279,14 @@ inline bool ray_sphere(float3 o, float3 d, float tmin, float tmax, float3 center
   return true;
 }
 
-inline uint prim_index_of(Primitive p) { return as_uint(p.a.w); }
-inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
+static inline uint prim_index_of(Primitive p) { return as_uint(p.a.w); }
+static inline uint prim_kind_of(Primitive p) { return as_uint(p.b.w); }
 
 /* Intersects one primitive; updates *hit when closer. Hits at equal t (a shared edge, coplanar faces)
  * go to the lower primitive index, so the nearest hit is one total order's minimum and the same whatever
  * the order the traversal meets the primitives in: the 4-, 8- and 16-wide layouts (and with them a CPU and
  * a GPU in one render) give the same hit records. */
-__attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, __global const Primitive* prims, uint slot,
+static __attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, __global const Primitive* prims, uint slot,
                                                           const Ray* ray, const RayPrecomp* rp, uint kz, float tmax, Hit* hit) {
   Primitive p = prims[slot];
   bool from_surface = prim_index_of(p) == ray->skip_prim;
@@ -314,7 +314,7 @@ __attribute__((always_inline)) inline bool intersect_prim(const SceneData* cut, 
 }
 
 /* The leaf reference's primitives; with any_hit, true at the first hit. */
-__attribute__((always_inline)) inline bool intersect_leaf(const SceneData* cut, __global const Primitive* prims, uint ref, const Ray* ray,
+static __attribute__((always_inline)) inline bool intersect_leaf(const SceneData* cut, __global const Primitive* prims, uint ref, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   uint first = PC_LEAF_FIRST(ref), count = PC_LEAF_COUNT(ref);
   for (uint i = 0; i < count; ++i) {
@@ -324,12 +324,12 @@ __attribute__((always_inline)) inline bool intersect_leaf(const SceneData* cut, 
 }
 
 /* Entry distances of a wide node's four children (INFINITY for a miss or an unused slot). */
-inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, int3 negative, float tmin, float tmax) {
+static inline float4 node_entries(__global const Bvh4Node* n, float3 o, float3 inv_d, int3 negative, float tmin, float tmax) {
   return ray_boxes4(o, inv_d, negative, tmin, tmax, n->lo_x, n->lo_y, n->lo_z, n->hi_x, n->hi_y, n->hi_z);
 }
 
 /* No hit yet: the nearest so far is the ray's far end. */
-inline void hit_init(Hit* hit, const Ray* ray) {
+static inline void hit_init(Hit* hit, const Ray* ray) {
   hit->t = ray->tmax;
   hit->slot = PC_INVALID;
   hit->prim = PC_INVALID;
@@ -345,7 +345,7 @@ inline void hit_init(Hit* hit, const Ray* ray) {
  * the traversal order (a packet's is not its single ray's: kernels/packet.cl). Every subtree the node
  * test would enter at the current t is entered, and the hit is the minimum of the one total order
  * (intersect_prim) whenever each triangle's t is within that widening of its boxes' entries. */
-__attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const float* stack_entry, int* sp, float t_far,
+static __attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const float* stack_entry, int* sp, float t_far,
                                                        uint* ref) {
   while (*sp > 0) {
     --*sp;
@@ -358,7 +358,7 @@ __attribute__((always_inline)) inline bool pop_subtree(const uint* stack, const 
 }
 
 /* Orders two (distance, reference) pairs, nearer first, without branches. */
-inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
+static inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
   bool swap = *db < *da;
   float d = *da;
   uint r = *ra;
@@ -373,7 +373,7 @@ inline void order_pair(float* da, uint* ra, float* db, uint* rb) {
  * whether *hit holds one. kz is passed as a literal by trace_tree, so each copy's triangle test has
  * constant axis indices. The stack holds at most 3 entries per level of the tree, whose depth is at
  * most kBvhMaxDepth. */
-__attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut, __global const Bvh4Node* nodes,
+static __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut, __global const Bvh4Node* nodes,
                                                           __global const Primitive* prims, uint root, const Ray* ray,
                                                           const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   uint stack[3 * PC_BVH_STACK];
@@ -415,7 +415,7 @@ __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneData* cut,
 }
 
 /* A LeafBlock's vertex coordinate by vertex (0 a, 1 b, 2 c) and axis, for literal indices. */
-inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
+static inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
   if (vertex == 0u) return axis == 0u ? b->ax : axis == 1u ? b->ay : b->az;
   if (vertex == 1u) return axis == 0u ? b->bx : axis == 1u ? b->by : b->bz;
   return axis == 0u ? b->cx : axis == 1u ? b->cy : b->cz;
@@ -424,7 +424,7 @@ inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
 /* The watertight test of ray_triangle on a block's four triangles at once: per lane the same IEEE
  * operations in the same order, so the same t, u, v bits. Then the hits update *hit lane by lane by
  * intersect_prim's rule (nearest by t, then lower primitive index), spheres through intersect_prim. */
-__attribute__((always_inline)) inline bool intersect_block(const SceneData* cut, __global const LeafBlock* b, __global const Primitive* prims,
+static __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut, __global const LeafBlock* b, __global const Primitive* prims,
                                                            const Ray* ray, const RayPrecomp* rp, bool any_hit, Hit* hit,
                                                            uint kz) {
   uint kx = kz == 2u ? 0u : kz + 1u, ky = kx == 2u ? 0u : kx + 1u;
@@ -483,15 +483,15 @@ __attribute__((always_inline)) inline bool intersect_block(const SceneData* cut,
 /* The 8- or 16-wide BVH's node at interior reference ref, and the first block of leaf reference ref: both
  * in bvh8 or bvh16, references in 8-byte words (kernels/shared/types.h), so the address is one scaled
  * addition. */
-inline __global const WideNode* wide_node(__global const WideNode* wide, uint ref) {
+static inline __global const WideNode* wide_node(__global const WideNode* wide, uint ref) {
   return (__global const WideNode*)((__global const ulong*)wide + ref);
 }
-inline __global const LeafBlock* wide_leaf(__global const LeafBlock* wide, uint ref) {
+static inline __global const LeafBlock* wide_leaf(__global const LeafBlock* wide, uint ref) {
   return (__global const LeafBlock*)((__global const ulong*)wide + (ref & ~PC_BVH4_LEAF));
 }
 
 /* The leaf reference's blocks (kernels/shared/types.h); with any_hit, true at the first hit. */
-__attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut, __global const LeafBlock* blocks,
+static __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut, __global const LeafBlock* blocks,
                                                             __global const Primitive* prims, uint ref, const Ray* ray,
                                                             const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
   for (__global const LeafBlock* b = wide_leaf(blocks, ref);; ++b) {
@@ -504,7 +504,7 @@ __attribute__((always_inline)) inline bool intersect_blocks(const SceneData* cut
  * traversal has pushed and will pop after the subtree it goes on with: on PoCL's x86 targets (clang's
  * prefetch instruction; OpenCL's prefetch() is empty there), nothing elsewhere. Bounce rays on the
  * benchmark terrain +8 %, camera rays +8 % (docs/benchmarks-notes.md). */
-inline void prefetch_subtree(__global const WideNode* nodes, __global const LeafBlock* blocks, uint ref) {
+static inline void prefetch_subtree(__global const WideNode* nodes, __global const LeafBlock* blocks, uint ref) {
 #if defined(__clang__) && defined(__x86_64__)
   __global const char* p = (ref & PC_BVH4_LEAF) ? (__global const char*)wide_leaf(blocks, ref)
                                                 : (__global const char*)wide_node(nodes, ref);
@@ -526,7 +526,7 @@ inline void prefetch_subtree(__global const WideNode* nodes, __global const Leaf
  * float16 slab test per node. As in Embree, one hit child is entered at once, of two the nearer is entered
  * and the other pushed, more are insertion-sorted onto the stack by entry distance, nearest on top, and
  * the nearest is popped. The stack holds at most PC_BVH_WIDE - 1 entries per level. */
-__attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut, __global const WideNode* nodes,
+static __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut, __global const WideNode* nodes,
                                                            __global const LeafBlock* blocks,
                                                            __global const Primitive* prims, uint root, const Ray* ray,
                                                            const RayPrecomp* rp, bool any_hit, Hit* hit, uint kz) {
@@ -610,9 +610,9 @@ __attribute__((always_inline)) inline bool trace_wide_axis(const SceneData* cut,
 /* The tree of the device's layout from node root, updating *hit as trace_bvh4_axis does, with the ray's
  * ray_precompute rp; kz as a literal, so each copy's triangle test has constant axis indices. cut: the
  * scene whose cut-outs apply (kernels/cutout.cl), or 0 for none. */
-inline bool trace_tree_precomputed(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
-                                   __global const Primitive* prims, uint root, const Ray* ray, const RayPrecomp* rp,
-                                   bool any_hit, Hit* hit) {
+PC_OUT_OF_LINE bool trace_tree_precomputed(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
+                                           __global const Primitive* prims, uint root, const Ray* ray, const RayPrecomp* rp,
+                                           bool any_hit, Hit* hit) {
 #ifdef PC_BVH_WIDE
 #define PC_TRACE_AXIS(kz) trace_wide_axis(cut, nodes, blocks, prims, root, ray, rp, any_hit, hit, kz)
 #else
@@ -624,16 +624,16 @@ inline bool trace_tree_precomputed(const SceneData* cut, __global const WideNode
 #undef PC_TRACE_AXIS
 }
 
-inline bool trace_tree(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
-                       __global const Primitive* prims, uint root, const Ray* ray, bool any_hit, Hit* hit) {
+static inline bool trace_tree(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks,
+                              __global const Primitive* prims, uint root, const Ray* ray, bool any_hit, Hit* hit) {
   RayPrecomp rp = ray_precompute(ray->d);
   return trace_tree_precomputed(cut, nodes, blocks, prims, root, ray, &rp, any_hit, hit);
 }
 
 /* The nearest hit (or with any_hit, any hit) in one tree whose root is node 0: the whole scene without
  * instances, and the geometry that ray files and the test kernels trace. */
-inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
-                      const Ray* ray, bool any_hit, Hit* hit) {
+static inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __global const LeafBlock* blocks, __global const Primitive* prims,
+                             const Ray* ray, bool any_hit, Hit* hit) {
   hit_init(hit, ray);
   return trace_tree(cut, nodes, blocks, prims, 0u, ray, any_hit, hit);
 }
@@ -641,12 +641,12 @@ inline bool trace_bvh(const SceneData* cut, __global const WideNode* nodes, __gl
 #ifdef PC_HAS_INSTANCES
 /* An affine transform given as three rows (x, y, z, translation) applied to a point or a direction, each
  * coordinate summed in this order (no contraction: the same bits everywhere). */
-inline float3 transform_point(__global const float4* rows, float3 p) {
+static inline float3 transform_point(__global const float4* rows, float3 p) {
   float4 r0 = rows[0], r1 = rows[1], r2 = rows[2];
   return (float3)(((r0.x * p.x + r0.y * p.y) + r0.z * p.z) + r0.w, ((r1.x * p.x + r1.y * p.y) + r1.z * p.z) + r1.w,
                   ((r2.x * p.x + r2.y * p.y) + r2.z * p.z) + r2.w);
 }
-inline float3 transform_vector(__global const float4* rows, float3 v) {
+static inline float3 transform_vector(__global const float4* rows, float3 v) {
   float4 r0 = rows[0], r1 = rows[1], r2 = rows[2];
   return (float3)((r0.x * v.x + r0.y * v.y) + r0.z * v.z, (r1.x * v.x + r1.y * v.y) + r1.z * v.z,
                   (r2.x * v.x + r2.y * v.y) + r2.z * v.z);
@@ -656,7 +656,7 @@ inline float3 transform_vector(__global const float4* rows, float3 v) {
  * t is the same parameter as in the device's). A hit of it replaces *hit when nearer, or at an equal t
  * when k is the lower instance: hits are ordered by (t, instance, primitive), whatever order the instance
  * BVH visits the instances in. */
-inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, const Ray* ray, bool any_hit, Hit* hit) {
+static inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, const Ray* ray, bool any_hit, Hit* hit) {
   __global const Instance* inst = sc->instances + k;
   Ray mesh_ray = *ray;
   if (!(inst->flags & PC_INSTANCE_IDENTITY)) {
@@ -690,7 +690,7 @@ inline bool trace_instance(const SceneData* sc, const SceneData* cut, uint k, co
 
 /* The instance BVH (binary, its leaves ranges of instances), nearer child first; each instance met is
  * traced by trace_instance. */
-inline bool trace_instances(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
+static inline bool trace_instances(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
   hit_init(hit, ray);
   uint stack[PC_BVH_STACK];
   float stack_entry[PC_BVH_STACK];
@@ -731,7 +731,7 @@ inline bool trace_instances(const SceneData* sc, const SceneData* cut, const Ray
 
 /* The scene's nearest hit (any hit with any_hit): its one tree, or with instances the instance BVH over
  * the instances' trees. cut: as for trace_tree. */
-inline bool trace_scene(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
+static inline bool trace_scene(const SceneData* sc, const SceneData* cut, const Ray* ray, bool any_hit, Hit* hit) {
 #ifdef PC_HAS_INSTANCES
   return trace_instances(sc, cut, ray, any_hit, hit);
 #else

@@ -17,43 +17,43 @@
 
 /* ---- For every width: a mask as bits (bit j: lane j set) and back, one lane by runtime index, the
  * smallest lane ----------------------------------------------------------------------------------- */
-inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
-inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
-inline PC_OVL float pc_lane(float x, uint j) { return x; }
-inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
-inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
-inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
+static inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
+static inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
+static inline PC_OVL float pc_lane(float x, uint j) { return x; }
+static inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
+static inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
+static inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
 
 /* The least of the lanes of x, which holds no NaN: plain comparisons (vminps), where fmin's NaN rules
  * cost a compare and a blend at every step. */
-inline PC_OVL float2 pc_min_of_numbers(float2 a, float2 b) { return select(a, b, b < a); }
-inline PC_OVL float4 pc_min_of_numbers(float4 a, float4 b) { return select(a, b, b < a); }
-inline PC_OVL float8 pc_min_of_numbers(float8 a, float8 b) { return select(a, b, b < a); }
-inline PC_OVL float pc_min_lanes(float2 x) { return x.y < x.x ? x.y : x.x; }
-inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
+static inline PC_OVL float2 pc_min_of_numbers(float2 a, float2 b) { return select(a, b, b < a); }
+static inline PC_OVL float4 pc_min_of_numbers(float4 a, float4 b) { return select(a, b, b < a); }
+static inline PC_OVL float8 pc_min_of_numbers(float8 a, float8 b) { return select(a, b, b < a); }
+static inline PC_OVL float pc_min_lanes(float2 x) { return x.y < x.x ? x.y : x.x; }
+static inline PC_OVL float pc_min_lanes(float4 x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
 
 /* A mask of 8 or 16 lanes as bits, on the critical path of every BVH node. */
 #ifdef PC_SIGN_BIT_MASKS
 /* The sign bits (exact_math.cl): one kmov with AVX-512, a vmovmskps's few with AVX, where the form below is
  * seven. */
-inline PC_OVL uint pc_lane_bits(int8 m) { return pc_sign_bits_(m); }
-inline PC_OVL uint pc_lane_bits(int16 m) { return pc_sign_bits_(m); }
+static inline PC_OVL uint pc_lane_bits(int8 m) { return pc_sign_bits_(m); }
+static inline PC_OVL uint pc_lane_bits(int16 m) { return pc_sign_bits_(m); }
 #else
 /* The lanes as bytes 0 or 1: the multiplication puts byte j's bit into bit 56 + j (the partial products
  * land on distinct bits, so nothing carries). Fewer instructions than OR-ing the lanes' bit values. */
-inline uint pc_bits_of_bytes_(ulong bytes) { return (uint)((bytes * 0x0102040810204080ul) >> 56); }
-inline PC_OVL uint pc_lane_bits(int8 m) { return pc_bits_of_bytes_(as_ulong(convert_uchar8(m & 1))); }
-inline PC_OVL uint pc_lane_bits(int16 m) {
+static inline uint pc_bits_of_bytes_(ulong bytes) { return (uint)((bytes * 0x0102040810204080ul) >> 56); }
+static inline PC_OVL uint pc_lane_bits(int8 m) { return pc_bits_of_bytes_(as_ulong(convert_uchar8(m & 1))); }
+static inline PC_OVL uint pc_lane_bits(int16 m) {
   ulong2 b = as_ulong2(convert_uchar16(m & 1));
   return pc_bits_of_bytes_(b.x) | pc_bits_of_bytes_(b.y) << 8;
 }
 #endif
 /* The index of the lowest bit set in x (x != 0): a form that compilers turn into one count of trailing zeros
  * (OpenCL 1.2 has no ctz). */
-inline uint pc_lowest_bit(uint x) { return popcount(~x & (x - 1u)); }
+static inline uint pc_lowest_bit(uint x) { return popcount(~x & (x - 1u)); }
 #define PC_LANE_REDUCTIONS(F, I, U, N, BITS)                                                              \
-  inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }          \
-  inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
+  static inline PC_OVL I pc_lanes_of_bits(uint bits, I like) { return ((U)(bits) & BITS) != (U)(0u); }   \
+  static inline PC_OVL float pc_min_lanes(F x) { return pc_min_lanes(pc_min_of_numbers(x.lo, x.hi)); }
 PC_LANE_REDUCTIONS(float8, int8, uint8, 8, (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u))
 PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
                    (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
@@ -63,21 +63,21 @@ PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
  * lanes) or AVX-512 (16), the lane is read with one vpermps: through memory, the load waits for the vector's
  * store to forward (on the BVH nodes' critical path: the 8-wide tree's bounce rays 5 % faster on AVX2 code). */
 #define PC_LANE_WRITE(T, S, N)                                                                            \
-  inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                                    \
+  static inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                             \
     S a[N];                                                                                               \
     vstore##N(x, 0, a);                                                                                   \
     a[j] = value;                                                                                         \
     return vload##N(0, a);                                                                                \
   }
 #define PC_LANE_READ_BY_MEMORY(T, S, N)                                                                   \
-  inline PC_OVL S pc_lane(T x, uint j) {                                                                  \
+  static inline PC_OVL S pc_lane(T x, uint j) {                                                           \
     S a[N];                                                                                               \
     vstore##N(x, 0, a);                                                                                   \
     return a[j];                                                                                          \
   }
 /* F: the float vector, I its int index vector, PERMUTE clang's vpermps builtin. */
 #define PC_LANE_READ_BY_PERMUTE(F, I, PERMUTE)                                                            \
-  inline PC_OVL float pc_lane(F x, uint j) {                                                              \
+  static inline PC_OVL float pc_lane(F x, uint j) {                                                       \
     F r = PERMUTE(x, (I)((int)j));                                                                        \
     return r.s0;                                                                                          \
   }
@@ -103,7 +103,7 @@ PC_LANE_WRITE(uint16, uint, 16)
 
 /* Functions of the lane code that PoCL would otherwise call rather than inline: a call passes their
  * vectors through memory. */
-#define PC_LANE_INLINE __attribute__((always_inline)) inline
+#define PC_LANE_INLINE static __attribute__((always_inline)) inline
 
 /* ---- This program's lanes --------------------------------------------------------------------------- */
 #ifndef PC_LANES
@@ -139,16 +139,16 @@ typedef lane3f16 Lane3;
   for (uint pc_left_ = (bits), j = pc_lowest_bit(pc_left_); pc_left_ != 0u;                               \
        pc_left_ &= pc_left_ - 1u, j = pc_lowest_bit(pc_left_))
 
-inline uint lane_count(LaneI m) { return popcount(pc_lane_bits(m)); }
+static inline uint lane_count(LaneI m) { return popcount(pc_lane_bits(m)); }
 
 /* The first lane set in m (m must have one). */
-inline uint lane_first(LaneI m) {
+static inline uint lane_first(LaneI m) {
   return pc_lowest_bit(pc_lane_bits(m));
 }
 
 /* index where m is set, the first set lane's elsewhere: an index at which a gather may read for every
  * lane (each read is of a valid element). */
-inline LaneU lane_safe_index(LaneU index, LaneI m) { return select((LaneU)(pc_lane(index, lane_first(m))), index, m); }
+static inline LaneU lane_safe_index(LaneU index, LaneI m) { return select((LaneU)(pc_lane(index, lane_first(m))), index, m); }
 
 /* base[index * stride] of every lane (a gather): a vector built from PC_LANES loads in registers (loads
  * stored to a private array and read back as one vector wait for every store to reach the cache). Every
@@ -278,23 +278,23 @@ PC_GROUP_GATHER(uint, LaneU)
         lane_group_gather_float((base) + 2, stride, g))
 
 /* Lane3 arithmetic, component by component: each is the float3 operation of one lane. */
-inline Lane3 lane3_splat(float3 v) { return lane3((LaneF)(v.x), (LaneF)(v.y), (LaneF)(v.z)); }
-inline Lane3 lane3_add(Lane3 a, Lane3 b) { return lane3(a.x + b.x, a.y + b.y, a.z + b.z); }
-inline Lane3 lane3_sub(Lane3 a, Lane3 b) { return lane3(a.x - b.x, a.y - b.y, a.z - b.z); }
-inline Lane3 lane3_mul(Lane3 a, Lane3 b) { return lane3(a.x * b.x, a.y * b.y, a.z * b.z); }
-inline Lane3 lane3_scale(Lane3 a, LaneF s) { return lane3(a.x * s, a.y * s, a.z * s); }
-inline Lane3 lane3_div(Lane3 a, LaneF s) { return lane3(a.x / s, a.y / s, a.z / s); }
-inline Lane3 lane3_neg(Lane3 a) { return lane3(-a.x, -a.y, -a.z); }
-inline Lane3 lane3_abs(Lane3 a) { return lane3(fabs(a.x), fabs(a.y), fabs(a.z)); }
-inline Lane3 lane3_select(Lane3 a, Lane3 b, LaneI m) {
+static inline Lane3 lane3_splat(float3 v) { return lane3((LaneF)(v.x), (LaneF)(v.y), (LaneF)(v.z)); }
+static inline Lane3 lane3_add(Lane3 a, Lane3 b) { return lane3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline Lane3 lane3_sub(Lane3 a, Lane3 b) { return lane3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline Lane3 lane3_mul(Lane3 a, Lane3 b) { return lane3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline Lane3 lane3_scale(Lane3 a, LaneF s) { return lane3(a.x * s, a.y * s, a.z * s); }
+static inline Lane3 lane3_div(Lane3 a, LaneF s) { return lane3(a.x / s, a.y / s, a.z / s); }
+static inline Lane3 lane3_neg(Lane3 a) { return lane3(-a.x, -a.y, -a.z); }
+static inline Lane3 lane3_abs(Lane3 a) { return lane3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+static inline Lane3 lane3_select(Lane3 a, Lane3 b, LaneI m) {
   return lane3(select(a.x, b.x, m), select(a.y, b.y, m), select(a.z, b.z, m));
 }
-inline LaneI lane3_any_positive(Lane3 a) { return (a.x > 0.0f) | (a.y > 0.0f) | (a.z > 0.0f); }
-inline LaneF lane3_max_component(Lane3 a) { return fmax(a.x, fmax(a.y, a.z)); }
+static inline LaneI lane3_any_positive(Lane3 a) { return (a.x > 0.0f) | (a.y > 0.0f) | (a.z > 0.0f); }
+static inline LaneF lane3_max_component(Lane3 a) { return fmax(a.x, fmax(a.y, a.z)); }
 
 /* Lane j of a Lane3 as a float3, and a Lane3 with lane j replaced. */
-inline float3 lane3_at(Lane3 a, uint j) { return (float3)(pc_lane(a.x, j), pc_lane(a.y, j), pc_lane(a.z, j)); }
-inline Lane3 lane3_with(Lane3 a, uint j, float3 v) {
+static inline float3 lane3_at(Lane3 a, uint j) { return (float3)(pc_lane(a.x, j), pc_lane(a.y, j), pc_lane(a.z, j)); }
+static inline Lane3 lane3_with(Lane3 a, uint j, float3 v) {
   return lane3(pc_with_lane(a.x, j, v.x), pc_with_lane(a.y, j, v.y), pc_with_lane(a.z, j, v.z));
 }
 

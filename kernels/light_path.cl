@@ -57,7 +57,7 @@ typedef struct {
 
 /* The key of light path `path` in sample `sample` (numbered like the pixels: a sample holds width x height
  * light paths), the key of the camera path of the same pixel too. */
-inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint sample) {
+static inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint sample) {
   SampleKey key;
   key.pixel = path;
   key.seed = h->seed;
@@ -66,7 +66,7 @@ inline SampleKey light_path_key(__constant const SceneHeader* h, uint path, uint
 }
 
 /* The camera ray of key's camera path at pixel (px, py) (BDPT's camera subpath, the gathering integrators'). */
-inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key, uint px, uint py) {
+static inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key, uint px, uint py) {
   Ray ray;
   camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
   ray.tmin = 0.0f;
@@ -80,14 +80,14 @@ inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key, uint 
 }
 
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
-inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
+static inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
   float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
   float den = fabs(pc_dot(w_light, ng)) * fabs(pc_dot(w_out, ns));
   return den > 0.0f ? num / den : 0.0f;
 }
 
 /* False (and counted) for a colour that is not finite and non-negative: such a splat is dropped. */
-inline bool splat_is_valid(float3 c, SplatCounts* n) {
+static inline bool splat_is_valid(float3 c, SplatCounts* n) {
   if (isnan(c.x) || isnan(c.y) || isnan(c.z)) {
     ++n->nan_splats;
     return false;
@@ -104,8 +104,8 @@ inline bool splat_is_valid(float3 c, SplatCounts* n) {
 }
 
 /* Splats colour c landing at image position `raster` into every pixel the filter reaches, weighted by it. */
-inline void splat_filtered(__global uint* film, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
-                           float2 raster, uint parity, float3 c, SplatCounts* n) {
+static inline void splat_filtered(__global uint* film, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
+                                  float2 raster, uint parity, float3 c, SplatCounts* n) {
   if (!splat_is_valid(c, n)) return;
   float r = h->filter_radius;
   int x0 = max(0, (int)floor(raster.x - r)), x1 = min((int)h->width - 1, (int)floor(raster.x + r));
@@ -144,8 +144,8 @@ typedef struct {
 #ifdef PC_MLT
 /* The light subpath stops after vertex v where v + 2 reaches this; the camera subpath before scattering at a
  * vertex of t_count camera vertices where t_count reaches this. */
-inline uint mlt_light_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 1u : m->only_s; }
-inline uint mlt_camera_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 2u : m->only_t; }
+static inline uint mlt_light_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 1u : m->only_s; }
+static inline uint mlt_camera_stop(const MisFactors* m) { return m->only_s == PC_INVALID ? m->depth_hi + 2u : m->only_t; }
 #endif
 
 #ifdef PC_MLT
@@ -159,13 +159,13 @@ typedef struct {
 #endif
 
 /* Light vertex slots per light path of a unit (runtime/light_transport.h's light_vertex_slots). */
-inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
+static inline uint light_vertex_slots(__constant const SceneHeader* h) { return max(h->max_depth, 1u); }
 
 /* The density with which next-event estimation from x (lights.cl's sample_light) picks light `index` at y
  * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;
  * for a point or spot light the choice times the squared distance (its solid-angle density at the light
  * being a delta of area density 1; SmallVCM's convention). */
-inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
+static inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
   Light light = sc->lights[index];
   switch (light.type) {
 #ifdef PC_HAS_AREA_LIGHTS
@@ -207,7 +207,7 @@ inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, floa
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
  * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
  * unweighted, and no other; for a Metropolis sample (mis->only) that strategy alone, weighted. */
-inline float strategy_weight(__constant const LightTransportHeader* lt, const MisFactors* mis, uint s, uint t, float others) {
+static inline float strategy_weight(__constant const LightTransportHeader* lt, const MisFactors* mis, uint s, uint t, float others) {
 #ifdef PC_MLT
   if (mis->only_s == PC_INVALID ? s + t < mis->depth_lo + 2u || s + t > mis->depth_hi + 2u : s != mis->only_s || t != mis->only_t)
     return 0.0f;
@@ -219,8 +219,8 @@ inline float strategy_weight(__constant const LightTransportHeader* lt, const Mi
 
 /* Traces light path (key) and splats its camera connections. BDPT: with MIS weights (and the merging
  * factors *mis), and its non-delta vertices in vertices[0 .. *count) (room for max_depth). */
-inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
-                             __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
+static inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                    __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
 #ifdef PC_BDPT
                              , const MisFactors* mis, __global LightVertex* vertices, uint* count
 #endif
@@ -373,7 +373,7 @@ inline void trace_light_path(const SceneData* sc, __constant const LightTranspor
 }
 
 /* Adds a work unit's counts to its SplatStats (integer atomics). */
-inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
+static inline void add_splat_counts(__global SplatStats* stats, const SplatCounts* n) {
   volatile __global uint* counters = (volatile __global uint*)&stats->rays_lo;
   add_counter64(counters, n->rays);
   if (n->nan_splats) atomic_add(counters + 2, n->nan_splats);

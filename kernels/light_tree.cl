@@ -101,7 +101,7 @@ PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, 
 /* For the lanes in m: where target is PC_INVALID, chooses a light with u and stores its index in *chosen;
  * elsewhere follows the choice of light target. Returns the probability of that choice from x (0: never
  * chosen from x). */
-inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, LaneF u, LaneI m, LaneU* chosen) {
+static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, LaneF u, LaneI m, LaneU* chosen) {
   __constant const SceneHeader* h = sc->h;
   *chosen = target;
   if (!pc_any_(m)) return (LaneF)(0.0f);
@@ -157,7 +157,7 @@ inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU target, Lane
 #if PC_LANES == 1
 /* With target == PC_INVALID: chooses a light with u and stores its index in *chosen. Otherwise follows
  * the choice of light target. Returns the probability of that choice from x. */
-inline float light_choice(const SceneData* sc, float3 x, uint target, float u, uint* chosen) {
+static inline float light_choice(const SceneData* sc, float3 x, uint target, float u, uint* chosen) {
   uint index;
   float p = light_choice_lanes(sc, x, target, u, 1, &index);
   if (target == PC_INVALID) *chosen = index;
@@ -165,7 +165,7 @@ inline float light_choice(const SceneData* sc, float3 x, uint target, float u, u
 }
 
 /* The probability that sample_light from x chooses light index. */
-inline float light_choice_pdf(const SceneData* sc, float3 x, uint index) {
+static inline float light_choice_pdf(const SceneData* sc, float3 x, uint index) {
   uint unused;
   return light_choice(sc, x, index, 0.0f, &unused);
 }

@@ -66,35 +66,35 @@ PC_LANE_INLINE void gather_primitive_shapes(__global const Primitive* prims, Lan
   *sphere = m & (lane_group_gather_uint(PC_FIELD_U_AT(prims, b, 3), &at) == PC_PRIM_SPHERE); /* prim_kind_of */
 }
 
-inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny, Lane3 y, Lane3 x) {
+static inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny, Lane3 y, Lane3 x) {
   LaneI lit = ((flags & PC_FLAG_TWO_SIDED) != 0u) | (pc_dot(ny, lane3_sub(x, y)) > 0.0f);
   return lane3_select(lane3_splat((float3)(0.0f)), emission, lit);
 }
 
 /* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). */
-inline LaneF spot_falloff_lanes(Lane3 direction, LaneF cos_inner, LaneF cos_outer, Lane3 from_light) {
+static inline LaneF spot_falloff_lanes(Lane3 direction, LaneF cos_inner, LaneF cos_outer, Lane3 from_light) {
   LaneF c = pc_dot(direction, from_light);
   LaneF t = (c - cos_outer) / (cos_inner - cos_outer);
   return select(select(t * t * (3.0f - 2.0f * t), (LaneF)(0.0f), c <= cos_outer), (LaneF)(1.0f), c >= cos_inner);
 }
 
-inline LaneF area_to_solid_angle_lanes(Lane3 x, Lane3 y, Lane3 ny, LaneF area_pdf) {
+static inline LaneF area_to_solid_angle_lanes(Lane3 x, Lane3 y, Lane3 ny, LaneF area_pdf) {
   Lane3 d = lane3_sub(y, x);
   LaneF dist2 = pc_dot(d, d);
   LaneF cos_y = fabs(pc_dot(ny, d)) / sqrt(dist2);
   return select((LaneF)(0.0f), area_pdf * dist2 / cos_y, cos_y > 0.0f);
 }
 
-inline LaneI sphere_sampled_by_area_lanes(Lane3 x, Lane3 c, LaneF r) {
+static inline LaneI sphere_sampled_by_area_lanes(Lane3 x, Lane3 c, LaneF r) {
   Lane3 d = lane3_sub(x, c);
   return pc_dot(d, d) <= r * r * 1.0001f;
 }
 
-inline LaneF sphere_cone_one_minus_cos_lanes(LaneF sin2_max) {
+static inline LaneF sphere_cone_one_minus_cos_lanes(LaneF sin2_max) {
   return select(1.0f - sqrt(fmax(0.0f, 1.0f - sin2_max)), 0.5f * sin2_max, sin2_max < 0.00068523f);
 }
 
-inline LaneF sphere_light_pdf_lanes(Lane3 c, LaneF r, Lane3 x, Lane3 y, Lane3 ny) {
+static inline LaneF sphere_light_pdf_lanes(Lane3 c, LaneF r, Lane3 x, Lane3 y, Lane3 ny) {
   Lane3 d = lane3_sub(c, x);
   LaneF cone = 1.0f / (2.0f * PC_PI * sphere_cone_one_minus_cos_lanes(r * r / pc_dot(d, d)));
   return select(cone, area_to_solid_angle_lanes(x, y, ny, 1.0f / (4.0f * PC_PI * r * r)),
@@ -102,7 +102,7 @@ inline LaneF sphere_light_pdf_lanes(Lane3 c, LaneF r, Lane3 x, Lane3 y, Lane3 ny
 }
 
 /* light_pdf by lane, for the lanes in m. */
-inline LaneF light_pdf_lanes(const SceneData* sc, LaneU light_index, Lane3 x, Lane3 y, Lane3 ny, LaneI m) {
+static inline LaneF light_pdf_lanes(const SceneData* sc, LaneU light_index, Lane3 x, Lane3 y, Lane3 ny, LaneI m) {
   LaneU unused;
   LaneF choice = light_choice_lanes(sc, x, light_index, (LaneF)(0.0f), m, &unused);
   LightLanes light;
@@ -118,7 +118,7 @@ inline LaneF light_pdf_lanes(const SceneData* sc, LaneU light_index, Lane3 x, La
 }
 
 #ifdef PC_HAS_ENVIRONMENT
-inline LaneF environment_light_pdf_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneI m) {
+static inline LaneF environment_light_pdf_lanes(const SceneData* sc, Lane3 x, Lane3 d, LaneI m) {
   LaneU unused;
   Light env = sc->lights[sc->h->env_light];
   return light_choice_lanes(sc, x, (LaneU)(sc->h->env_light), (LaneF)(0.0f), m, &unused) *
@@ -127,7 +127,7 @@ inline LaneF environment_light_pdf_lanes(const SceneData* sc, Lane3 x, Lane3 d, 
 #endif
 
 /* A point on the sphere (centre c, radius r) seen from x, per lane. */
-inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF u1, LaneF* pdf) {
+static inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF u1, LaneF* pdf) {
   Lane3 d = lane3_sub(x, c);
   LaneF dc2 = pc_dot(d, d), dc = sqrt(dc2);
   LaneF sin2_max = r * r / dc2;
@@ -151,8 +151,8 @@ inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0, LaneF
 }
 
 /* A point on the area light (a triangle or a sphere) seen from x, into the lanes m of out. */
-inline void sample_area_light_lanes(const SceneData* sc, const LightLanes* light, LaneF choice, Lane3 x, LaneF u0,
-                                    LaneF u1, LaneI m, LightSampleLanes* out) {
+PC_OUT_OF_LINE void sample_area_light_lanes(const SceneData* sc, const LightLanes* light, LaneF choice, Lane3 x, LaneF u0,
+                                           LaneF u1, LaneI m, LightSampleLanes* out) {
   Lane3 a, b, c, p = x, p_err = x, ny = x;
   LaneI sphere;
   LaneF pdf = (LaneF)(0.0f);
@@ -200,8 +200,8 @@ inline void sample_area_light_lanes(const SceneData* sc, const LightLanes* light
 
 /* sample_light by lane, for the lanes in m: u0 chooses the light, u1, u2 the point on it. Returns the
  * lanes with a sample (as sample_light's result). */
-inline LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, LaneF u1, LaneF u2, LaneI m,
-                                LightSampleLanes* out) {
+PC_OUT_OF_LINE LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, LaneF u1, LaneF u2, LaneI m,
+                                       LightSampleLanes* out) {
   LaneU index;
   LaneF choice = light_choice_lanes(sc, x, (LaneU)(PC_INVALID), u0, m, &index);
   LightLanes light;
@@ -269,28 +269,28 @@ inline LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, LaneF u1
 /* ---- One lane: the float3 functions of the W = 1 programs --------------------------------------------- */
 #if PC_LANES == 1
 /* Radiance from light point y with normal ny towards x. */
-inline float3 emitted_towards(float3 emission, uint flags, float3 ny, float3 y, float3 x) {
+static inline float3 emitted_towards(float3 emission, uint flags, float3 ny, float3 y, float3 x) {
   return emitted_towards_lanes(emission, flags, ny, y, x);
 }
 
-inline float spot_falloff(Light light, float3 from_light) {
+static inline float spot_falloff(Light light, float3 from_light) {
   return spot_falloff_lanes(light.direction.xyz, light.cos_inner, light.cos_outer, from_light);
 }
 
 /* Solid-angle pdf of reaching point y (normal ny) of area light light_index from x, light choice included. */
-inline float light_pdf(const SceneData* sc, uint light_index, float3 x, float3 y, float3 ny) {
+static inline float light_pdf(const SceneData* sc, uint light_index, float3 x, float3 y, float3 ny) {
   return light_pdf_lanes(sc, light_index, x, y, ny, 1);
 }
 
 #ifdef PC_HAS_ENVIRONMENT
 /* Solid-angle pdf of light sampling from x producing direction d towards the environment. */
-inline float environment_light_pdf(const SceneData* sc, float3 x, float3 d) {
+static inline float environment_light_pdf(const SceneData* sc, float3 x, float3 d) {
   return environment_light_pdf_lanes(sc, x, d, 1);
 }
 #endif
 
 /* u: x chooses the light, yz the point on it. */
-inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* out) {
+static inline bool sample_light(const SceneData* sc, float3 x, float3 u, LightSample* out) {
   LightSampleLanes ls;
   bool ok = sample_light_lanes(sc, x, u.x, u.y, u.z, 1, &ls) != 0;
   out->p = ls.p;

@@ -16,7 +16,7 @@
  * so v = 1 (the image's top row) is the +y pole, and u grows from +x towards -z: seen from outside
  * with y up, the image is not mirrored (u grows to the right). The environment map uses the mirror
  * image of this (phi = atan2(z, x)), as it is seen from inside. */
-inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) {
+static inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) {
 #ifdef PC_HAS_SPHERES
   if (sc->shading[s->prim].kind == PC_PRIM_SPHERE) {
     float4 a = sc->uvs[2 * s->prim], b = sc->uvs[2 * s->prim + 1];
@@ -37,8 +37,8 @@ inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit* hit) 
  * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). Vertex colours,
  * interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x COLOR_0); a
  * sphere's are white. */
-inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
-                                       const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
+PC_OUT_OF_LINE MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
+                                              const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
   /* Fields a program's material types do not read are dead code here, and their gathers with them. */
   LaneGroups at; /* a scene has few materials */
   lane_groups(material, m, &at);
@@ -81,7 +81,7 @@ inline MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, cons
 
 #if PC_LANES == 1
 /* material_at_lanes for one surface point: the material with its colour looked up. */
-inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
+static inline Material material_at(const SceneData* sc, uint material, const Surface* s, const Hit* hit) {
   ShadingLanes shading;
   shading.material = material;
   shading.flags = sc->shading[s->prim].flags;

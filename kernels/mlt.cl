@@ -64,17 +64,17 @@
 #define PC_MLT_HEADER_WORDS 16u
 /* Work items of the bootstrap (runtime/technique_mlt.cpp's bootstrap_items: at most 4096, at most the pixels). */
 #define PC_MLT_BOOTSTRAP_ITEMS 4096u
-inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC_MLT_BOOTSTRAP_ITEMS, h->width * h->height); }
+static inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC_MLT_BOOTSTRAP_ITEMS, h->width * h->height); }
 /* The keys (b of MltSampler and SampleKey.sample) of fresh states, beyond any step: the bootstrap's
  * candidates, and (or-ed with the step) a chain's BDPT samples of depths 0 and 1. */
 #define PC_MLT_BOOTSTRAP_SAMPLE 0xfffff000u
 #define PC_MLT_NEAR_SAMPLE 0x40000000u
 
-inline uint mlt_state_words(__constant const SceneHeader* h) { return PC_MLT_HEADER_WORDS + 5u * mlt_slots(h); }
+static inline uint mlt_state_words(__constant const SceneHeader* h) { return PC_MLT_HEADER_WORDS + 5u * mlt_slots(h); }
 /* The chains take paths of depth 2 .. D (PC_MLT_FIRST_DEPTH); depths 0 and 1 are each pixel's BDPT sample. */
 #define PC_MLT_FIRST_DEPTH 2u
-inline uint mlt_depths(__constant const SceneHeader* h) { return max(h->max_depth + 1u, PC_MLT_FIRST_DEPTH) - PC_MLT_FIRST_DEPTH; }
-inline uint mlt_candidates(__constant const LightTransportHeader* lt, __constant const SceneHeader* h) {
+static inline uint mlt_depths(__constant const SceneHeader* h) { return max(h->max_depth + 1u, PC_MLT_FIRST_DEPTH) - PC_MLT_FIRST_DEPTH; }
+static inline uint mlt_candidates(__constant const LightTransportHeader* lt, __constant const SceneHeader* h) {
   return lt->bootstrap * mlt_depths(h);
 }
 /* The bootstrap buffer: the candidates' importances, summed in place by scan.cl's prefix sum (the total at
@@ -82,11 +82,11 @@ inline uint mlt_candidates(__constant const LightTransportHeader* lt, __constant
  * device computes it once (its buffer is kept for the render) and marks it done (bootstrap[C + 1 +
  * PC_SCAN_BLOCKS]). */
 #define PC_MLT_BOOTSTRAP_DONE 0x444f4e45u
-inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap) {
+static inline bool mlt_bootstrapped(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, __global const float* bootstrap) {
   return as_uint(bootstrap[mlt_candidates(lt, h) + 1u + PC_SCAN_BLOCKS]) == PC_MLT_BOOTSTRAP_DONE;
 }
 /* Bootstrap candidate c: depth 2 + c % (D - 1), fresh numbers of key (c, PC_MLT_BOOTSTRAP_SAMPLE). */
-inline uint mlt_candidate_depth(__constant const SceneHeader* h, uint c) { return PC_MLT_FIRST_DEPTH + c % mlt_depths(h); }
+static inline uint mlt_candidate_depth(__constant const SceneHeader* h, uint c) { return PC_MLT_FIRST_DEPTH + c % mlt_depths(h); }
 
 /* A state's contribution: where it goes (PC_MLT_PIXEL: the pixel of raster, PC_MLT_SPLAT: through the
  * filter, PC_MLT_NONE: nowhere) and its value. */
@@ -105,7 +105,7 @@ typedef struct {
   uint modified[PC_MLT_MAX_SLOTS], backup_modified[PC_MLT_MAX_SLOTS], changed[PC_MLT_MAX_SLOTS];
 } MltSlots;
 
-inline void mlt_sampler_on(MltSampler* m, MltSlots* slots, uint seed) {
+static inline void mlt_sampler_on(MltSampler* m, MltSlots* slots, uint seed) {
   m->x = slots->x;
   m->backup = slots->backup;
   m->modified = slots->modified;
@@ -116,7 +116,7 @@ inline void mlt_sampler_on(MltSampler* m, MltSlots* slots, uint seed) {
 }
 
 /* A fresh state's sampler: every slot's numbers from (a, b) when read. */
-inline void mlt_fresh(MltSampler* m, MltSlots* slots, __constant const SceneHeader* h, uint a, uint b) {
+static inline void mlt_fresh(MltSampler* m, MltSlots* slots, __constant const SceneHeader* h, uint a, uint b) {
   mlt_sampler_on(m, slots, h->seed);
   m->fresh = 1u;
   m->large = 0u;
@@ -131,9 +131,9 @@ inline void mlt_fresh(MltSampler* m, MltSlots* slots, __constant const SceneHead
  * strategy of the depths depth .. depth_hi at pixel `pixel` (BDPT's sample, its camera subpath's value there,
  * its light tracing connection, if one, in *splat), its importance the luminance of the camera subpath's
  * value and of every light tracing connection. */
-inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
-                          __global LightVertex* vertices, MltSampler* m, uint depth, bool all, uint depth_hi, uint pixel,
-                          uint sample, SplatCounts* n, MltContribution* out, MltSplat* splat) {
+static inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
+                                 __global LightVertex* vertices, MltSampler* m, uint depth, bool all, uint depth_hi, uint pixel,
+                                 uint sample, SplatCounts* n, MltContribution* out, MltSplat* splat) {
   __constant const SceneHeader* h = sc->h;
   SampleKey key;
   key.pixel = pixel;
@@ -229,8 +229,8 @@ __kernel void mlt_bootstrap_done(PC_SCENE_PARAMS, __constant const LightTranspor
 }
 
 /* Adds contribution c times `weight` to a splat layer. */
-inline void mlt_splat(__global uint* splats, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
-                      const MltContribution* c, float weight, uint parity, SplatCounts* n) {
+static inline void mlt_splat(__global uint* splats, __constant const SceneHeader* h, __constant const LightTransportHeader* lt,
+                             const MltContribution* c, float weight, uint parity, SplatCounts* n) {
   if (c->kind == PC_MLT_NONE || !(weight > 0.0f)) return;
   float3 v = c->value * weight;
   if (c->kind == PC_MLT_PIXEL)
@@ -242,9 +242,9 @@ inline void mlt_splat(__global uint* splats, __constant const SceneHeader* h, __
 /* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (fresh numbers): emitters seen directly and
  * direct light, which the chains leave out, into the independent samples' layer at weight 1 (its camera
  * subpath's value to the pixel, its light tracing connection through the filter). */
-inline void mlt_near_sample(const SceneData* sc, __constant const LightTransportHeader* lt,
-                            __global const float* emission_cdf, __global LightVertex* vertices, MltSlots* slots,
-                            __global uint* independent, uint chain, uint step, SplatCounts* n) {
+static inline void mlt_near_sample(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                   __global const float* emission_cdf, __global LightVertex* vertices, MltSlots* slots,
+                                   __global uint* independent, uint chain, uint step, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
   MltSampler m;
   mlt_fresh(&m, slots, h, chain, PC_MLT_NEAR_SAMPLE | step);

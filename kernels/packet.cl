@@ -19,11 +19,11 @@
  * selects with masks instead: the same values, so the same bits. */
 #if defined(__clang__) && defined(__AVX512F__)
 #define PC_TABLE_LOOKUP
-inline float16 pc_table_lookup(float16 table, int16 index) { return __builtin_ia32_permvarsf512(table, index); }
-inline PC_OVL void pc_narrow(float16 v, float16* out) { *out = v; }
-inline PC_OVL void pc_narrow(float16 v, float8* out) { *out = v.lo; }
-inline PC_OVL int16 pc_widen(uint16 v) { return as_int16(v); }
-inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
+static inline float16 pc_table_lookup(float16 table, int16 index) { return __builtin_ia32_permvarsf512(table, index); }
+static inline PC_OVL void pc_narrow(float16 v, float16* out) { *out = v; }
+static inline PC_OVL void pc_narrow(float16 v, float8* out) { *out = v.lo; }
+static inline PC_OVL int16 pc_widen(uint16 v) { return as_int16(v); }
+static inline PC_OVL int16 pc_widen(uint8 v) { return as_int16((uint16)(v, v)); }
 #endif
 
 #ifdef PC_HAS_CUTOUTS

@@ -6,8 +6,8 @@
 
 /* Adds sample s's radiance to a pixel's accumulators (even and odd half sums, squares). A sample that is
  * not a finite non-negative radiance is counted and dropped: it is a bug to find. */
-inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
-                              uint* inf_samples, uint* negative_samples) {
+static inline void accumulate_sample(float3 L, uint s, float4* half_sum, float4* squares, uint* nan_samples,
+                                     uint* inf_samples, uint* negative_samples) {
 #ifdef PC_DEBUG_INJECT_HAZARDS
   /* Test builds only (RenderOptions::debug_inject_hazards): proves that the hazard counters count. */
   if (s % 7u == 3u) L.x = NAN;

@@ -66,9 +66,9 @@ __constant uint kPrimes[PC_HALTON_DIMENSIONS] = {2, 3, 5, 7, 11, 13, 17, 19, 23,
 
 /* Lane j of a uint table lookup a[i]: a vector built from one load per lane (a private array read back as
  * one vector waits for every store to reach the cache). */
-inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
-inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
-inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
+static inline PC_OVL uint pc_gather_(__constant const uint* a, uint i) { return a[i]; }
+static inline PC_OVL uint8 pc_gather_(__constant const uint* a, uint8 i) { return (uint8)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7]); }
+static inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
   return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7],
     a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
 }
@@ -76,9 +76,9 @@ inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
 /* The XOR of the direction numbers of the four bits of index & 15 (a row of kSobolNibbles): one table
  * load for one lane; for 8 or 16 lanes four selects of the row's single-bit entries, since a gather of 8
  * or 16 loads costs more than the arithmetic. */
-inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
+static inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
 #define PC_SOBOL_NIBBLE_LANES(U)                                                                          \
-  inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                                \
+  static inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                         \
     return select((U)(0u), (U)(row[1]), (index & 1u) != 0u) ^ select((U)(0u), (U)(row[2]), (index & 2u) != 0u) ^ \
            select((U)(0u), (U)(row[4]), (index & 4u) != 0u) ^ select((U)(0u), (U)(row[8]), (index & 8u) != 0u); \
   }
@@ -94,7 +94,7 @@ PC_SOBOL_NIBBLE_LANES(uint16)
 #include "templates/sampler.cl"
 
 /* pcg4d of the four components of v. */
-inline uint4 pcg4d(uint4 v) {
+static inline uint4 pcg4d(uint4 v) {
   uint x = v.x, y = v.y, z = v.z, w = v.w;
   pcg4d_lanes(&x, &y, &z, &w);
   return (uint4)(x, y, z, w);
@@ -107,7 +107,7 @@ inline uint4 pcg4d(uint4 v) {
  * groups above every camera path's (light_path.cl, PC_LT_*). */
 #define PC_DIM_CAMERA 0u
 /* The first group of a light path's (light_path.cl's PC_LT_*): above every camera path's. */
-inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
+static inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 2u * h->max_depth + 3u); }
 #define PC_DIM_LIGHT(depth) (1u + 2u * (depth))
 #define PC_DIM_BSDF(depth) (2u + 2u * (depth))
 /* The rays of a camera path, numbered for their cut-out seeds (cutout.cl): the camera ray, then per
@@ -120,9 +120,9 @@ inline uint light_group_base(__constant const SceneHeader* h) { return max(64u, 
 /* Metropolis (mlt.cl): a state holds four numbers for each group a BDPT sample of max_depth D reads, in
  * slots: the camera subpath's groups 0 .. 2 D, the light subpath's light_group_base .. + 2 D + 1, then the
  * strategy's (group PC_MLT_STRATEGY_GROUP, the one after the light subpath's). */
-inline uint mlt_slots(__constant const SceneHeader* h) { return 4u * h->max_depth + 4u; }
+static inline uint mlt_slots(__constant const SceneHeader* h) { return 4u * h->max_depth + 4u; }
 #define PC_MLT_STRATEGY_GROUP(h) (light_group_base(h) + 2u * (h)->max_depth + 2u)
-inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
+static inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
   uint base = light_group_base(h);
   if (group <= 2u * h->max_depth) return group;
   if (group >= base && group - base <= 2u * h->max_depth + 2u) return 2u * h->max_depth + 1u + (group - base);
@@ -153,10 +153,10 @@ typedef struct MltSampler {
   float size;               /* a small step's largest move */
 } MltSampler;
 
-inline float mlt_uniform(uint a, uint b, uint k, uint seed) { return uint_to_unit(hash4(a, b, k, seed ^ 0x70737321u)); }
+static inline float mlt_uniform(uint a, uint b, uint k, uint seed) { return uint_to_unit(hash4(a, b, k, seed ^ 0x70737321u)); }
 
 /* Kelemen's mutation of one number: moved up or down by s2 e^(-ln(16) u), s2 = size, wrapped into [0, 1). */
-inline float mlt_mutate(float x, float size, uint bits) {
+static inline float mlt_mutate(float x, float size, uint bits) {
   float dv = size * pc_exp(-2.7725887f * uint_to_unit(bits)); /* ln 16 */
   float y = (bits & 1u) ? x + dv : x - dv;
   y -= floor(y);
@@ -164,12 +164,12 @@ inline float mlt_mutate(float x, float size, uint bits) {
 }
 
 /* Slot `slot`'s numbers uniform from hash (a, b). */
-inline void mlt_uniform_slot(MltSampler* m, uint slot, uint b) {
+static inline void mlt_uniform_slot(MltSampler* m, uint slot, uint b) {
   for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = mlt_uniform(m->a, b, 4u * slot + k, m->seed);
 }
 
 /* Slot `slot` at the sampler's iteration. */
-inline void mlt_ensure_ready(MltSampler* m, uint slot) {
+static inline void mlt_ensure_ready(MltSampler* m, uint slot) {
   if (m->modified[slot] == m->iteration) return;
   if (!m->fresh) {
     for (uint k = 0; k < 4u; ++k) m->backup[4u * slot + k] = m->x[4u * slot + k];
@@ -191,7 +191,7 @@ inline void mlt_ensure_ready(MltSampler* m, uint slot) {
 }
 
 /* A rejected proposal: the slots it changed back as they were, and the iteration. */
-inline void mlt_reject(MltSampler* m) {
+static inline void mlt_reject(MltSampler* m) {
   for (uint j = 0; j < m->changed_count; ++j) {
     uint slot = m->changed[j];
     for (uint k = 0; k < 4u; ++k) m->x[4u * slot + k] = m->backup[4u * slot + k];
@@ -201,13 +201,13 @@ inline void mlt_reject(MltSampler* m) {
 }
 
 /* The pixel a state's image position u (its camera group's xy, in [0, 1)) lies in. */
-inline uint2 mlt_pixel(__constant const SceneHeader* h, float2 u) {
+static inline uint2 mlt_pixel(__constant const SceneHeader* h, float2 u) {
   float2 raster = u * (float2)((float)h->width, (float)h->height);
   return min(convert_uint2(raster), (uint2)(h->width - 1u, h->height - 1u));
 }
 
 /* Slot `slot`'s four numbers at the sampler's iteration. */
-inline float4 mlt_numbers(MltSampler* m, uint slot) {
+static inline float4 mlt_numbers(MltSampler* m, uint slot) {
   mlt_ensure_ready(m, slot);
   return vload4(slot, m->x);
 }
@@ -215,7 +215,7 @@ inline float4 mlt_numbers(MltSampler* m, uint slot) {
 
 /* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key (a Metropolis chain's:
  * its state's; the camera group's image position there is the pixel's, within the pixel the state takes). */
-inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
+static inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
 #ifdef PC_MLT
   uint slot = mlt_slot(h, group);
   if (slot != PC_INVALID) {

@@ -13,32 +13,32 @@
 #define PC_LANE_W 16
 #include "templates/sampling.cl"
 
-inline float2 sample_concentric_disk(float2 u) {
+static inline float2 sample_concentric_disk(float2 u) {
   float x, y;
   sample_concentric_disk_lanes(u.x, u.y, &x, &y);
   return (float2)(x, y);
 }
 
-inline float3 sample_cosine_hemisphere(float2 u) {
+static inline float3 sample_cosine_hemisphere(float2 u) {
   float x, y, z;
   sample_cosine_hemisphere_lanes(u.x, u.y, &x, &y, &z);
   return (float3)(x, y, z);
 }
 
-inline float3 sample_uniform_sphere(float2 u) {
+static inline float3 sample_uniform_sphere(float2 u) {
   float x, y, z;
   sample_uniform_sphere_lanes(u.x, u.y, &x, &y, &z);
   return (float3)(x, y, z);
 }
 
-inline float2 sample_uniform_triangle(float2 u) {
+static inline float2 sample_uniform_triangle(float2 u) {
   float a, b;
   sample_uniform_triangle_lanes(u.x, u.y, &a, &b);
   return (float2)(a, b);
 }
 
 /* Index i with cdf[i] <= u < cdf[i + 1], over count intervals (binary search of a cdf). */
-inline uint find_interval(__global const float* cdf, uint count, float u) {
+static inline uint find_interval(__global const float* cdf, uint count, float u) {
   uint lo = 0, hi = count;
   while (hi - lo > 1) {
     uint mid = (lo + hi) / 2;

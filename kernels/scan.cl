@@ -8,10 +8,10 @@
 #ifndef PATHCL_SCAN_CL
 #define PATHCL_SCAN_CL
 
-inline uint scan_chunk(uint n) { return (n + PC_SCAN_BLOCKS - 1u) / PC_SCAN_BLOCKS; }
+static inline uint scan_chunk(uint n) { return (n + PC_SCAN_BLOCKS - 1u) / PC_SCAN_BLOCKS; }
 
 #define PC_SCAN_FUNCTIONS(T)                                                            \
-  inline void scan_block_##T(__global T* a, uint n, uint block) {                      \
+  static inline void scan_block_##T(__global T* a, uint n, uint block) {               \
     uint chunk = scan_chunk(n);                                                         \
     T sum = (T)(0);                                                                     \
     for (uint i = block * chunk; i < min(n, (block + 1u) * chunk); ++i) {               \
@@ -20,7 +20,7 @@ inline uint scan_chunk(uint n) { return (n + PC_SCAN_BLOCKS - 1u) / PC_SCAN_BLOC
     }                                                                                   \
     a[n + 1u + block] = sum;                                                            \
   }                                                                                     \
-  inline void scan_offsets_##T(__global T* a, uint n) {                                \
+  static inline void scan_offsets_##T(__global T* a, uint n) {                         \
     T total = (T)(0);                                                                   \
     for (uint block = 0; block < PC_SCAN_BLOCKS; ++block) {                            \
       T sum = a[n + 1u + block];                                                        \
@@ -29,7 +29,7 @@ inline uint scan_chunk(uint n) { return (n + PC_SCAN_BLOCKS - 1u) / PC_SCAN_BLOC
     }                                                                                   \
     a[n] = total;                                                                       \
   }                                                                                     \
-  inline void scan_add_##T(__global T* a, uint n, uint block) {                        \
+  static inline void scan_add_##T(__global T* a, uint n, uint block) {                 \
     uint chunk = scan_chunk(n);                                                         \
     T offset = a[n + 1u + block];                                                       \
     for (uint i = block * chunk; i < min(n, (block + 1u) * chunk); ++i) a[i] += offset; \

@@ -22,9 +22,9 @@ PC_LANE_INLINE void frame_about(Lane3 n, FrameLanes* f) {
   f->n = n;
 }
 
-inline Lane3 to_local(const FrameLanes* f, Lane3 w) { return lane3(pc_dot(w, f->t), pc_dot(w, f->b), pc_dot(w, f->n)); }
+static inline Lane3 to_local(const FrameLanes* f, Lane3 w) { return lane3(pc_dot(w, f->t), pc_dot(w, f->b), pc_dot(w, f->n)); }
 
-inline Lane3 to_world(const FrameLanes* f, Lane3 w) {
+static inline Lane3 to_world(const FrameLanes* f, Lane3 w) {
   return lane3_add(lane3_add(lane3_scale(f->t, w.x), lane3_scale(f->b, w.y)), lane3_scale(f->n, w.z));
 }
 

@@ -15,7 +15,7 @@
 #define PC_SPLAT_LIMIT 0x1.0p62f
 
 /* Adds q to the 64-bit word pair (low word first). */
-inline void splat_add_u64(volatile __global uint* word, ulong q) {
+static inline void splat_add_u64(volatile __global uint* word, ulong q) {
 #ifdef PC_SPLAT_ATOMIC64
   atom_add((volatile __global ulong*)word, q);
 #else
@@ -27,10 +27,10 @@ inline void splat_add_u64(volatile __global uint* word, ulong q) {
 }
 
 /* The 64-bit sum of a word pair (low word first), once no more is added to it. */
-inline ulong splat_word_pair(__global const uint* word) { return (ulong)word[0] | (ulong)word[1] << 32; }
+static inline ulong splat_word_pair(__global const uint* word) { return (ulong)word[0] | (ulong)word[1] << 32; }
 
 /* v (>= 0, finite) in fixed point with `scale` units per unit: false (nothing added) when too large. */
-inline bool splat_add(volatile __global uint* word, float v, float scale) {
+static inline bool splat_add(volatile __global uint* word, float v, float scale) {
   float q = v * scale;
   if (!(q < PC_SPLAT_LIMIT)) return false;
   ulong n = convert_ulong_rte(q);
@@ -40,7 +40,7 @@ inline bool splat_add(volatile __global uint* word, float v, float scale) {
 
 /* Adds colour c to pixel `pixel` of parity `parity` (the sample's parity), and its square to the squares;
  * returns the number of overflows (0 to 2). */
-inline uint splat_pixel(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
+static inline uint splat_pixel(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
   volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
   uint overflows = 0u;
   float v[3] = {c.x, c.y, c.z};
@@ -53,7 +53,7 @@ inline uint splat_pixel(__global uint* film, __constant const LightTransportHead
 }
 
 /* BDPT: adds a camera subpath's colour c to its own pixel, as splat_pixel does and to the camera sums. */
-inline uint splat_camera(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
+static inline uint splat_camera(__global uint* film, __constant const LightTransportHeader* lt, uint pixel, uint parity, float3 c) {
   volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
   uint overflows = splat_pixel(film, lt, pixel, parity, c);
   float v[3] = {c.x, c.y, c.z};

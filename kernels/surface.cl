@@ -14,10 +14,10 @@ typedef struct {
   uint instance; /* with instances (PC_HAS_INSTANCES): the instance of prim; 0 otherwise */
 } Surface;
 
-inline float3 triangle_normal(Primitive p) { return pc_normalize(pc_cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz)); }
+static inline float3 triangle_normal(Primitive p) { return pc_normalize(pc_cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz)); }
 
 /* Outward normal at a point of a sphere, inward when the sphere's normals are flipped. */
-inline float3 sphere_normal(Primitive p, float3 at, uint flags) {
+static inline float3 sphere_normal(Primitive p, float3 at, uint flags) {
   float3 n = (at - p.a.xyz) / p.b.x;
   return (flags & PC_FLAG_FLIP_NORMAL) ? -n : n;
 }
@@ -26,7 +26,7 @@ inline float3 sphere_normal(Primitive p, float3 at, uint flags) {
 /* A normal of the mesh's coordinates in the device's: by the inverse transpose of to_device's linear part,
  * which is the transpose of to_mesh's. It keeps the side a normal points to, also for a mirroring
  * transform, so the front stays the front. */
-inline float3 transform_normal(__global const float4* to_mesh, float3 n) {
+static inline float3 transform_normal(__global const float4* to_mesh, float3 n) {
   float4 r0 = to_mesh[0], r1 = to_mesh[1], r2 = to_mesh[2];
   return (float3)((r0.x * n.x + r1.x * n.y) + r2.x * n.z, (r0.y * n.x + r1.y * n.y) + r2.y * n.z,
                   (r0.z * n.x + r1.z * n.y) + r2.z * n.z);
@@ -35,7 +35,7 @@ inline float3 transform_normal(__global const float4* to_mesh, float3 n) {
 /* A surface of an instance's mesh (in the mesh's coordinates, as scene_surface_lanes first finds it) in the device's
  * coordinates. The error bound of the transformed point is pbrt-v4's: the point's own bound carried
  * through the matrix, plus the rounding of the transform's products and sums. */
-inline void place_surface(Surface* s, __global const Instance* inst) {
+static inline void place_surface(Surface* s, __global const Instance* inst) {
   float3 p = s->p, e = s->p_err;
   __global const float4* m = inst->to_device;
   s->p = transform_point(m, p);
@@ -74,7 +74,7 @@ typedef struct {
 
 /* A vertex attribute of 3 float4 per primitive (smooth normals, vertex colours) at barycentric (b0, u, v)
  * of each lane's primitive: (a b0 + b u) + c v. */
-inline Lane3 vertex_blend_lanes(__global const float4* vertices, LaneU prim, LaneF b0, LaneF u, LaneF v) {
+static inline Lane3 vertex_blend_lanes(__global const float4* vertices, LaneU prim, LaneF b0, LaneF u, LaneF v) {
   Lane3 a, b, c;
   LaneF unused;
   lane_gather4(vertices, 3u, prim, &a, &unused);
@@ -86,8 +86,8 @@ inline Lane3 vertex_blend_lanes(__global const float4* vertices, LaneU prim, Lan
 /* The surfaces at the hits of trace_scene (trace_lanes) of the lanes in m (the others get the first such
  * lane's), in the device's coordinates. A point on a sphere is re-projected onto it (pbrt-v4): its error is
  * then a few ulps of the offset from the centre. */
-inline SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
-                                        ShadingLanes* shading) {
+PC_OUT_OF_LINE SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
+                                               ShadingLanes* shading) {
   LaneU slot = lane_safe_index(hit->slot, m);
   Lane3 a, b, c;
   LaneF a_w, b_w, c_w;
@@ -186,20 +186,20 @@ PC_LANE_INLINE void spawn_ray_to_lanes(Lane3 p, Lane3 p_err, Lane3 n, LaneU prim
 
 #if PC_LANES == 1
 /* The surface at a hit of the scene (trace_scene), in the device's coordinates. */
-inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
+static inline Surface scene_surface(const SceneData* sc, const Ray* ray, const Hit* hit) {
   ShadingLanes shading;
   return scene_surface_lanes(sc, ray, hit, 1, &shading);
 }
 
 /* spawn_ray_lanes from surface point s; the cut-out seed is the caller's. */
-inline Ray spawn_ray(const Surface* s, float3 w) {
+static inline Ray spawn_ray(const Surface* s, float3 w) {
   Ray r;
   spawn_ray_lanes(s->p, s->p_err, s->ng, s->prim, s->instance, w, &r);
   r.cutout_seed = 0u;
   return r;
 }
 
-inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
+static inline Ray spawn_ray_to(float3 p, float3 p_err, float3 n, uint prim, uint instance, float3 q, float3 q_err, float3 nq) {
   Ray r;
   spawn_ray_to_lanes(p, p_err, n, prim, instance, q, q_err, nq, &r);
   r.cutout_seed = 0u;

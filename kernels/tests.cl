@@ -141,9 +141,9 @@ __kernel void brute_force_trace(__global const Primitive* prims, uint prim_count
  * shadow ray to it, stopped short like the integrator's). out: scene-order primitive hit, or PC_INVALID. */
 /* The surface at triangle slot q[0] (uint bits), barycentrics q[1], q[2], of a scene without placed
  * instances (instance 0 is the whole scene, untransformed). */
-inline Surface query_surface(__global const Primitive* prims, __global const PrimShading* shading,
-                             __global const float4* normals, __global const Instance* instances,
-                             __global const float* q) {
+static inline Surface query_surface(__global const Primitive* prims, __global const PrimShading* shading,
+                                    __global const float4* normals, __global const Instance* instances,
+                                    __global const float* q) {
   SceneData sc; /* the arrays scene_surface reads */
   sc.prims = prims;
   sc.shading = shading;

@@ -132,11 +132,11 @@ PC_BENCH(pc_sin, float, pc_sin(x))
 PC_BENCH(sin, float, sin(x))
 PC_BENCH(pc_cos, float, pc_cos(x))
 PC_BENCH(cos, float, cos(x))
-inline float pc_sincos_sum_(float x) {
+static inline float pc_sincos_sum_(float x) {
   float c, s = pc_sincos(x, &c);
   return s + c;
 }
-inline float sincos_sum_(float x) {
+static inline float sincos_sum_(float x) {
   float c, s = sincos(x, &c);
   return s + c;
 }

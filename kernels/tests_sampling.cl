@@ -21,15 +21,15 @@
 #include "emission.cl"
 #include "camera_importance.cl"
 
-inline float4 test_random4(uint item, uint seed) {
+static inline float4 test_random4(uint item, uint seed) {
   uint4 v = pcg4d((uint4)(item, seed, 0x9e3779b9u, 0x85ebca6bu));
   return convert_float4(v >> 8u) * 0x1.0p-24f;
 }
 
 /* Quadrature node (i, j) of bin `bin` with Gauss-Legendre nodes/weights on [0, 1]: the direction, and
  * in *w the node's weight times the Jacobian sin(theta) dtheta dphi. */
-inline float3 bin_node(__global const float4* binning, uint bin, __global const float* nodes,
-                       __global const float* weights, uint i, uint j, float* w) {
+static inline float3 bin_node(__global const float4* binning, uint bin, __global const float* nodes,
+                              __global const float* weights, uint i, uint j, float* w) {
   uint theta_bins = (uint)binning[3].y, phi_bins = (uint)binning[3].z;
   float dt = binning[3].x / (float)theta_bins, dp = 2.0f * PC_PI / (float)phi_bins;
   float theta = ((float)(bin / phi_bins) + nodes[i]) * dt;
@@ -105,7 +105,7 @@ __kernel void fresnel_conductor_test(__global const float* cos_i, float4 eta, fl
 /* The density with which light sampling from x produces direction d, found the way a BSDF-sampled ray
  * finds it (as the integrator's MIS does): trace the ray; an emitter hit gives light_pdf there, an
  * escape gives the environment's pdf. *le: the radiance seen along d (first channel). */
-inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float* le) {
+static inline float direction_light_pdf(const SceneData* sc, float3 x, float3 d, float* le) {
   Ray ray;
   ray.o = x;
   ray.d = d;
@@ -208,8 +208,8 @@ __kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
  * (px, py, u), and from (u.x, u.y) the disk point (2), cosine (3) and sphere (3) directions and
  * triangle barycentrics (2). */
 #define PC_CAMERA_LANES_TEST(F, U, V3, N, LOAD, STORE)                                                   \
-  inline void camera_lanes_write_##N(__constant const SceneHeader* h, U px, U py, F u0, F u1, F u2, F u3, \
-                                     __global uint* o) {                                                  \
+  static inline void camera_lanes_write_##N(__constant const SceneHeader* h, U px, U py, F u0, F u1, F u2, F u3, \
+                                            __global uint* o) {                                           \
     V3 ro, rd;                                                                                            \
     camera_ray_lanes(h, px, py, u0, u1, u2, u3, &ro, &rd);                                                \
     F r[16];                                                                                              \
@@ -260,7 +260,7 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
  * as bits at out[((3 i + width) 16 + j) 10 + k] (width 0: 16 lanes, 1: 8, 2: one): t, b, the offset
  * origin (3 each) and the weight. */
 #define PC_MATH_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
-  inline void math_lanes_write_##N(float in[14][16], uint first, __global uint* o) {                    \
+  static inline void math_lanes_write_##N(float in[14][16], uint first, __global uint* o) {             \
     F v[14];                                                                                              \
     for (uint k = 0u; k < 14u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 t, b;                                                                                              \
@@ -283,7 +283,7 @@ PC_MATH_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
  * out[((3 i + width) 16 + j) 36 + k] (width 0: 16 lanes, 1: 8, 2: one): per lobe eval (3), pdf, the
  * sample's wi (3), pdf, weight (3) and validity (1 or 0). */
 #define PC_BSDF_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
-  inline void bsdf_lanes_write_##N(float in[17][16], uint first, __global uint* o) {                    \
+  static inline void bsdf_lanes_write_##N(float in[17][16], uint first, __global uint* o) {             \
     F v[17];                                                                                              \
     for (uint k = 0u; k < 17u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 c = lane3(v[0], v[1], v[2]), wo = lane3(v[4], v[5], v[6]), wi = lane3(v[7], v[8], v[9]);           \
@@ -315,7 +315,7 @@ PC_BSDF_LANES_TEST(lane3f16, float16, 16, PC_LOAD_LANES_16, PC_STORE_LANES_16)
  * sample's wi (3), pdf, weight (3), validity, delta (1 or 0) and eta2 (the delta lobes' eval and pdf,
  * and all but the dielectric's eta2, are written as 0, 0 and 1). */
 #define PC_FRESNEL_LOBES_LANES_TEST(V3, F, I, N, LOAD, STORE)                                             \
-  inline void fresnel_lobes_lanes_write_##N(float in[20][16], uint first, __global uint* o) {             \
+  static inline void fresnel_lobes_lanes_write_##N(float in[20][16], uint first, __global uint* o) {      \
     F v[20];                                                                                              \
     for (uint k = 0u; k < 20u; ++k) v[k] = LOAD(in[k] + first);                                           \
     V3 c = lane3(v[0], v[1], v[2]), eta = lane3(v[5], v[6], v[7]), kk = lane3(v[8], v[9], v[10]);         \
@@ -559,7 +559,7 @@ __kernel void camera_we_pdf_bins(__constant const SceneHeader* h, float4 o, __gl
 /* The solid-angle density at x of the direction d towards the lens, as camera_sample_wi claims it: the
  * lens point where the ray (x, d) meets the lens disk, its area density times dist^2 / cos at the lens;
  * 0 where the ray misses the lens. */
-inline float camera_wi_density(__constant const SceneHeader* h, float3 x, float3 d) {
+static inline float camera_wi_density(__constant const SceneHeader* h, float3 x, float3 d) {
   float3 fwd = h->cam_forward.xyz;
   float c = -pc_dot(d, fwd);
   if (!(c > 0.0f)) return 0.0f;

@@ -12,7 +12,7 @@
 __constant float pc_srgb_to_linear[256] = PC_SRGB_TO_LINEAR_TABLE;
 
 /* Texel index along an axis of n texels for integer coordinate i under the wrap mode. */
-inline int wrap_texel(int i, int n, uint wrap) {
+static inline int wrap_texel(int i, int n, uint wrap) {
   if (wrap == PC_WRAP_CLAMP) return clamp(i, 0, n - 1);
   if (wrap == PC_WRAP_MIRROR) {
     int period = 2 * n;
@@ -23,7 +23,7 @@ inline int wrap_texel(int i, int n, uint wrap) {
 }
 
 /* The linear RGB of texel (x, y); the conversions from bytes and halves are exact. */
-inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
+static inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
   uint i = (uint)y * t.width + (uint)x;
   __global const uint* image = texels + t.offset;
   if (t.format == PC_TEXELS_SRGB8) {
@@ -42,7 +42,7 @@ inline float3 texel_at(__global const uint* texels, Texture t, int x, int y) {
 
 /* Bilinear interpolation at texel coordinates (x, y), texel centres at integers, columns wrapped by
  * wrap_x and rows by wrap_y. */
-inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, float y, uint wrap_x, uint wrap_y) {
+static inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, float y, uint wrap_x, uint wrap_y) {
   /* Far outside the image the coordinates lose precision; keep them bounded. */
   x = clamp(x, -1.0e6f, 1.0e6f);
   y = clamp(y, -1.0e6f, 1.0e6f);
@@ -57,7 +57,7 @@ inline float3 texture_bilinear(__global const uint* texels, Texture t, float x, 
 }
 
 /* uv at barycentrics (u, v) of triangle prim (uvs: 2 per primitive, kernels/scene.cl). */
-inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float v) {
+static inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float v) {
   float4 a = uvs[2 * prim], b = uvs[2 * prim + 1];
   return (1.0f - u - v) * a.xy + u * a.zw + v * b.xy;
 }
@@ -67,7 +67,7 @@ inline float2 triangle_uv(__global const float4* uvs, uint prim, float u, float 
  * color1 where floor(x) + floor(y) is odd, else color0. It is tested as Mitsuba's checkerboard tests its
  * (src/textures/checkerboard.cpp: frac(s) > 0.5 along each axis, s = x / 2), so that on a tile's edge the
  * same side wins; halving, floor and the subtraction are exact. */
-inline float3 checker_lookup(__global const uint* texels, Texture t, float2 uv) {
+static inline float3 checker_lookup(__global const uint* texels, Texture t, float2 uv) {
   __global const float* w = (__global const float*)(texels + t.offset);
   float2 s = 0.5f * ((float2)(uv.x, 1.0f - uv.y) * vload2(3, w) + vload2(4, w));
   int2 upper = isgreater(s - floor(s), (float2)(0.5f));
@@ -75,7 +75,7 @@ inline float3 checker_lookup(__global const uint* texels, Texture t, float2 uv) 
 }
 
 /* Bilinear lookup at (u, v) under the texture's wrap mode; texel centres at half-integer coordinates. */
-inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
+static inline float3 texture_lookup(__global const Texture* textures, __global const uint* texels, uint index, float2 uv) {
   Texture t = textures[index];
   if (t.format == PC_TEXELS_CHECKER) return checker_lookup(texels, t, uv);
   return texture_bilinear(texels, t, uv.x * (float)t.width - 0.5f, (1.0f - uv.y) * (float)t.height - 0.5f, t.wrap,

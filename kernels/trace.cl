@@ -7,7 +7,7 @@
 /* A ray's record: its hit, or t = INFINITY and no primitive. The hit's own scene-order index, not
  * prims[hit->slot]'s: that load is a cache miss per ray on a large scene (a tenth of the kernel's time on
  * the terrain's bounce rays). */
-inline HitRecord hit_record(bool found, const Hit* hit) {
+static inline HitRecord hit_record(bool found, const Hit* hit) {
   HitRecord out;
   out.t = found ? hit->t : INFINITY;
   out.prim = found ? hit->prim : PC_INVALID;

@@ -35,13 +35,13 @@ typedef struct {
 
 /* The cut-out seed of ray ray_index (PC_RAY_* of sampler.cl) of each lane's path: cutout.cl's cutout_seed
  * by lane. */
-inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, LaneU sample, LaneU ray_index) {
+static inline LaneU cutout_seed_lanes(__constant const SceneHeader* h, LaneU pixel, LaneU sample, LaneU ray_index) {
   return hash4(pixel, sample, (LaneU)(h->seed ^ 0x3c6ef372u), ray_index);
 }
 
 /* The rays of the lanes in m: the nearest hits (with any_hit: whether each is blocked). Returns the lanes
  * with a hit; lanes outside m have none. */
-inline LaneI trace_lanes(const SceneData* sc, const RayLanes* r, LaneI m, bool any_hit, HitLanes* hit) {
+static inline LaneI trace_lanes(const SceneData* sc, const RayLanes* r, LaneI m, bool any_hit, HitLanes* hit) {
 #ifdef PC_TRACE_PACKETS
   PC_PACKET_OF_LANES(PC_LANES) p;
   p.o = r->o;

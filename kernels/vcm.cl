@@ -50,18 +50,18 @@ typedef struct {
   uint overflows;
 } MergeSums;
 
-inline uint grid_table(uint paths) {
+static inline uint grid_table(uint paths) {
   uint t = 1u;
   while (t < paths) t <<= 1;
   return t;
 }
 
-inline float iteration_radius2(__constant const LightTransportHeader* lt, uint iteration) {
+static inline float iteration_radius2(__constant const LightTransportHeader* lt, uint iteration) {
   return lt->radius * lt->radius * pc_powr((float)(iteration + 1u), lt->alpha - 1.0f);
 }
 
 /* The merging factors of an iteration (light_path.cl's MisFactors). */
-inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, float radius2) {
+static inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, float radius2) {
   MisFactors m;
   bool merge = (lt->vcm_mode & PC_VCM_MERGE) != 0u, sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
   m.connect = (lt->vcm_mode & PC_VCM_CONNECT) != 0u;
@@ -74,21 +74,21 @@ inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, _
 
 /* Cells are 2 r wide: what a position is scaled by to find its cell (one expression for the grid's build and
  * its queries, which must agree). */
-inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
+static inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
 
-inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
+static inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
 
-inline uint grid_bucket(int x, int y, int z, uint table) {
+static inline uint grid_bucket(int x, int y, int z, uint table) {
   return (((uint)x * 73856093u) ^ ((uint)y * 19349663u) ^ ((uint)z * 83492791u)) & (table - 1u);
 }
 
-inline uint grid_bucket_of(float3 p, float3 origin, float inv_cell, uint table) {
+static inline uint grid_bucket_of(float3 p, float3 origin, float inv_cell, uint table) {
   float3 q = floor((p - origin) * inv_cell);
   return grid_bucket(grid_coordinate(q.x), grid_coordinate(q.y), grid_coordinate(q.z), table);
 }
 
 /* Adds merge c to the sums (NaN, infinite or negative ones counted and dropped, as splats are). */
-inline void merge_add(MergeSums* m, float3 c, __constant const LightTransportHeader* lt, SplatCounts* n) {
+static inline void merge_add(MergeSums* m, float3 c, __constant const LightTransportHeader* lt, SplatCounts* n) {
   if (!splat_is_valid(c, n)) return;
   float v[3] = {c.x, c.y, c.z};
   for (uint k = 0; k < 3u; ++k) {
@@ -114,9 +114,9 @@ inline void merge_add(MergeSums* m, float3 c, __constant const LightTransportHea
  * f(wo, wl) beta / (pi r^2 N) times the shading normal's cosine over the geometric one (the photon's
  * density is per area, the camera's integral over the shading normal's cosine, as in path tracing), weighted
  * by MIS against every strategy making the path (SmallVCM's eq.), or not at all for SPPM. */
-inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, Material m, const FrameLanes* f,
-                     float3 wo_local, float wo_ng, uint depth, float3 throughput, float dvcm, float dvm, float vc,
-                     bool sppm, __constant const LightTransportHeader* lt, MergeSums* out, SplatCounts* n) {
+static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, Material m, const FrameLanes* f,
+                            float3 wo_local, float wo_ng, uint depth, float3 throughput, float dvcm, float dvm, float vc,
+                            bool sppm, __constant const LightTransportHeader* lt, MergeSums* out, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
   /* The 2 x 2 x 2 cells about s->p that a ball of radius r about it can reach (cells are 2 r wide). */
   float3 q = (s->p - g->origin) * g->inv_cell, fl = floor(q);

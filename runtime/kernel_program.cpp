@@ -159,10 +159,10 @@ std::string assemble_kernel_source(const std::string& main_file) {
   // the OpenCL implementation (and let rays slip through shared triangle edges).
   // And clang's ABI notes (-Wpsabi) are off: compiled for a CPU without AVX-512 (PoCL on AVX2), every call
   // passing a float16 or uint16 draws one (the ray tracer's 16-wide packets: 136; 16 lanes: 1152), which
-  // PoCL prints at each build (612 for the Cornell box's 8-lane program: PoCL builds with -Dinline=, so the
-  // 16-lane functions of the lane templates are compiled there too, though never called). They say that
-  // such a call would differ from one compiled for AVX-512; a program's functions are compiled together,
-  // for one target.
+  // PoCL printed at each build (612 for the Cornell box's 8-lane program before the kernels' functions were
+  // static: PoCL builds with -Dinline=, and compiled the 16-lane functions of the lane templates there too).
+  // They say that such a call would differ from one compiled for AVX-512; a program's functions are
+  // compiled together, for one target.
   std::string out = "#pragma OPENCL FP_CONTRACT OFF\n#ifdef __clang__\n#pragma clang diagnostic ignored \"-Wpsabi\"\n#endif\n";
   expand(main_file, seen, out);
   return out;

@@ -2,7 +2,7 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight, F* eta2) {
+static inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight, F* eta2) {
   I entering = wo.z > 0.0f;
   F eta = select(1.0f / ior, ior, entering); /* n_t / n_i */
   F f = fresnel_dielectric(fabs(wo.z), eta);
@@ -22,7 +22,7 @@ inline PC_OVL I dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf
  * R' = R + T^2 R / (1 - R^2) = 2 R / (1 + R) with R the Fresnel reflectance of one face and T = 1 - R;
  * what is not reflected passes straight through (no offset, no bending, no radiance scaling), tinted by c.
  * Both sides alike (the caller flips wo to +z). */
-inline PC_OVL I thin_dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight) {
+static inline PC_OVL I thin_dielectric_sample_lanes(V3 c, F ior, V3 wo, F u2, V3* wi, F* pdf, V3* weight) {
   F r = fresnel_dielectric(fabs(wo.z), ior);
   r = 2.0f * r / (1.0f + r);
   I reflected = u2 < r;

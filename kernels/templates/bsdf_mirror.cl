@@ -2,7 +2,7 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL I mirror_sample_lanes(V3 c, V3 wo, V3* wi, F* pdf, V3* weight) {
+static inline PC_OVL I mirror_sample_lanes(V3 c, V3 wo, V3* wi, F* pdf, V3* weight) {
   *wi = reflect_local(wo);
   *weight = c;
   *pdf = 1.0f;

@@ -2,7 +2,7 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {
+static inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {
   F s2 = sigma * sigma;
   F a = 1.0f - s2 / (2.0f * (s2 + 0.33f));
   F b = 0.45f * s2 / (s2 + 0.09f);
@@ -19,9 +19,9 @@ inline PC_OVL V3 oren_nayar_eval_lanes(V3 c, F sigma, V3 wo, V3 wi) {
   return lane3(select(c.x * PC_INV_PI * k, (F)(0.0f), below), select(c.y * PC_INV_PI * k, (F)(0.0f), below),
                select(c.z * PC_INV_PI * k, (F)(0.0f), below));
 }
-inline PC_OVL F oren_nayar_pdf_lanes(V3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }
+static inline PC_OVL F oren_nayar_pdf_lanes(V3 wi) { return fmax(wi.z, 0.0f) * PC_INV_PI; }
 /* Sampled like Lambert; the mask: where the sample is valid (weight is then f cos / pdf). */
-inline PC_OVL I oren_nayar_sample_lanes(V3 c, F sigma, V3 wo, F u0, F u1, V3* wi, F* pdf, V3* weight) {
+static inline PC_OVL I oren_nayar_sample_lanes(V3 c, F sigma, V3 wo, F u0, F u1, V3* wi, F* pdf, V3* weight) {
   F x, y, z;
   sample_cosine_hemisphere_lanes(u0, u1, &x, &y, &z);
   *wi = lane3(x, y, z);

@@ -2,12 +2,12 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL F phong_specular_probability_lanes(V3 color, V3 specular) {
+static inline PC_OVL F phong_specular_probability_lanes(V3 color, V3 specular) {
   F d = luminance_lanes(color), s = luminance_lanes(specular);
   return select((F)(0.0f), s / (d + s), d + s > 0.0f);
 }
-inline PC_OVL F phong_cos_alpha_lanes(V3 wo, V3 wi) { return pc_dot(lane3(-wo.x, -wo.y, wo.z), wi); }
-inline PC_OVL V3 phong_eval_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 wi) {
+static inline PC_OVL F phong_cos_alpha_lanes(V3 wo, V3 wi) { return pc_dot(lane3(-wo.x, -wo.y, wo.z), wi); }
+static inline PC_OVL V3 phong_eval_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 wi) {
   F c = phong_cos_alpha_lanes(wo, wi);
   F spec = (exponent + 2.0f) * (0.5f * PC_INV_PI) * pc_powr(c, exponent);
   spec = select((F)(0.0f), spec, c > 0.0f);
@@ -16,7 +16,7 @@ inline PC_OVL V3 phong_eval_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 w
                select(color.y * PC_INV_PI + specular.y * spec, (F)(0.0f), below),
                select(color.z * PC_INV_PI + specular.z * spec, (F)(0.0f), below));
 }
-inline PC_OVL F phong_pdf_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 wi) {
+static inline PC_OVL F phong_pdf_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 wi) {
   F ps = phong_specular_probability_lanes(color, specular);
   F c = phong_cos_alpha_lanes(wo, wi);
   F lobe = (exponent + 1.0f) * (0.5f * PC_INV_PI) * pc_powr(c, exponent);
@@ -26,8 +26,8 @@ inline PC_OVL F phong_pdf_lanes(V3 color, V3 specular, F exponent, V3 wo, V3 wi)
 }
 /* u2 chooses the lobe: cos^n about the mirror direction (cos(alpha) = u0^(1 / (n + 1))) or cosine-
  * weighted; the mask: where the sample is valid (weight is then f cos / pdf). */
-inline PC_OVL I phong_sample_lanes(V3 color, V3 specular, F exponent, V3 wo, F u0, F u1, F u2, V3* wi,
-                                   F* pdf, V3* weight) {
+static inline PC_OVL I phong_sample_lanes(V3 color, V3 specular, F exponent, V3 wo, F u0, F u1, F u2, V3* wi,
+                                          F* pdf, V3* weight) {
   F cos_a = pc_powr(u0, 1.0f / (exponent + 1.0f));
   F sin_a = sqrt(fmax(0.0f, 1.0f - cos_a * cos_a));
   F phi = 2.0f * PC_PI * u1;

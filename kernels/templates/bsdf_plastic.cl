@@ -2,13 +2,13 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL F plastic_coat_probability_lanes(V3 c, F ior, V3 wo) {
+static inline PC_OVL F plastic_coat_probability_lanes(V3 c, F ior, V3 wo) {
   F f = fresnel_dielectric(wo.z, ior);
   F base = (1.0f - f) * fmax(c.x, fmax(c.y, c.z));
   return select((F)(1.0f), f / (f + base), f + base > 0.0f);
 }
 /* The non-delta part: the base, plus the rough coat. */
-inline PC_OVL V3 plastic_eval_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
+static inline PC_OVL V3 plastic_eval_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
   F base = PC_INV_PI * (1.0f - fresnel_dielectric(wo.z, ior)) * (1.0f - fresnel_dielectric(wi.z, ior));
   V3 h = pc_normalize(lane3(wo.x + wi.x, wo.y + wi.y, wo.z + wi.z));
   F coat = fresnel_dielectric(pc_dot(wo, h), ior) * ggx_d(h, alpha) * ggx_g2(wo, wi, alpha) / (4.0f * wo.z * wi.z);
@@ -19,7 +19,7 @@ inline PC_OVL V3 plastic_eval_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
   fz = select(fz, fz + coat, rough);
   return lane3(select(fx, (F)(0.0f), below), select(fy, (F)(0.0f), below), select(fz, (F)(0.0f), below));
 }
-inline PC_OVL F plastic_pdf_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
+static inline PC_OVL F plastic_pdf_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
   F pc = plastic_coat_probability_lanes(c, ior, wo);
   F pdf = (1.0f - pc) * wi.z * PC_INV_PI;
   pdf = select(pdf, pdf + pc * ggx_reflection_pdf(wo, wi, alpha), alpha > 0.0f);
@@ -27,8 +27,8 @@ inline PC_OVL F plastic_pdf_lanes(V3 c, F ior, F alpha, V3 wo, V3 wi) {
 }
 /* u2 chooses the lobe: the coat (a delta where alpha = 0: *delta set) or the base. The mask: where the
  * sample is valid. */
-inline PC_OVL I plastic_sample_lanes(V3 c, F ior, F alpha, V3 wo, F u0, F u1, F u2, V3* wi, F* pdf,
-                                     V3* weight, I* delta) {
+static inline PC_OVL I plastic_sample_lanes(V3 c, F ior, F alpha, V3 wo, F u0, F u1, F u2, V3* wi, F* pdf,
+                                            V3* weight, I* delta) {
   F pc = plastic_coat_probability_lanes(c, ior, wo);
   I coat = u2 < pc;
   *delta = coat & (alpha == 0.0f);

@@ -3,7 +3,7 @@
 #include "templates/lane_width.h"
 
 /* Inverse error function, single precision (Giles 2010). */
-inline PC_OVL F erf_inverse(F x) {
+static inline PC_OVL F erf_inverse(F x) {
   F w = -pc_log(fmax((1.0f - x) * (1.0f + x), FLT_MIN)), p = (F)(0.0f);
   I central = w < 5.0f;
   if (pc_any_(central)) {
@@ -35,7 +35,7 @@ inline PC_OVL F erf_inverse(F x) {
   return p * x;
 }
 /* An offset from the pixel centre, in pixels, distributed as the filter along one axis. */
-inline PC_OVL F sample_filter_1d(__constant const SceneHeader* h, F u) {
+static inline PC_OVL F sample_filter_1d(__constant const SceneHeader* h, F u) {
   float r = h->filter_radius;
   if (h->filter == PC_FILTER_TENT) return select(r * (1.0f - sqrt(2.0f - 2.0f * u)), r * (sqrt(2.0f * u) - 1.0f), u < 0.5f);
   if (h->filter == PC_FILTER_GAUSSIAN) {
@@ -48,8 +48,8 @@ inline PC_OVL F sample_filter_1d(__constant const SceneHeader* h, F u) {
 }
 /* The camera ray through pixel (px, py) of each lane: u0, u1 the position in the pixel (through the
  * filter), u2, u3 the position on the lens. */
-inline PC_OVL void camera_ray_lanes(__constant const SceneHeader* h, U px, U py, F u0, F u1, F u2, F u3,
-                                    V3* o, V3* d) {
+static inline PC_OVL void camera_ray_lanes(__constant const SceneHeader* h, U px, U py, F u0, F u1, F u2, F u3,
+                                           V3* o, V3* d) {
   F fx = convert_F(px) + 0.5f + sample_filter_1d(h, u0);
   F fy = convert_F(py) + 0.5f + sample_filter_1d(h, u1);
   F sx = 2.0f * fx / (float)h->width - 1.0f;

@@ -3,39 +3,39 @@
 #include "templates/lane_width.h"
 
 /* Bit casts and conversions under one name per type, for the algorithms below. */
-inline PC_OVL U pc_bits_(F x) { return as_U(x); }
-inline PC_OVL F pc_float_(U b) { return as_F(b); }
-inline PC_OVL I pc_int_(U b) { return as_I(b); }
-inline PC_OVL U pc_uint_(I i) { return as_U(i); }
-inline PC_OVL F pc_to_float_(I i) { return convert_F(i); }
-inline PC_OVL F pc_to_float_(U i) { return convert_F(i); }
-inline PC_OVL I pc_to_int_(F x) { return convert_I(x); }
+static inline PC_OVL U pc_bits_(F x) { return as_U(x); }
+static inline PC_OVL F pc_float_(U b) { return as_F(b); }
+static inline PC_OVL I pc_int_(U b) { return as_I(b); }
+static inline PC_OVL U pc_uint_(I i) { return as_U(i); }
+static inline PC_OVL F pc_to_float_(I i) { return convert_F(i); }
+static inline PC_OVL F pc_to_float_(U i) { return convert_F(i); }
+static inline PC_OVL I pc_to_int_(F x) { return convert_I(x); }
 /* x, and a denormal x as a zero of its sign. */
-inline PC_OVL F pc_flush_(F x) { return select(x, copysign((F)0.0f, x), fabs(x) < FLT_MIN); }
+static inline PC_OVL F pc_flush_(F x) { return select(x, copysign((F)0.0f, x), fabs(x) < FLT_MIN); }
 /* A product p of normal numbers, as a zero where it is at most FLT_MIN: a product rounded up to FLT_MIN
  * by gradual underflow may be flushed on a device that detects tininess before rounding. */
-inline PC_OVL F pc_flush_product_(F p) { return select(p, copysign((F)0.0f, p), fabs(p) <= FLT_MIN); }
+static inline PC_OVL F pc_flush_product_(F p) { return select(p, copysign((F)0.0f, p), fabs(p) <= FLT_MIN); }
 
 /* Error-free transformations (round to nearest, no FMA, no overflow; callers keep the operands where the
  * low parts stay normal or below half an ulp of what they are added to):
  *   two_sum: s + e = a + b exactly (Knuth);  fast_two_sum: the same when exponent(a) >= exponent(b);
  *   two_prod: p + e = a * b exactly (Dekker, with Veltkamp's split into 12-bit halves). */
-inline PC_OVL F pc_two_sum_(F a, F b, F* e) {
+static inline PC_OVL F pc_two_sum_(F a, F b, F* e) {
   F s = a + b, bb = s - a;
   *e = (a - (s - bb)) + (b - bb);
   return s;
 }
-inline PC_OVL F pc_fast_two_sum_(F a, F b, F* e) {
+static inline PC_OVL F pc_fast_two_sum_(F a, F b, F* e) {
   F s = a + b;
   *e = b - (s - a);
   return s;
 }
-inline PC_OVL F pc_split_(F a, F* lo) {
+static inline PC_OVL F pc_split_(F a, F* lo) {
   F c = 4097.0f * a, hi = c - (c - a);
   *lo = a - hi;
   return hi;
 }
-inline PC_OVL F pc_two_prod_(F a, F b, F* e) {
+static inline PC_OVL F pc_two_prod_(F a, F b, F* e) {
   F p = a * b, al, bl, ah = pc_split_(a, &al), bh = pc_split_(b, &bl);
   *e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
   return p;
@@ -49,7 +49,7 @@ inline PC_OVL F pc_two_prod_(F a, F b, F* e) {
 
 /* 0 <= a < 4096 (k <= 2608): the first two subtractions are exact (Sterbenz, then both terms are
  * multiples of 2^-24 below 1), the next two error-free, the last product's error below 2^-60. */
-inline PC_OVL F pc_reduce_cody_waite_(F a, F* lo, I* q) {
+static inline PC_OVL F pc_reduce_cody_waite_(F a, F* lo, I* q) {
   F k = rint(a * 0x1.45f306p-1f), e1, e2;
   F t = (a - k * PC_CW1) - k * PC_CW2;
   F h = pc_two_sum_(t, -(k * PC_CW3), &e1);
@@ -58,7 +58,7 @@ inline PC_OVL F pc_reduce_cody_waite_(F a, F* lo, I* q) {
   return pc_fast_two_sum_(h, (e1 + e2) - k * PC_CW5, lo);
 }
 /* Word i (0..7) of 2/pi's bits behind one zero word (padding for exponents below the binary point). */
-inline PC_OVL U pc_two_over_pi_word_(U i) {
+static inline PC_OVL U pc_two_over_pi_word_(U i) {
   I b0 = (i & 1u) != 0u, b1 = (i & 2u) != 0u, b2 = (i & 4u) != 0u;
   U w01 = select((U)0u, (U)0xa2f9836eu, b0), w23 = select((U)0x4e441529u, (U)0xfc2757d1u, b0);
   U w45 = select((U)0xf534ddc0u, (U)0xdb629599u, b0), w67 = select((U)0x3c439041u, (U)0xfe5163abu, b0);
@@ -66,7 +66,7 @@ inline PC_OVL U pc_two_over_pi_word_(U i) {
 }
 /* 4096 <= a < inf, a = m 2^E: x 2/pi mod 4 = m W 2^-94 mod 4 for the 96-bit window W of 2/pi that
  * starts at bit E - 1 (earlier bits give multiples of 4, later ones less than 2^-70). */
-inline PC_OVL F pc_reduce_payne_hanek_(F a, F* lo, I* q) {
+static inline PC_OVL F pc_reduce_payne_hanek_(F a, F* lo, I* q) {
   U b = pc_bits_(a), m = (b & 0x7fffffu) | 0x800000u;
   U start = (b >> 23) - 120u, w = start >> 5, s = start & 31u;
   U a0 = pc_two_over_pi_word_(w), a1 = pc_two_over_pi_word_(w + 1u);
@@ -99,7 +99,7 @@ inline PC_OVL F pc_reduce_payne_hanek_(F a, F* lo, I* q) {
   *lo = select(*lo, -*lo, neg);
   return select(hi, -hi, neg);
 }
-inline PC_OVL F pc_sincos(F x, F* cosval) {
+static inline PC_OVL F pc_sincos(F x, F* cosval) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   F a = pc_float_(select(ab, (U)0u, ab < 0x00800000u)), lo;
   I q, big = (ab >= 0x45800000u) & (ab < 0x7f800000u); /* 4096 <= |x| < inf */
@@ -124,11 +124,11 @@ inline PC_OVL F pc_sincos(F x, F* cosval) {
   *cosval = select(cv, pc_float_((U)PC_NAN_BITS), bad);
   return select(sv, pc_float_((U)PC_NAN_BITS), bad);
 }
-inline PC_OVL F pc_sin(F x) {
+static inline PC_OVL F pc_sin(F x) {
   F c;
   return pc_sincos(x, &c);
 }
-inline PC_OVL F pc_cos(F x) {
+static inline PC_OVL F pc_cos(F x) {
   F c;
   pc_sincos(x, &c);
   return c;
@@ -141,7 +141,7 @@ inline PC_OVL F pc_cos(F x) {
  * = +-3pi/4, NaN in either -> NaN. Results below FLT_MIN (|y| tiny against x > 0) are +-0.
  * t = min / max of |y|, |x| in [0, 1], atan t by one minimax polynomial (relative error 2^-28.5), placed
  * as off + -atan t with off in {0, pi/2, pi} (a double-float sum). */
-inline PC_OVL F pc_atan2(F y, F x) {
+static inline PC_OVL F pc_atan2(F y, F x) {
   U yb = pc_bits_(y), xb = pc_bits_(x), ya = yb & 0x7fffffffu, xa = xb & 0x7fffffffu;
   F a = pc_float_(select(ya, (U)0u, ya < 0x00800000u)), b = pc_float_(select(xa, (U)0u, xa < 0x00800000u));
   F num = fmin(a, b), den = fmax(a, b);
@@ -174,7 +174,7 @@ inline PC_OVL F pc_atan2(F y, F x) {
  * pc_acos(x): error <= 1 ulp on [-1, 1] (0.89 over all floats); acos(1) = +0, acos(-1) = pi (rounded), |x| > 1 and NaN -> NaN.
  * asin s = s + s z B(z) (z = s^2 <= 1/4, relative error 2^-31.7) for s = |x| < 1/2, else for
  * s = sqrt((1 - |x|) / 2), whose rounding error c is recovered for x > 0 (Sun's fdlibm scheme). */
-inline PC_OVL F pc_acos(F x) {
+static inline PC_OVL F pc_acos(F x) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   I tiny = ab < 0x00800000u, small = ab < 0x3f000000u; /* |x| < 1/2 */
   F xs = pc_float_(select(b, b & 0x80000000u, tiny)), ax = fabs(xs);
@@ -195,16 +195,16 @@ inline PC_OVL F pc_acos(F x) {
  * pc_log(x): natural log, error <= 1 ulp (0.84 over all floats); log(+-0) = -inf (denormals too), log(x < 0) = NaN, log(+inf) =
  * +inf, NaN -> NaN. x = 2^k (1 + f), sqrt(1/2) <= 1 + f < sqrt(2), s = f / (2 + f):
  * log(1 + f) = f - f^2/2 + s (f^2/2 + z L(z)), z = s^2 <= 0.0295 (L: relative error 2^-35 of the whole). */
-inline PC_OVL F pc_log_poly_(F z) {
+static inline PC_OVL F pc_log_poly_(F z) {
   return z * (0x1.555554p-1f + z * (0x1.999c26p-2f + z * (0x1.23d3dap-2f + z * 0x1.f13d2p-3f)));
 }
 /* For x positive and normal: 1 + f in [sqrt(1/2), sqrt(2)) and k. */
-inline PC_OVL F pc_log_reduce_(F x, F* k) {
+static inline PC_OVL F pc_log_reduce_(F x, F* k) {
   U iy = pc_bits_(x) + (0x3f800000u - 0x3f3504f3u);
   *k = pc_to_float_(pc_int_(iy >> 23) - 127);
   return pc_float_((iy & 0x7fffffu) + 0x3f3504f3u);
 }
-inline PC_OVL F pc_log(F x) {
+static inline PC_OVL F pc_log(F x) {
   U b = pc_bits_(x);
   I normal = (b >= 0x00800000u) & (b < 0x7f800000u);
   F k, f = pc_log_reduce_(select((F)1.0f, x, normal), &k) - 1.0f; /* exact */
@@ -218,7 +218,7 @@ inline PC_OVL F pc_log(F x) {
 /* 2^(th + tl) for |tl| <= 2^-20 |th| or so; |th| > 200 saturates (to 0 or inf); results below FLT_MIN
  * are +0: the exponent is added in the bits, never by a multiplication that could round. 2^r - 1 on
  * |r| <= 1/2 by a minimax polynomial (relative error 2^-28.3). */
-inline PC_OVL F pc_exp2_dd_(F th, F tl) {
+static inline PC_OVL F pc_exp2_dd_(F th, F tl) {
   tl = select(tl, (F)0.0f, fabs(th) > 200.0f);
   th = fmin(fmax(th, -200.0f), 200.0f);
   F n = rint(th), r = (th - n) + tl;
@@ -230,19 +230,19 @@ inline PC_OVL F pc_exp2_dd_(F th, F tl) {
   return select(res, (F)INFINITY, e >= 255);
 }
 /* e^x for finite x, through x log2(e) in double-float. */
-inline PC_OVL F pc_exp_finite_(F x) {
+static inline PC_OVL F pc_exp_finite_(F x) {
   x = fmin(fmax(x, -104.0f), 90.0f);
   F tl, th = pc_two_prod_(x, PC_INV_LN2_HI, &tl);
   return pc_exp2_dd_(th, tl + x * PC_INV_LN2_LO);
 }
 /* pc_exp2(x), pc_exp(x): error <= 1.5 ulp (1.08, 1.17 over all floats); +inf -> +inf, -inf -> +0,
  * results below FLT_MIN -> +0. */
-inline PC_OVL F pc_exp2(F x) {
+static inline PC_OVL F pc_exp2(F x) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   F r = pc_exp2_dd_(pc_float_(select(b, b & 0x80000000u, ab < 0x00800000u)), (F)0.0f);
   return select(r, pc_float_((U)PC_NAN_BITS), ab > 0x7f800000u);
 }
-inline PC_OVL F pc_exp(F x) {
+static inline PC_OVL F pc_exp(F x) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   F r = pc_exp_finite_(pc_float_(select(b, b & 0x80000000u, ab < 0x00800000u)));
   return select(r, pc_float_((U)PC_NAN_BITS), ab > 0x7f800000u);
@@ -250,7 +250,7 @@ inline PC_OVL F pc_exp(F x) {
 /* log2 x as hi + lo for x positive and normal (relative error about 2^-32): x = 2^k m, m = c (1 + s) /
  * (1 - s) with c = 2^(-1/3), 1 or 2^(1/3) (as floats) nearest to m, so |s| <= 0.058; s = (m - c) /
  * (m + c) in double-float (m - c is exact), log(m / c) = 2 atanh s = 2s + s z L(z). */
-inline PC_OVL F pc_log2_dd_(F x, F* lo) {
+static inline PC_OVL F pc_log2_dd_(F x, F* lo) {
   F k, m = pc_log_reduce_(x, &k);
   I below = m < 0x1.c823ep-1f, above = m >= 0x1.1f59acp+0f; /* 2^(-1/6), 2^(1/6) */
   F c = select(select((F)1.0f, (F)0x1.428a3p+0f, above), (F)0x1.965feap-1f, below);
@@ -270,7 +270,7 @@ inline PC_OVL F pc_log2_dd_(F x, F* lo) {
  * finite x > 0; powr(+-0, y) = +inf for y < 0 (-inf included), +0 for y > 0; powr(+-0, +-0) = NaN;
  * powr(+inf, +-0) = NaN; powr(+1, y) = 1 for finite y; powr(+1, +-inf) = NaN; NaN -> NaN; otherwise
  * the limits (powr(x < 1, +inf) = +0, powr(+inf, y > 0) = +inf, ...). Results below FLT_MIN -> +0. */
-inline PC_OVL F pc_powr(F x, F y) {
+static inline PC_OVL F pc_powr(F x, F y) {
   U xb = pc_bits_(x), yb = pc_bits_(y), ya = yb & 0x7fffffffu;
   xb = select(xb, xb & 0x80000000u, (xb & 0x7fffffffu) < 0x00800000u);
   yb = select(yb, yb & 0x80000000u, ya < 0x00800000u);
@@ -293,7 +293,7 @@ inline PC_OVL F pc_powr(F x, F y) {
  * pc_erf(x): error <= 2 ulp (1.31 over all floats); erf(+-0) = +-0, erf(+-inf) = +-1, NaN -> NaN.
  * |x| < 1: x + x P(x^2) (relative error 2^-29.4); 1 <= |x| < 4: 1 - e^(G(|x| - 2.5) - x^2) with
  * G = log(erfc(x) e^(x^2)) (error 2^-29.8 in erf); |x| >= 4: 1 (erfc(4) < 2^-25). */
-inline PC_OVL F pc_erf(F x) {
+static inline PC_OVL F pc_erf(F x) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   F ax = pc_float_(select(ab, (U)0u, ab < 0x00800000u));
   /* Tiny x: x P(x^2), about x/8, is computed 2^64 times larger so that it is never denormal. */

@@ -2,7 +2,7 @@
  * PC_LANE_W (1, 8, 16) with templates/lane_width.h's types F, I, U and V3. */
 #include "templates/lane_width.h"
 
-inline PC_OVL F fresnel_conductor_channel(F cos_i, F cos2, F sin2, F eta, F k) {
+static inline PC_OVL F fresnel_conductor_channel(F cos_i, F cos2, F sin2, F eta, F k) {
   F t0 = eta * eta - k * k - sin2;
   F a2_plus_b2 = sqrt(fmax(t0 * t0 + 4.0f * eta * eta * k * k, 0.0f));
   F t1 = a2_plus_b2 + cos2;
@@ -19,7 +19,7 @@ inline PC_OVL F fresnel_conductor_channel(F cos_i, F cos2, F sin2, F eta, F k) {
 }
 /* Dielectric: cos_i > 0 on the incident side, eta = n_transmitted / n_incident. 1 under total internal
  * reflection. */
-inline PC_OVL F fresnel_dielectric(F cos_i, F eta) {
+static inline PC_OVL F fresnel_dielectric(F cos_i, F eta) {
   cos_i = clamp(cos_i, 0.0f, 1.0f);
   F sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
   F cos_t = sqrt(fmax(0.0f, 1.0f - sin2_t));
@@ -29,17 +29,17 @@ inline PC_OVL F fresnel_dielectric(F cos_i, F eta) {
                 sin2_t >= 1.0f);
 }
 /* Conductor with complex index eta + i k per channel, from a medium of index 1. */
-inline PC_OVL V3 fresnel_conductor(F cos_i, V3 eta, V3 k) {
+static inline PC_OVL V3 fresnel_conductor(F cos_i, V3 eta, V3 k) {
   cos_i = clamp(cos_i, 0.0f, 1.0f);
   F cos2 = cos_i * cos_i, sin2 = 1.0f - cos2;
   return lane3(fresnel_conductor_channel(cos_i, cos2, sin2, eta.x, k.x),
                fresnel_conductor_channel(cos_i, cos2, sin2, eta.y, k.y),
                fresnel_conductor_channel(cos_i, cos2, sin2, eta.z, k.z));
 }
-inline PC_OVL V3 reflect_local(V3 wo) { return lane3(-wo.x, -wo.y, wo.z); }
+static inline PC_OVL V3 reflect_local(V3 wo) { return lane3(-wo.x, -wo.y, wo.z); }
 /* Refraction of wo through the interface with normal n on wo's side; eta = n_t / n_i. The mask: where
  * there is no total internal reflection (*wt is valid). */
-inline PC_OVL I refract_dir(V3 wo, V3 n, F eta, V3* wt) {
+static inline PC_OVL I refract_dir(V3 wo, V3 n, F eta, V3* wt) {
   F cos_i = pc_dot(wo, n);
   F sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
   F cos_t = sqrt(fmax(0.0f, 1.0f - sin2_t));

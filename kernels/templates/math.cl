@@ -3,7 +3,7 @@
 #include "templates/lane_width.h"
 
 /* An orthonormal basis around unit n (Duff et al. 2017). */
-inline PC_OVL void make_frame(V3 n, V3* t, V3* b) {
+static inline PC_OVL void make_frame(V3 n, V3* t, V3* b) {
   F s = select((F)(-1.0f), (F)(1.0f), n.z >= 0.0f);
   F a = -1.0f / (s + n.z);
   F c = n.x * n.y * a;
@@ -13,12 +13,12 @@ inline PC_OVL void make_frame(V3 n, V3* t, V3* b) {
 /* Moves p off the surface with normal n, by the error bound err, to the side of direction w, and
  * rounds away from the surface (pbrt-v4 OffsetRayOrigin), so a spawned ray cannot re-hit the surface
  * it left. */
-inline PC_OVL F pc_offset_component_(F p, F offset) {
+static inline PC_OVL F pc_offset_component_(F p, F offset) {
   F po = p + offset;
   return select(select(po, nextafter(po, (F)(-INFINITY)), offset < 0.0f), nextafter(po, (F)(INFINITY)),
                 offset > 0.0f);
 }
-inline PC_OVL V3 offset_ray_origin(V3 p, V3 err, V3 n, V3 w) {
+static inline PC_OVL V3 offset_ray_origin(V3 p, V3 err, V3 n, V3 w) {
   F d = pc_dot(lane3(fabs(n.x), fabs(n.y), fabs(n.z)), err);
   I back = pc_dot(w, n) < 0.0f;
   F ox = d * n.x, oy = d * n.y, oz = d * n.z;
@@ -27,8 +27,8 @@ inline PC_OVL V3 offset_ray_origin(V3 p, V3 err, V3 n, V3 w) {
   oz = select(oz, -oz, back);
   return lane3(pc_offset_component_(p.x, ox), pc_offset_component_(p.y, oy), pc_offset_component_(p.z, oz));
 }
-inline PC_OVL F luminance_lanes(V3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
-inline PC_OVL F power_heuristic(F pdf_a, F pdf_b) {
+static inline PC_OVL F luminance_lanes(V3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+static inline PC_OVL F power_heuristic(F pdf_a, F pdf_b) {
   F a = pdf_a * pdf_a, b = pdf_b * pdf_b;
   I squares = (a + b > 0.0f) & isfinite(a + b);
   F weight = a / (a + b);

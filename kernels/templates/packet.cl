@@ -20,7 +20,7 @@ typedef struct {
 /* The components of v on a lane's axes kx, ky, kz (ray_precompute's: kx = kz + 1, ky = kz + 2, mod 3)
  * from the three masks kz == 0, 1, 2: three masks for the six selections, where the axes' own
  * comparisons were six (and spilled mask registers in packet_leaf's loop). */
-inline PC_OVL void pc_permute_lanes(V3 v, I z_is_x, I z_is_y, I z_is_z, F* x, F* y, F* z) {
+static inline PC_OVL void pc_permute_lanes(V3 v, I z_is_x, I z_is_y, I z_is_z, F* x, F* y, F* z) {
   *x = select(select(v.x, v.y, z_is_x), v.z, z_is_y);
   *y = select(select(v.x, v.y, z_is_z), v.z, z_is_x);
   *z = select(select(v.x, v.y, z_is_y), v.z, z_is_z);
@@ -31,18 +31,18 @@ typedef struct {
   I z_is_x, z_is_y, z_is_z;
   int16 at_x, at_y, at_z;
 } PC_LANE_NAME(LaneAxes);
-inline PC_OVL PC_LANE_NAME(LaneAxes) lane_axes(U kz) {
+static inline PC_OVL PC_LANE_NAME(LaneAxes) lane_axes(U kz) {
   PC_LANE_NAME(LaneAxes) a;
   a.z_is_x = kz == 0u, a.z_is_y = kz == 1u, a.z_is_z = kz == 2u;
   PC_LANE_AXES_AT
   return a;
 }
 /* Vertex coordinates c[0], c[4], c[8] (x, y, z of one block lane) on each lane's axes kx, ky, kz. */
-inline PC_OVL void block_vertex_on_axes(__global const float* c, const PC_LANE_NAME(LaneAxes)* a, F* x, F* y, F* z) {
+static inline PC_OVL void block_vertex_on_axes(__global const float* c, const PC_LANE_NAME(LaneAxes)* a, F* x, F* y, F* z) {
   PC_BLOCK_VERTEX_ON_AXES(F)
 }
 /* Lane j of the packet as a single ray (its nearest hit so far as tmax), and its hit. */
-inline PC_OVL Ray packet_ray_lane(const PC_LANE_NAME(RayPacket)* r, uint j, const PC_LANE_NAME(HitPacket)* h, Hit* hit) {
+static inline PC_OVL Ray packet_ray_lane(const PC_LANE_NAME(RayPacket)* r, uint j, const PC_LANE_NAME(HitPacket)* h, Hit* hit) {
   Ray ray;
   ray.o = (float3)(pc_lane(r->o.x, j), pc_lane(r->o.y, j), pc_lane(r->o.z, j));
   ray.d = (float3)(pc_lane(r->d.x, j), pc_lane(r->d.y, j), pc_lane(r->d.z, j));
@@ -59,7 +59,7 @@ inline PC_OVL Ray packet_ray_lane(const PC_LANE_NAME(RayPacket)* r, uint j, cons
   hit->instance = PC_INVALID;
   return ray;
 }
-inline PC_OVL void packet_set_hit_lane(PC_LANE_NAME(HitPacket)* h, uint j, const Hit* hit) {
+static inline PC_OVL void packet_set_hit_lane(PC_LANE_NAME(HitPacket)* h, uint j, const Hit* hit) {
   h->t = pc_with_lane(h->t, j, hit->t);
   h->u = pc_with_lane(h->u, j, hit->u);
   h->v = pc_with_lane(h->v, j, hit->v);
@@ -68,8 +68,8 @@ inline PC_OVL void packet_set_hit_lane(PC_LANE_NAME(HitPacket)* h, uint j, const
 }
 /* Lane j against one primitive with the single-ray code (spheres; intersect_prim). Returns whether
  * lane j's hit changed. */
-inline PC_OVL bool packet_prim_lane(const SceneData* cut, __global const Primitive* prims, uint slot,
-                                    const PC_LANE_NAME(RayPacket)* r, uint j, PC_LANE_NAME(HitPacket)* h) {
+static inline PC_OVL bool packet_prim_lane(const SceneData* cut, __global const Primitive* prims, uint slot,
+                                           const PC_LANE_NAME(RayPacket)* r, uint j, PC_LANE_NAME(HitPacket)* h) {
   Hit hit;
   Ray ray = packet_ray_lane(r, j, h, &hit);
   RayPrecomp rp = ray_precompute(ray.d);
@@ -84,8 +84,8 @@ typedef struct {
   float ox[N], oy[N], oz[N], dx[N], dy[N], dz[N], tmin[N], ix[N], iy[N], iz[N], sx[N], sy[N], sz[N];
   uint skip_prim[N], cutout_seed[N], kz[N];
 } PC_LANE_NAME(PacketByLane);
-inline PC_OVL void packet_by_lane(const PC_LANE_NAME(RayPacket)* r, V3 inv_d, U kz, F sx, F sy, F sz,
-                                  PC_LANE_NAME(PacketByLane)* l) {
+static inline PC_OVL void packet_by_lane(const PC_LANE_NAME(RayPacket)* r, V3 inv_d, U kz, F sx, F sy, F sz,
+                                         PC_LANE_NAME(PacketByLane)* l) {
   PC_LANE_NAME(vstore)(r->o.x, 0, l->ox), PC_LANE_NAME(vstore)(r->o.y, 0, l->oy), PC_LANE_NAME(vstore)(r->o.z, 0, l->oz);
   PC_LANE_NAME(vstore)(r->d.x, 0, l->dx), PC_LANE_NAME(vstore)(r->d.y, 0, l->dy), PC_LANE_NAME(vstore)(r->d.z, 0, l->dz);
   PC_LANE_NAME(vstore)(r->tmin, 0, l->tmin), PC_LANE_NAME(vstore)(r->skip_prim, 0, l->skip_prim);
@@ -95,10 +95,10 @@ inline PC_OVL void packet_by_lane(const PC_LANE_NAME(RayPacket)* r, V3 inv_d, U 
 }
 /* Each lane in bits alone through the subtree at node root with the single-ray traversal, for subtrees
  * few lanes entered. Returns the lanes whose hit changed. */
-inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const WideNode* nodes,
-                                           __global const LeafBlock* blocks, __global const Primitive* prims,
-                                           uint root, const PC_LANE_NAME(PacketByLane)* l, uint bits, bool any_hit,
-                                           PC_LANE_NAME(HitPacket)* h) {
+static inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const WideNode* nodes,
+                                                  __global const LeafBlock* blocks, __global const Primitive* prims,
+                                                  uint root, const PC_LANE_NAME(PacketByLane)* l, uint bits, bool any_hit,
+                                                  PC_LANE_NAME(HitPacket)* h) {
   float t[N], u[N], v[N];
   uint slot[N], prim[N], changed = 0u;
   PC_LANE_NAME(vstore)(h->t, 0, t), PC_LANE_NAME(vstore)(h->u, 0, u), PC_LANE_NAME(vstore)(h->v, 0, v);
@@ -130,9 +130,9 @@ inline PC_OVL uint packet_subtrees_by_lane(const SceneData* cut, __global const 
   return changed;
 }
 /* The packet's active lanes against a leaf reference's blocks; returns the lanes whose hit changed. */
-inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,
-                            __global const Primitive* prims, uint ref, const PC_LANE_NAME(RayPacket)* r, U kz,
-                            F sx, F sy, F sz, I active, PC_LANE_NAME(HitPacket)* h) {
+static inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* blocks,
+                                   __global const Primitive* prims, uint ref, const PC_LANE_NAME(RayPacket)* r, U kz,
+                                   F sx, F sy, F sz, I active, PC_LANE_NAME(HitPacket)* h) {
   /* Derived from kz here at every leaf: passed in from trace_packet (computed once a packet) they were
    * spilled and reloaded instead, and the Cornell box at 16 lanes ran 4.3 % slower. */
   PC_LANE_NAME(LaneAxes) axes = lane_axes(kz);
@@ -191,9 +191,9 @@ inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBlock* bloc
  * distance per lane (NaN where the lane's ray missed its box): when popped, a lane enters it where the
  * single ray would, where that distance is no farther than its nearest hit so far times
  * slab_widening() (pop_subtree). */
-inline PC_OVL I trace_packet(const SceneData* cut, __global const WideNode* nodes,
-                             __global const LeafBlock* blocks, __global const Primitive* prims, uint root,
-                             const PC_LANE_NAME(RayPacket)* r, I active, bool any_hit, PC_LANE_NAME(HitPacket)* h) {
+static inline PC_OVL I trace_packet(const SceneData* cut, __global const WideNode* nodes,
+                                    __global const LeafBlock* blocks, __global const Primitive* prims, uint root,
+                                    const PC_LANE_NAME(RayPacket)* r, I active, bool any_hit, PC_LANE_NAME(HitPacket)* h) {
   /* ray_precompute by lane */
   V3 inv_d = lane3(1.0f / r->d.x, 1.0f / r->d.y, 1.0f / r->d.z);
   I neg_x = inv_d.x < 0.0f, neg_y = inv_d.y < 0.0f, neg_z = inv_d.z < 0.0f;
@@ -287,7 +287,7 @@ inline PC_OVL I trace_packet(const SceneData* cut, __global const WideNode* node
 
 /* rays[0 .. N) through the tree at node 0 as one packet, the lanes set in bits only: hits[j] (instance
  * PC_INVALID) and found[j] for each of those (pathcl rays' packets, the lane kernels' rays). */
-inline void PC_LANE_NAME(trace_rays_as_packet)(const SceneData* cut, __global const WideNode* nodes,
+static inline void PC_LANE_NAME(trace_rays_as_packet)(const SceneData* cut, __global const WideNode* nodes,
                                     __global const LeafBlock* blocks, __global const Primitive* prims,
                                     const Ray* rays, uint bits, bool any_hit, Hit* hits, bool* found) {
   float v[8][N];

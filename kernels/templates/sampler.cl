@@ -3,7 +3,7 @@
 #include "templates/lane_width.h"
 
 /* pcg4d (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020) of four lane values. */
-inline PC_OVL void pcg4d_lanes(U* x, U* y, U* z, U* w) {
+static inline PC_OVL void pcg4d_lanes(U* x, U* y, U* z, U* w) {
   U a = *x * 1664525u + 1013904223u, b = *y * 1664525u + 1013904223u;
   U c = *z * 1664525u + 1013904223u, d = *w * 1664525u + 1013904223u;
   a += b * d; b += c * a; c += a * b; d += b * c;
@@ -11,7 +11,7 @@ inline PC_OVL void pcg4d_lanes(U* x, U* y, U* z, U* w) {
   a += b * d; b += c * a; c += a * b; d += b * c;
   *x = a; *y = b; *z = c; *w = d;
 }
-inline PC_OVL U hash_uint(U x) { /* lowbias32 (Wellons) */
+static inline PC_OVL U hash_uint(U x) { /* lowbias32 (Wellons) */
   x ^= x >> 16u;
   x *= 0x7feb352du;
   x ^= x >> 15u;
@@ -19,12 +19,12 @@ inline PC_OVL U hash_uint(U x) { /* lowbias32 (Wellons) */
   x ^= x >> 16u;
   return x;
 }
-inline PC_OVL U hash4(U a, U b, U c, U d) {
+static inline PC_OVL U hash4(U a, U b, U c, U d) {
   pcg4d_lanes(&a, &b, &c, &d);
   return a;
 }
-inline PC_OVL F uint_to_unit(U x) { return convert_F(x >> 8u) * 0x1.0p-24f; }
-inline PC_OVL U reverse_bits(U x) {
+static inline PC_OVL F uint_to_unit(U x) { return convert_F(x >> 8u) * 0x1.0p-24f; }
+static inline PC_OVL U reverse_bits(U x) {
   x = ((x >> 1u) & 0x55555555u) | ((x & 0x55555555u) << 1u);
   x = ((x >> 2u) & 0x33333333u) | ((x & 0x33333333u) << 2u);
   x = ((x >> 4u) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4u);
@@ -32,7 +32,7 @@ inline PC_OVL U reverse_bits(U x) {
   return (x >> 16u) | (x << 16u);
 }
 /* Laine-Karras style permutation with Burley's constants: an Owen scramble of the reversed bits. */
-inline PC_OVL U nested_uniform_scramble(U x, U seed) {
+static inline PC_OVL U nested_uniform_scramble(U x, U seed) {
   x = reverse_bits(x);
   x += seed;
   x ^= x * 0x6c50b47cu;
@@ -42,7 +42,7 @@ inline PC_OVL U nested_uniform_scramble(U x, U seed) {
   return reverse_bits(x);
 }
 /* Sobol dimension dim in 1..3 of a 32-bit index, as bits. */
-inline PC_OVL U sobol_bits(U index, uint dim) {
+static inline PC_OVL U sobol_bits(U index, uint dim) {
   U x = (U)(0u);
   for (uint n = 0u; n < 8u; ++n) x ^= pc_sobol_nibble_(&kSobolNibbles[dim - 1u][n][0], index >> (4u * n));
   return x;
@@ -51,7 +51,7 @@ inline PC_OVL U sobol_bits(U index, uint dim) {
  * into [0, n), then rotated. The rotation uses a second hash: Kensler's original rotation by p itself
  * is correlated with the bijection and made the marginal of small permutations non-uniform (a
  * measurable bias of Owen-scrambled Halton at low spp). */
-inline PC_OVL U permute_index(U i, U n, U p) {
+static inline PC_OVL U permute_index(U i, U n, U p) {
   U w = n - 1u;
   w |= w >> 1u; w |= w >> 2u; w |= w >> 4u; w |= w >> 8u; w |= w >> 16u;
   I walking = (I)(-1);
@@ -67,7 +67,7 @@ inline PC_OVL U permute_index(U i, U n, U p) {
   return (i + hash_uint(p ^ 0x68bc21ebu)) % n;
 }
 /* One pair of stratified dimensions: the sample's stratum in an nx x ny grid of about spp, jittered. */
-inline PC_OVL void stratified_pair(U pixel, U sample, uint seed, uint spp, U pair_id, F* x, F* y) {
+static inline PC_OVL void stratified_pair(U pixel, U sample, uint seed, uint spp, U pair_id, F* x, F* y) {
   uint nx = max(1u, (uint)sqrt((float)spp)), ny = max(1u, spp / nx), n = nx * ny;
   U h = hash4(pixel, pair_id, (U)(seed), (U)(0x5851f42du));
   F jx = uint_to_unit(hash4(pixel, sample, pair_id, (U)(seed ^ 0x2545f491u)));
@@ -76,7 +76,7 @@ inline PC_OVL void stratified_pair(U pixel, U sample, uint seed, uint spp, U pai
   *x = (convert_F(stratum % nx) + jx) / (float)nx;
   *y = (convert_F(stratum / nx) + jy) / (float)ny;
 }
-inline PC_OVL F owen_scrambled_radical_inverse(U base, U a, U hash) {
+static inline PC_OVL F owen_scrambled_radical_inverse(U base, U a, U hash) {
   F inv_base = 1.0f / convert_F(base), inv_base_m = (F)(1.0f);
   U reversed = (U)(0u), digit_count = (U)(0u);
   /* Digits until they no longer change a float in [0, 1). */
@@ -95,8 +95,8 @@ inline PC_OVL F owen_scrambled_radical_inverse(U base, U a, U hash) {
 }
 /* Four uniform numbers in [0, 1) per lane, for dimensions 4 group .. 4 group + 3 of the lane's key
  * (pixel, sample, seed). */
-inline PC_OVL void sample4_lanes(__constant const SceneHeader* h, U pixel, U sample, uint seed, U group,
-                                 F* u0, F* u1, F* u2, F* u3) {
+static inline PC_OVL void sample4_lanes(__constant const SceneHeader* h, U pixel, U sample, uint seed, U group,
+                                        F* u0, F* u1, F* u2, F* u3) {
   if (h->sampler == PC_SAMPLER_STRATIFIED) {
     stratified_pair(pixel, sample, seed, h->spp, 2u * group, u0, u1);
     stratified_pair(pixel, sample, seed, h->spp, 2u * group + 1u, u2, u3);
