@@ -14,6 +14,8 @@
 #include <sstream>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "runtime/atomic_file.h"
@@ -144,6 +146,33 @@ void store_cached(const fs::path& file, const std::vector<unsigned char>& binary
   }
 }
 
+// An exclusive lock on the cache entry `file` (flock on FILE.lock, held until destruction): one build of a
+// program at a time, between the threads of one process (each device's worker) and between processes, so
+// that a second build of the same program waits and then loads what the first stored, rather than compiling
+// it at the same time (two identical devices, the ranks of an MPI job on one machine, tests run at once).
+// Without a usable cache directory it locks nothing.
+class CacheEntryLock {
+ public:
+  explicit CacheEntryLock(const fs::path& file) {
+    if (file.empty()) return;
+    std::error_code ec;
+    fs::create_directories(file.parent_path(), ec);
+    fd_ = ::open((file.string() + ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ >= 0 && ::flock(fd_, LOCK_EX) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
+  }
+  ~CacheEntryLock() {
+    if (fd_ >= 0) ::close(fd_);  // releases the lock
+  }
+  CacheEntryLock(const CacheEntryLock&) = delete;
+  CacheEntryLock& operator=(const CacheEntryLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 }  // namespace
 
 void register_kernel_source(const std::string& name, const std::string& text) {
@@ -242,6 +271,7 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
         return result;
       }
   }
+  CacheEntryLock lock(file);
   if (!file.empty() && stamp_only) result.from_cache = !read_cached(file).empty();
   if (!file.empty() && !stamp_only) result.from_cache = (result.program = load_cached(cl, file, options)) != nullptr;
   if (!result.program) {
