@@ -6,18 +6,8 @@
 # (_GLIBCXX_ASSERTIONS), line tables for reports; the tests' own code at -O0 (tests/CMakeLists.txt).
 # clang rather than the Release build's gcc: a second compiler's view of the same code, and 0.6 times gcc's
 # compile time for these flags (scene_load_test.cpp: 11 s against 19 s), which the suite's time needs.
-packages=(clang-14 libclang-rt-14-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  echo "installing ${missing[*]}" >&2
-  SUDO=""
-  [ "$(id -u)" = 0 ] || SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+source scripts/lib/packages.sh
+install_packages clang-14 libclang-rt-14-dev
 # A build-asan/ of the gcc days (or of any other flags) is configured again from scratch.
 sanitized_flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -D_GLIBCXX_ASSERTIONS"
 if [ -f build-asan/CMakeCache.txt ] && ! grep -qF "CMAKE_CXX_FLAGS:STRING=$sanitized_flags" build-asan/CMakeCache.txt; then
