@@ -125,7 +125,7 @@ static inline LaneF bsdf_pdf_lanes(const MaterialLanes* m, Lane3 wo, Lane3 wi, L
 
 /* u0, u1 for the direction, u2 to choose a lobe. Returns the lanes of mask with a valid sample. */
 PC_OUT_OF_LINE LaneI bsdf_sample_lanes(const MaterialLanes* m, Lane3 wo, LaneF u0, LaneF u1, LaneF u2, LaneI mask,
-                                      BsdfSampleLanes* s) {
+                                       BsdfSampleLanes* s) {
   LaneI flip = bsdf_flipped_lanes(m, wo);
   wo = flip_z_lanes(wo, flip);
   LaneI ok = (LaneI)(0), is, valid;

@@ -152,7 +152,7 @@ static inline Lane3 sample_sphere_cone_lanes(Lane3 c, LaneF r, Lane3 x, LaneF u0
 
 /* A point on the area light (a triangle or a sphere) seen from x, into the lanes m of out. */
 PC_OUT_OF_LINE void sample_area_light_lanes(const SceneData* sc, const LightLanes* light, LaneF choice, Lane3 x, LaneF u0,
-                                           LaneF u1, LaneI m, LightSampleLanes* out) {
+                                            LaneF u1, LaneI m, LightSampleLanes* out) {
   Lane3 a, b, c, p = x, p_err = x, ny = x;
   LaneI sphere;
   LaneF pdf = (LaneF)(0.0f);
@@ -201,7 +201,7 @@ PC_OUT_OF_LINE void sample_area_light_lanes(const SceneData* sc, const LightLane
 /* sample_light by lane, for the lanes in m: u0 chooses the light, u1, u2 the point on it. Returns the
  * lanes with a sample (as sample_light's result). */
 PC_OUT_OF_LINE LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, LaneF u1, LaneF u2, LaneI m,
-                                       LightSampleLanes* out) {
+                                        LightSampleLanes* out) {
   LaneU index;
   LaneF choice = light_choice_lanes(sc, x, (LaneU)(PC_INVALID), u0, m, &index);
   LightLanes light;

@@ -38,7 +38,7 @@ static inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit
  * interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x COLOR_0); a
  * sphere's are white. */
 PC_OUT_OF_LINE MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
-                                              const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
+                                               const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
   /* Fields a program's material types do not read are dead code here, and their gathers with them. */
   LaneGroups at; /* a scene has few materials */
   lane_groups(material, m, &at);

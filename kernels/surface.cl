@@ -87,7 +87,7 @@ static inline Lane3 vertex_blend_lanes(__global const float4* vertices, LaneU pr
  * lane's), in the device's coordinates. A point on a sphere is re-projected onto it (pbrt-v4): its error is
  * then a few ulps of the offset from the centre. */
 PC_OUT_OF_LINE SurfaceLanes scene_surface_lanes(const SceneData* sc, const RayLanes* ray, const HitLanes* hit, LaneI m,
-                                               ShadingLanes* shading) {
+                                                ShadingLanes* shading) {
   LaneU slot = lane_safe_index(hit->slot, m);
   Lane3 a, b, c;
   LaneF a_w, b_w, c_w;

@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -226,16 +227,22 @@ TEST_P(CliKernelCache, DamagedEntryIsDetectedAndRebuilt) {
   // One lane: the smallest program (with PoCL's cache off each run generates its code again).
   std::string render = "render " + scene("tiny.json") + " --spp 1 --lanes 1 --quiet -o " + temp_dir() + "/c.exr --stats " + stats;
   auto from_cache = [&] { return nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>(); };
+  // The cache's entries: its files but the builds' locks (kernel_program.cpp).
+  auto entries = [&] {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(cache))
+      if (entry.path().extension() != ".lock") files.push_back(entry.path());
+    return files;
+  };
   std::string err;
   ASSERT_EQ(run_pathcl(render, &err), 0) << err;
   EXPECT_FALSE(from_cache());
   ASSERT_EQ(run_pathcl(render, &err), 0) << err;
   EXPECT_TRUE(from_cache());
   size_t damaged = 0;
-  for (const auto& entry : fs::directory_iterator(cache)) {
-    if (entry.path().extension() == ".lock") continue;  // a build's lock (kernel_program.cpp), not an entry
-    std::fstream f(entry.path(), std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(std::streamoff(fs::file_size(entry.path()) / 2));
+  for (const fs::path& entry : entries()) {
+    std::fstream f(entry, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(fs::file_size(entry) / 2));
     f.put('\x7f');
     ++damaged;
   }
@@ -244,10 +251,8 @@ TEST_P(CliKernelCache, DamagedEntryIsDetectedAndRebuilt) {
   EXPECT_FALSE(from_cache());
   ASSERT_EQ(run_pathcl(render, &err), 0) << err;  // and stored again
   EXPECT_TRUE(from_cache());
-  for (const auto& entry : fs::directory_iterator(cache)) {  // the kind of entry this test is about
-    if (entry.path().extension() == ".lock") continue;
-    EXPECT_EQ(entry.path().extension() == ".built", is_pocl(test_device().info) && !binaries) << entry.path();
-  }
+  for (const fs::path& entry : entries())  // the kind of entry this test is about
+    EXPECT_EQ(entry.extension() == ".built", is_pocl(test_device().info) && !binaries) << entry;
   if (binaries) unsetenv("POCL_KERNEL_CACHE");
   if (previous) setenv("PATHCL_KERNEL_CACHE", saved.c_str(), 1); else unsetenv("PATHCL_KERNEL_CACHE");
 }
