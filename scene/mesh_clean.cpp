@@ -6,7 +6,8 @@
 //   -> [orient: orient_polygon_soup, outward if closed] -> [smooth normals: scene/mesh_normals.cpp]
 //
 // CGAL's preconditions and assertions are off in release builds (NDEBUG), where a violated one is
-// undefined behaviour; where they are on (debug and fuzz builds, tests/mesh_clean_test) a violation
+// undefined behaviour; where they are on (debug builds and scripts/sanitize's, which the fuzzers and
+// tests/mesh_clean_test there link) a violation
 // throws CGAL::Failure_exception. Both are avoided by checking the preconditions we know of first (see
 // the orientation step), and any CGAL failure that still happens becomes a SceneError.
 //

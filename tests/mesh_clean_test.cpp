@@ -1,5 +1,6 @@
 // Tests for clean_mesh (scene/mesh_clean.cpp): merging, degeneracies, duplicates, triangulation,
-// orientation and smooth normals. Built with CGAL's own checks on (tests/CMakeLists.txt).
+// orientation and smooth normals. In scripts/sanitize's build with CGAL's own checks on (CMakeLists.txt);
+// in Release as users run it, without them.
 #include "scene/mesh_clean.h"
 
 #include <gtest/gtest.h>
