@@ -233,6 +233,8 @@ size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested
 }
 
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
+  if (work_group == 0 && items > 0)
+    for (work_group = 64; items % work_group != 0;) work_group /= 2;
   size_t global = items;
   if (work_group > 0) global = (items + work_group - 1) / work_group * work_group;
   cl_event event = nullptr;

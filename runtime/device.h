@@ -109,6 +109,9 @@ ClBuffer upload(ClContext& cl, const std::vector<T>& data) {
 // from the global size's factors (4094 of 53,222 packets of 16 rays: 13 groups for 2 threads).
 size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested, uint32_t lanes, const std::string& what);
 
-// Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size; 0 lets
-// the driver choose) and returns the kernel's time on the device in milliseconds, from profiling events.
+// Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size) and returns
+// the kernel's time on the device in milliseconds, from profiling events. work_group 0: the largest power of
+// two up to 64 that divides items (the tests' kernels, which have no bound on their index), not the driver's
+// choice: PoCL compiles a work-group function per local size and chooses it from the global size's factors,
+// so a kernel launched over many sizes was compiled many times (light_pdf_bins 23 times in a suite run).
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);
