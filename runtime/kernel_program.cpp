@@ -271,7 +271,7 @@ KernelProgram build_kernel_program(ClContext& cl, const std::string& main_file, 
         return result;
       }
   }
-  CacheEntryLock lock(file);
+  CacheEntryLock entry_lock(file);  // until the program is built and stored
   if (!file.empty() && stamp_only) result.from_cache = !read_cached(file).empty();
   if (!file.empty() && !stamp_only) result.from_cache = (result.program = load_cached(cl, file, options)) != nullptr;
   if (!result.program) {

@@ -79,8 +79,9 @@ TEST(MpiRender, AnyNumberOfRanksGivesTheOneProcessBits) {
   // radiosity (per-sample pixel units) on 3.
   for (const std::string integrator : {"path", "bdpt", "vcm", "light", "bpm", "sppm", "instant_radiosity", "radiosity", "mlt"}) {
     const bool all_counts = integrator == "path" || integrator == "bdpt" || integrator == "vcm";
-    // The one-process render first: it builds the kernels once, which the ranks then load from the cache
-    // (on an empty cache three ranks would each compile them at once).
+    // The one-process render first: it builds the kernels and PoCL's work-group functions once, which the
+    // ranks then load from the caches (on empty caches the kernel cache's lock has one rank build each
+    // program, but every rank would compile PoCL's work-group functions at its first launches).
     reference(integrator);
     for (int ranks : {1, 2, 3}) {
       if (!all_counts && ranks != 3) continue;
