@@ -1,8 +1,11 @@
 // Camera sampling (kernels/camera.cl): the pixel filters' 1-D distributions (filter importance sampling)
 // against their own CDFs by chi-square, and the thin lens's geometry.
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
@@ -226,16 +229,23 @@ TEST(CameraLanes, LanesGiveTheOneLaneBits) {
   }
 }
 
-// make_frame, offset_ray_origin and power_heuristic (math.cl, written once over lanes) give the one-lane
-// bits at 16 and 8 lanes: normals of both hemispheres, offsets to both sides and zero error bounds, pdfs
-// whose squares overflow or underflow and zero pdfs, side by side in one vector.
-TEST(CameraLanes, FrameOffsetAndMisWeightGiveTheOneLaneBits) {
-  const size_t items = 32, lanes = 16 * items;
-  std::vector<float> in(14 * lanes);
+// make_frame, offset_ray_origin, power_heuristic and the next floats (math.cl, written once over lanes) give
+// the one-lane bits at 16 and 8 lanes: normals of both hemispheres, offsets to both sides and zero error
+// bounds, pdfs whose squares overflow or underflow and zero pdfs, side by side in one vector; and the next
+// floats are std::nextafter's towards +-infinity: zeros, denormals, the largest finite floats, infinities,
+// NaN and floats of random bits.
+TEST(CameraLanes, FrameOffsetMisWeightAndNextFloatGiveTheOneLaneBits) {
+  const size_t items = 32, lanes = 16 * items, results = 12;
+  std::vector<float> in(15 * lanes);
   uint32_t x = 4242;
-  auto uniform = [&] { return float((x = x * 1664525u + 1013904223u) >> 8) * 0x1.0p-24f; };
+  auto next = [&] { return x = x * 1664525u + 1013904223u; };
+  auto uniform = [&] { return float(next() >> 8) * 0x1.0p-24f; };
+  const float special[] = {0.0f, -0.0f, 0x1.0p-149f, -0x1.0p-149f, 0x1.fffffcp-127f, -0x1.fffffcp-127f, FLT_MIN,
+                           -FLT_MIN, FLT_MAX, -FLT_MAX, INFINITY, -INFINITY, NAN, 1.0f, -1.0f, 0x1.fffffep-1f};
+  const size_t specials = sizeof special / sizeof special[0];
+  size_t not_finite = 0;  // results that are infinite or NaN (inputs of the next floats)
   for (size_t j = 0; j < lanes; ++j) {
-    float* v = &in[14 * j];
+    float* v = &in[15 * j];
     float n[3] = {2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1};
     float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     for (int k = 0; k < 3; ++k) v[k] = n[k] / len;
@@ -244,9 +254,28 @@ TEST(CameraLanes, FrameOffsetAndMisWeightGiveTheOneLaneBits) {
     const float pdfs[] = {0.0f, 1e-30f, 1e30f, 1.0f};
     v[12] = j % 5 == 0 ? pdfs[j / 5 % 4] : uniform() * 4;
     v[13] = j % 3 == 0 ? pdfs[j / 3 % 4] : uniform() * 4;
+    uint32_t b = next();
+    std::memcpy(&v[14], &b, 4);
+    if (j % 3 == 0) v[14] = special[j / 3 % specials];
+    not_finite += !std::isfinite(std::nextafter(v[14], INFINITY)) + !std::isfinite(std::nextafter(v[14], -INFINITY));
   }
-  std::vector<uint32_t> bits = run_float_lanes_test("math_lanes_test", in, items, 160);
-  LaneComparison lc = compare_lanes(bits, items, 160, [](float f) { return bool(std::isfinite(f)); });
+  std::vector<uint32_t> bits = run_float_lanes_test("math_lanes_test", in, items, 16 * results);
+  LaneComparison lc = compare_lanes(bits, items, 16 * results, [](float f) { return bool(std::isfinite(f)); });
   EXPECT_EQ(lc.differing, 0u);
-  EXPECT_EQ(lc.valid, items * 160);
+  EXPECT_EQ(lc.valid, items * 16 * results - not_finite);
+  for (size_t j = 0; j < lanes; ++j) {
+    const float v = in[15 * j + 14];
+    const uint32_t* one = &bits[(3 * (j / 16) + 2) * 16 * results + (j % 16) * results];  // the one-lane results
+    for (int k = 0; k < 2; ++k) {
+      float got, want = std::nextafter(v, k == 0 ? INFINITY : -INFINITY);
+      std::memcpy(&got, &one[10 + k], 4);
+      uint32_t want_bits, v_bits;
+      std::memcpy(&want_bits, &want, 4);
+      std::memcpy(&v_bits, &v, 4);
+      if (std::isnan(want))
+        EXPECT_TRUE(std::isnan(got)) << "the next float of NaN";
+      else
+        EXPECT_EQ(one[10 + k], want_bits) << (k == 0 ? "up" : "down") << " from bits " << std::hex << v_bits;
+    }
+  }
 }
