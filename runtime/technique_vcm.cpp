@@ -13,6 +13,8 @@
 
 namespace {
 
+// A grid entry of kernels/vcm.cl: a float4.
+constexpr size_t kGridEntryBytes = 4 * sizeof(float);
 
 // kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
 size_t grid_table(uint32_t paths) {
@@ -30,13 +32,13 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.per_sample = true;
   // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
   // its vertex count, the grid's buckets (a power of two >= c, one end and the prefix sum's block offsets)
-  // and entries.
+  // and entries (a vertex's position and slot: 4 words).
   t.buffers = {{"light_vertices", light_vertex_bytes},
                {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
                {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + PC_SCAN_BLOCKS) * sizeof(uint32_t); }},
-               {"entries", [](const TechniqueSizes& s) { return s.unit_items * light_vertex_slots(s) * sizeof(uint32_t); }}};
+               {"entries", [](const TechniqueSizes& s) { return s.unit_items * light_vertex_slots(s) * kGridEntryBytes; }}};
   t.max_unit_items = [](const TechniqueSizes& s) {
-    return light_vertex_unit_paths(s, light_vertex_slots(s) * sizeof(uint32_t) + 3 * sizeof(uint32_t));
+    return light_vertex_unit_paths(s, light_vertex_slots(s) * kGridEntryBytes + 3 * sizeof(uint32_t));
   };
   const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
   t.phases = {
