@@ -51,7 +51,7 @@ struct RenderOptions {
   // each device's own (path_lanes, runtime/device.h), 1 for the other techniques.
   uint32_t lanes = 0;
   // Photon merging (vcm, bpm, sppm; kernels/vcm.cl): the first iteration's radius in scene units (0: a pixel's
-  // footprint where the camera looks, default_merging_radius), its reduction exponent, and whether vcm
+  // footprint where the camera looks, default_merging_radius; half of it for vcm), its reduction exponent, and whether vcm
   // merges (false: bdpt's estimator, the same bits).
   double radius = 0;
   double alpha = 0.75;

@@ -59,7 +59,12 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.setup_light = [mode](LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& o) {
     LightTransportHeader& lt = setup.header;
     lt.vcm_mode = o.merge ? mode : mode & ~PC_VCM_MERGE;
-    lt.radius = float(o.radius > 0 ? o.radius : default_merging_radius(scene, lt));
+    // vcm's merges compete with its connections, which sample light between diffuse surfaces with no bias:
+    // half a pixel's footprint there (its bias on the Cornell box at 1024 spp a quarter of the whole
+    // footprint's, glass-metal's caustics under a spot light as noisy; docs/light-transport.md). bpm and
+    // sppm have nothing but merging: the whole footprint, for the photons a pixel gathers.
+    const double footprints = mode & PC_VCM_CONNECT ? 0.5 : 1.0;
+    lt.radius = float(o.radius > 0 ? o.radius : footprints * default_merging_radius(scene, lt));
     lt.alpha = float(o.alpha);
   };
   t.options = {number_option("radius", "a radius > 0 (scene units)", [](double v) { return v > 0 && std::isfinite(v); },

@@ -75,7 +75,8 @@ TEST(Vcm, CapSphereExactForEveryMergingIntegrator) {
 }
 
 // The SDS scene: path and bdpt give exactly 0; vcm, bpm and sppm the exact image mean (4 standard errors
-// of both, seeds apart), and their error falls as the radius shrinks with the iterations.
+// of both, seeds apart; vcm over four times the iterations, its default radius being half theirs), and
+// their error falls as the radius shrinks with the iterations.
 TEST(Vcm, SpecularDiffuseSpecularLightOnlyMergingSees) {
   DeviceScene scene = scene_from("vcm-sds.json", sds_scene());
   DeviceScene unfolded = scene_from("vcm-sds-unfolded.json", sds_unfolded_scene());
@@ -87,7 +88,7 @@ TEST(Vcm, SpecularDiffuseSpecularLightOnlyMergingSees) {
     EXPECT_EQ(image_mean(f), 0.0) << blind;
   }
   for (const char* integrator : kMerging) {
-    MeanStd m = seeded_mean(scene, merging(integrator, 64, 3), 4);
+    MeanStd m = seeded_mean(scene, merging(integrator, std::string(integrator) == "vcm" ? 256 : 64, 3), 4);
     EXPECT_NEAR(m.mean, exact.mean, 4 * std::hypot(m.std_error, exact.std_error)) << integrator << ": error " << m.std_error;
     EXPECT_LT(m.std_error, 0.01 * exact.mean) << integrator << " too noisy for the test to mean anything";
   }
@@ -143,10 +144,10 @@ TEST(Vcm, WithoutMergingItIsBdptBitForBit) {
 
 // Merging and path tracing estimate the same pixels: the Cornell box and glass-metal (glass, metals, a
 // mirror: caustics), per channel |z| <= 4 against a longer path render. Merging's bias (light from a
-// surface within the radius of an edge merged across it) shrinks with the radius: vcm at half the default
-// radius (its MIS gives connections the diffuse surfaces); bpm and sppm, which have nothing but merging,
-// at the default one over 256 iterations (the last radius half the first), where a pixel gathers enough
-// photons for its variance estimate to hold.
+// surface within the radius of an edge merged across it) shrinks with the radius: each at its default radius
+// (vcm's half a pixel's footprint: its MIS gives connections the diffuse surfaces; bpm's and sppm's, which
+// have nothing but merging, the whole footprint), vcm over 128 iterations, bpm and sppm over 256 (the last
+// radius half the first), where a pixel gathers enough photons for its variance estimate to hold.
 TEST(Vcm, AgreesWithPathTracingPerPixel) {
   const std::string scenes = std::string(PATHCL_SOURCE_DIR) + "/scenes/";
   for (const char* name : {"cornell-box", "glass-metal"}) {
@@ -154,12 +155,10 @@ TEST(Vcm, AgreesWithPathTracingPerPixel) {
     scene.header.width = 48;
     scene.header.height = 48;
     Film reference = render_with(scene, merging("path", 512, 5)).film;
-    const double default_radius = default_merging_radius(scene, light_transport_setup(scene, 1).header);
     for (const char* integrator : kMerging) {
       SCOPED_TRACE(std::string(name) + ", " + integrator);
       const bool vcm = std::string(integrator) == "vcm";
       Options o = merging(integrator, vcm ? 128 : 256, 5);
-      o.radius = vcm ? default_radius / 2 : 0;
       expect_same_pixels(reference, render_with(scene, o).film);
     }
   }
