@@ -39,6 +39,13 @@ std::string lower(std::string s) {
 }  // namespace
 
 std::vector<DeviceInfo> list_devices() {
+  // PoCL's CPU devices compile a kernel's work-group function again for every local size, for a global offset
+  // other than zero and for grids of 65535 items or more ("specialization"). pathcl's kernels trace a whole
+  // path or more per work item, where the specialized functions are no faster (docs/benchmarks-notes.md:
+  // samples/s and rays/s the same within noise), so one generic function per kernel serves every launch: a
+  // 512 x 512 bdpt render compiled its kernel twice (the start-up launches are narrow), the tests once per
+  // work-group size. Set before the first OpenCL call, where the user has not set it.
+  setenv("POCL_WORK_GROUP_SPECIALIZATION", "0", 0);
   cl_uint platform_count = 0;
   cl_int status = clGetPlatformIDs(0, nullptr, &platform_count);
   if (status == CL_PLATFORM_NOT_FOUND_KHR || platform_count == 0) return {};
