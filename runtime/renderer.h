@@ -51,8 +51,8 @@ struct RenderOptions {
   // each device's own (path_lanes, runtime/device.h), 1 for the other techniques.
   uint32_t lanes = 0;
   // Photon merging (vcm, bpm, sppm; kernels/vcm.cl): the first iteration's radius in scene units (0: a pixel's
-  // footprint where the camera looks, default_merging_radius; half of it for vcm), its reduction exponent, and whether vcm
-  // merges (false: bdpt's estimator, the same bits).
+  // footprint where the camera looks, default_merging_radius; half of it for vcm), its reduction exponent, and
+  // whether vcm merges (false: bdpt's estimator, the same bits).
   double radius = 0;
   double alpha = 0.75;
   bool merge = true;

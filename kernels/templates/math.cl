@@ -10,9 +10,6 @@ static inline PC_OVL void make_frame(V3 n, V3* t, V3* b) {
   *t = lane3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
   *b = lane3(c, s + n.y * n.y * a, -n.y);
 }
-/* Moves p off the surface with normal n, by the error bound err, to the side of direction w, and
- * rounds away from the surface (pbrt-v4 OffsetRayOrigin), so a spawned ray cannot re-hit the surface
- * it left. */
 /* nextafter(x, INFINITY) and nextafter(x, -INFINITY) by a step of the bits: the same bits for every x, zeros,
  * denormals and infinities included (NaN gives x). PoCL's nextafter is a call per lane: offset_ray_origin
  * was a sixth of a BDPT sample's time at one lane. */
@@ -28,6 +25,9 @@ static inline PC_OVL F pc_next_float_down(F x) {
   stepped = select(stepped, (U)(0x80000001u), magnitude == 0u);
   return select(as_F(stepped), x, (magnitude > 0x7f800000u) | (b == 0xff800000u));
 }
+/* Moves p off the surface with normal n, by the error bound err, to the side of direction w, and
+ * rounds away from the surface (pbrt-v4 OffsetRayOrigin), so a spawned ray cannot re-hit the surface
+ * it left. */
 static inline PC_OVL F pc_offset_component_(F p, F offset) {
   F po = p + offset;
   return select(select(po, pc_next_float_down(po), offset < 0.0f), pc_next_float_up(po), offset > 0.0f);
