@@ -3,6 +3,7 @@
 // left out, or used with --allow-mixed-devices. CTest runs this under POCL_DEVICES="basic pthread" and
 // "pthread pthread" (tests/CMakeLists.txt), so PoCL shows two devices.
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -304,4 +305,19 @@ TEST(MultiDevice, CommandLineDeviceLists) {
   EXPECT_EQ(run_pathcl(common + "--device 0,99 -o " + dir + "/none.exr", &err), 2);
   EXPECT_NE(err.find("no device with that index"), std::string::npos) << err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/twice.exr") || std::filesystem::exists(dir + "/none.exr"));
+}
+
+// Listing the devices asks PoCL for one generic work-group function per kernel (runtime/device.cpp): without
+// it a large render compiled its kernels again for wide launches, and every work-group size again. A value
+// the user set holds.
+TEST(MultiDevice, PoclGetsOneWorkGroupFunctionPerKernel) {
+  const char* kVariable = "POCL_WORK_GROUP_SPECIALIZATION";
+  unsetenv(kVariable);
+  ASSERT_FALSE(list_devices().empty());
+  ASSERT_NE(std::getenv(kVariable), nullptr);
+  EXPECT_STREQ(std::getenv(kVariable), "0");
+  setenv(kVariable, "1", 1);
+  list_devices();
+  EXPECT_STREQ(std::getenv(kVariable), "1");
+  setenv(kVariable, "0", 1);
 }
