@@ -112,6 +112,7 @@ size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested
 // Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size) and returns
 // the kernel's time on the device in milliseconds, from profiling events. work_group 0: the largest power of
 // two up to 64 that divides items (the tests' kernels, which have no bound on their index), not the driver's
-// choice: PoCL compiles a work-group function per local size and chooses it from the global size's factors,
-// so a kernel launched over many sizes was compiled many times (light_pdf_bins 23 times in a suite run).
+// choice: a driver that specializes work-group functions (PoCL unless POCL_WORK_GROUP_SPECIALIZATION=0, which
+// list_devices sets) compiles one per local size and chooses it from the global size's factors, so a kernel
+// launched over many sizes was compiled many times (light_pdf_bins 23 times in a suite run).
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);
