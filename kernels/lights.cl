@@ -71,11 +71,22 @@ static inline Lane3 emitted_towards_lanes(Lane3 emission, LaneU flags, Lane3 ny,
   return lane3_select(lane3_splat((float3)(0.0f)), emission, lit);
 }
 
-/* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). */
-static inline LaneF spot_falloff_lanes(Lane3 direction, LaneF cos_inner, LaneF cos_outer, Lane3 from_light) {
-  LaneF c = pc_dot(direction, from_light);
-  LaneF t = (c - cos_outer) / (cos_inner - cos_outer);
-  return select(select(t * t * (3.0f - 2.0f * t), (LaneF)(0.0f), c <= cos_outer), (LaneF)(1.0f), c >= cos_inner);
+/* Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between (pbrt-v4). For one
+ * lane in every program (light paths start lane by lane: emission.cl), and for the program's lanes. */
+#define PC_SPOT_FALLOFF(V3, F)                                                                            \
+  static inline PC_OVL F spot_falloff_lanes(V3 direction, F cos_inner, F cos_outer, V3 from_light) {     \
+    F c = pc_dot(direction, from_light);                                                                  \
+    F t = (c - cos_outer) / (cos_inner - cos_outer);                                                      \
+    return select(select(t * t * (3.0f - 2.0f * t), (F)(0.0f), c <= cos_outer), (F)(1.0f), c >= cos_inner); \
+  }
+PC_SPOT_FALLOFF(float3, float)
+#if PC_LANES > 1
+PC_SPOT_FALLOFF(Lane3, LaneF)
+#endif
+#undef PC_SPOT_FALLOFF
+
+static inline float spot_falloff(Light light, float3 from_light) {
+  return spot_falloff_lanes(light.direction.xyz, light.cos_inner, light.cos_outer, from_light);
 }
 
 static inline LaneF area_to_solid_angle_lanes(Lane3 x, Lane3 y, Lane3 ny, LaneF area_pdf) {
@@ -271,10 +282,6 @@ PC_OUT_OF_LINE LaneI sample_light_lanes(const SceneData* sc, Lane3 x, LaneF u0, 
 /* Radiance from light point y with normal ny towards x. */
 static inline float3 emitted_towards(float3 emission, uint flags, float3 ny, float3 y, float3 x) {
   return emitted_towards_lanes(emission, flags, ny, y, x);
-}
-
-static inline float spot_falloff(Light light, float3 from_light) {
-  return spot_falloff_lanes(light.direction.xyz, light.cos_inner, light.cos_outer, from_light);
 }
 
 /* Solid-angle pdf of reaching point y (normal ny) of area light light_index from x, light choice included. */
