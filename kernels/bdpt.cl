@@ -203,7 +203,7 @@ PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const Ligh
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
     uint count = 0u;
-    trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, vertices, &count);
+    trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, key.pixel, 1, &n, &mis, vertices, &count);
     float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, true,
                                     vertices, count, &n.rays);
     if (splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, s & 1u, L);

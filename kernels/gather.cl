@@ -156,8 +156,8 @@ PC_KERNEL_BODY void ir_light_item(const SceneData* scene, __constant const Light
   uint slots = light_vertex_slots(h);
   for (uint j = item; j < lt->light_paths; j += pixel_count) {
     uint count = 0u;
-    trace_light_path(&sc, lt, emission_cdf, (__global uint*)0, light_path_key(h, j, sample_begin), &n, &mis,
-                     light_vertices + j * slots, &count);
+    trace_light_paths_lanes(&sc, lt, emission_cdf, (__global uint*)0, light_path_key(h, j, sample_begin), j, 1, &n, &mis,
+                            light_vertices + j * slots, &count);
     vertex_counts[j] = count;
   }
   add_splat_counts(stats, &n);
@@ -255,7 +255,8 @@ PC_KERNEL_BODY void rad_shoot_item(const SceneData* scene, __constant const Ligh
   uint longest = lt->final_gather ? h->max_depth - 1u : h->max_depth;
   for (uint j = item; j < lt->light_paths; j += items) {
     uint count = 0u;
-    trace_light_path(&sc, lt, emission_cdf, (__global uint*)0, light_path_key(h, j, sample_begin), &n, &mis, vertices, &count);
+    trace_light_paths_lanes(&sc, lt, emission_cdf, (__global uint*)0, light_path_key(h, j, sample_begin), j, 1, &n, &mis,
+                            vertices, &count);
     for (uint k = 0; k < count && vertices[k].length <= longest; ++k) {
       float3 beta = vertices[k].beta.xyz;
       if (!splat_is_valid(beta, &n)) continue;

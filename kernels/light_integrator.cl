@@ -1,24 +1,38 @@
-/* The light-tracing integrator (`light`, lane width 1: one work item traces one light path at a time,
- * scalar code like the path megakernel). Light path `index` of sample s is keyed by (index, s): sample
- * s holds width x height light paths, so a light render of N spp traces as many paths as a path render
- * of N spp. The light paths themselves, their camera connections and splats are light_path.cl's (BDPT
- * traces the same ones). */
+/* The light-tracing integrator (`light`): light path `index` of sample s is keyed by (index, s): sample s
+ * holds width x height light paths, so a light render of N spp traces as many paths as a path render of N
+ * spp. The light paths themselves, their camera connections and splats are light_path.cl's (BDPT traces the
+ * same ones). A work item traces W = PC_LANES paths at once (kernels/lanes.cl: 1 on GPUs, 8 or 16 on CPU
+ * devices), a lane each, bounce by bounce: every path is the one-lane path, bit for bit. */
 #include "light_path.cl"
 
 /* One work unit: light paths [path_begin, path_begin + path_count) of samples [sample_begin, sample_begin +
  * sample_count), splatted into film (PC_SPLAT_WORDS 64-bit sums per pixel, cleared by the host per unit).
- * Which work item runs which path, and in which order splats arrive, changes no bit of the film. */
+ * Work item i traces paths i G .. i G + G - 1 (G = PC_ITEM_PIXELS: W x PC_LANE_PIXELS, 1 for one lane), W at
+ * a time. Which work item or lane runs which path, and in which order splats arrive, changes no bit of the film. */
+#if PC_LANES > 1
+#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
+#else
+#define PC_ITEM_PIXELS 1u
+#endif
 PC_KERNEL_BODY void light_pass_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                     __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                     uint path_begin, uint path_count, uint sample_begin, uint sample_count, uint item) {
   SceneData sc = *scene;
   __constant const SceneHeader* h = sc.h;
-  if (item >= path_count) return;
-  SampleKey key = light_path_key(h, path_begin + item, sample_begin);
+  uint first = item * PC_ITEM_PIXELS;
+  if (first >= path_count) return;
+  uint lane_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) lane_of[j] = j;
+  LaneU lane = lane_load(lane_of);
+  SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
-    trace_light_path(&sc, lt, emission_cdf, film, key, &n);
+    for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
+      LaneU index = (LaneU)(b) + lane;
+      key.pixel = path_begin + b;
+      trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, (LaneU)(path_begin) + index, index < path_count, &n);
+    }
   }
   add_splat_counts(stats, &n);
 }

@@ -1,6 +1,7 @@
-/* A light path (lane width 1): emitted from a light chosen by power (emission.cl), connected to the camera
- * at every non-delta vertex (camera_importance.cl), shadow-tested and splatted into the pixels its image
- * position lands in (splat_film.cl), weighted by the pixel filter. The `light` integrator traces these
+/* Light paths, one per lane of the program's width (kernels/lanes.cl; BDPT's programs are one lane wide):
+ * emitted from a light chosen by power (emission.cl), connected to the camera at every non-delta vertex
+ * (camera_importance.cl), shadow-tested and splatted into the pixels its image position lands in
+ * (splat_film.cl), weighted by the pixel filter. The `light` integrator traces these
  * alone; BDPT (bdpt.cl, which defines PC_BDPT) traces the same paths as its light subpaths: then each
  * camera connection is weighted by multiple importance sampling against BDPT's other strategies, and the
  * non-delta vertices are kept for the camera subpath to connect to.
@@ -38,6 +39,7 @@
 #include "camera_importance.cl"
 #include "splat_film.cl"
 #include "scatter.cl"
+#include "trace_lanes.cl"
 
 /* Sample dimensions (groups of four, sampler.cl). Light paths take groups from light_group_base on, above
  * every group a camera path of the same key takes (PC_DIM_* of sampler.cl: BDPT's camera subpath, the path
@@ -79,11 +81,11 @@ static inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key
   return ray;
 }
 
-/* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file). */
-static inline float shading_normal_factor(float3 w_light, float3 w_out, float3 ns, float3 ng) {
-  float num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
-  float den = fabs(pc_dot(w_light, ng)) * fabs(pc_dot(w_out, ns));
-  return den > 0.0f ? num / den : 0.0f;
+/* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file), by lane. */
+static inline LaneF shading_normal_factor(Lane3 w_light, Lane3 w_out, Lane3 ns, Lane3 ng) {
+  LaneF num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
+  LaneF den = fabs(pc_dot(w_light, ng)) * fabs(pc_dot(w_out, ns));
+  return select((LaneF)(0.0f), num / den, den > 0.0f);
 }
 
 /* False (and counted) for a colour that is not finite and non-negative: such a splat is dropped. */
@@ -217,59 +219,129 @@ static inline float strategy_weight(__constant const LightTransportHeader* lt, c
 }
 #endif
 
-/* Traces light path (key) and splats its camera connections. BDPT: with MIS weights (and the merging
- * factors *mis), and its non-delta vertices in vertices[0 .. *count) (room for max_depth). */
-static inline void trace_light_path(const SceneData* sc, __constant const LightTransportHeader* lt,
-                                    __global const float* emission_cdf, __global uint* film, SampleKey key, SplatCounts* n
+/* The four numbers of sample group `group` of each lane's light path (key.sample, key.seed; lane j's path
+ * index path[j]): sample4 of key with one lane (a Metropolis chain's state included), sample4_lanes with more. */
+static inline void light_sample4_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint group, LaneF* x,
+                                       LaneF* y, LaneF* z, LaneF* w) {
+#if PC_LANES == 1
+  float4 u = sample4(h, key, group);
+  *x = u.x;
+  *y = u.y;
+  *z = u.z;
+  *w = u.w;
+#else
+  sample4_lanes(h, path, (LaneU)(key.sample), key.seed, (LaneU)(group), x, y, z, w);
+#endif
+}
+
+#ifdef PC_HAS_CUTOUTS
+/* The cut-out seed of ray ray_index of each lane's light path (cutout.cl's cutout_seed of its key; with more
+ * lanes than one, the key's seed is the scene's). */
+static inline LaneU light_cutout_seed_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint ray_index) {
+#if PC_LANES == 1
+  return cutout_seed(key, ray_index);
+#else
+  return cutout_seed_lanes(h, path, (LaneU)(key.sample), (LaneU)(ray_index));
+#endif
+}
+#endif
+
+#if defined(PC_BDPT) && PC_LANES > 1
+#error "BDPT's programs are one lane wide: its light subpath's strategies are written for one lane"
+#endif
+
+/* Traces the light paths of the lanes in m, lane j's keyed by (path[j], key.sample) (with one lane: key, whose
+ * pixel is path; BDPT and the integrators built on it pass one lane, 1), and splats their camera connections: the lanes go bounce by bounce together, each doing the
+ * one-lane operations (the emission and the camera's lens point lane by lane, with the one-lane code), so a
+ * path's splats are the same bits at every width; the film's fixed-point sums do not depend on their order.
+ * BDPT (one lane): with MIS weights (and the merging factors *mis), and its non-delta vertices in
+ * vertices[0 .. *count) (room for max_depth). */
+static inline void trace_light_paths_lanes(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                           __global const float* emission_cdf, __global uint* film, SampleKey key,
+                                           LaneU path, LaneI m, SplatCounts* n
 #ifdef PC_BDPT
-                             , const MisFactors* mis, __global LightVertex* vertices, uint* count
+                                    , const MisFactors* mis, __global LightVertex* vertices, uint* count
 #endif
 #ifdef PC_MLT
-                             , MltSplat* splat
+                                    , MltSplat* splat
 #endif
 ) {
   __constant const SceneHeader* h = sc->h;
   if (h->max_depth == 0u) return; /* no scattering: only directly seen lights, which light paths cannot see */
-  float4 u_pos = sample4(h, key, PC_LT_EMIT_POS(h)), u_dir = sample4(h, key, PC_LT_EMIT_DIR(h));
-  EmissionSample e;
-  if (!sample_emission(sc, lt, emission_cdf, u_pos.x, u_pos.yzw, u_dir.xy, &e)) return;
-  float3 beta = emission_weight(&e);
-  float beta0 = max_component(beta);
-  uint parity = key.sample & 1u;
-  Ray ray;
-  ray.o = e.prim != PC_INVALID ? offset_ray_origin(e.p, e.p_err, e.n, e.d) : e.p;
-  ray.d = e.d;
-  ray.tmin = 0.0f;
-  ray.tmax = INFINITY;
-  ray.skip_prim = e.prim;
-  ray.skip_instance = 0u;
-#ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE);
-#endif
+  LaneF up0, up1, up2, up3, ud0, ud1, ud2, ud3;
+  light_sample4_lanes(h, key, path, PC_LT_EMIT_POS(h), &up0, &up1, &up2, &up3);
+  light_sample4_lanes(h, key, path, PC_LT_EMIT_DIR(h), &ud0, &ud1, &ud2, &ud3);
+  /* The lanes' first rays and throughputs, lane by lane into arrays (one vector load each after). */
+  float beta_x[PC_LANES], beta_y[PC_LANES], beta_z[PC_LANES], beta_max[PC_LANES];
+  float o_x[PC_LANES], o_y[PC_LANES], o_z[PC_LANES], d_x[PC_LANES], d_y[PC_LANES], d_z[PC_LANES];
+  uint skip[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    beta_x[j] = beta_y[j] = beta_z[j] = o_x[j] = o_y[j] = o_z[j] = d_x[j] = d_y[j] = d_z[j] = 0.0f;
+    beta_max[j] = 1.0f;
+    skip[j] = PC_INVALID;
+  }
 #ifdef PC_BDPT
   /* dVC starts as the emission's cosine over its density (0 for a delta light: no strategy but this one
    * reaches its paths' first vertex); dVCM needs next-event estimation's density, which the light tree
    * makes depend on the receiver, and is set at the first vertex. */
-  float emit_pdf = e.pdf_choice * e.pdf_pos * e.pdf_dir;
-  bool area = e.prim != PC_INVALID;
-  float cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
-  float dvc = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf, dvcm = 0.0f;
-  float dvm = dvc * mis->vc;
-  float3 prev_p = e.p;
+  EmissionSample e;
+  float emit_pdf = 0.0f, cos_light = 1.0f, dvc = 0.0f, dvcm = 0.0f, dvm = 0.0f;
+  float3 prev_p = (float3)(0.0f);
 #endif
+  uint emitted = 0u; /* the lanes whose light emits */
+  PC_EACH_LANE(j, pc_lane_bits(m)) {
+#ifndef PC_BDPT
+    EmissionSample e;
+#endif
+    if (!sample_emission(sc, lt, emission_cdf, pc_lane(up0, j), (float3)(pc_lane(up1, j), pc_lane(up2, j), pc_lane(up3, j)),
+                         (float2)(pc_lane(ud0, j), pc_lane(ud1, j)), &e))
+      continue;
+    emitted |= 1u << j;
+    float3 b = emission_weight(&e);
+    float3 o = e.prim != PC_INVALID ? offset_ray_origin(e.p, e.p_err, e.n, e.d) : e.p;
+    beta_x[j] = b.x, beta_y[j] = b.y, beta_z[j] = b.z, beta_max[j] = max_component(b);
+    o_x[j] = o.x, o_y[j] = o.y, o_z[j] = o.z, d_x[j] = e.d.x, d_y[j] = e.d.y, d_z[j] = e.d.z;
+    skip[j] = e.prim;
+#ifdef PC_BDPT
+    emit_pdf = e.pdf_choice * e.pdf_pos * e.pdf_dir;
+    bool area = e.prim != PC_INVALID;
+    cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
+    dvc = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf;
+    dvm = dvc * mis->vc;
+    prev_p = e.p;
+#endif
+  }
+  Lane3 beta = lane3(lane_load(beta_x), lane_load(beta_y), lane_load(beta_z));
+  LaneF beta0 = lane_load(beta_max);
+  RayLanes ray;
+  ray.o = lane3(lane_load(o_x), lane_load(o_y), lane_load(o_z));
+  ray.d = lane3(lane_load(d_x), lane_load(d_y), lane_load(d_z));
+  ray.tmin = (LaneF)(0.0f);
+  ray.tmax = (LaneF)(INFINITY);
+  ray.skip_prim = lane_load(skip);
+  ray.skip_instance = (LaneU)(0u);
+  ray.cutout_seed = (LaneU)(0u);
+  LaneI live = pc_lanes_of_bits(emitted, m);
+  if (!pc_any_(live)) return;
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE);
+#endif
+  uint parity = key.sample & 1u;
   for (uint v = 0;; ++v) { /* v + 1 scattering events at the vertex found now */
-    Hit hit;
-    ++n->rays;
-    if (!trace_scene(sc, sc, &ray, false, &hit)) break;
-    Surface s = scene_surface(sc, &ray, &hit);
-    PrimShading sh = sc->shading[s.prim];
-    Material m = material_at(sc, sh.material, &s, &hit);
+    HitLanes hit;
+    n->rays += lane_count(live);
+    live = trace_lanes(sc, &ray, live, false, &hit);
+    if (!pc_any_(live)) break;
+    ShadingLanes sh;
+    SurfaceLanes s = scene_surface_lanes(sc, &ray, &hit, live, &sh);
+    MaterialLanes mat = material_at_lanes(sc, sh.material, &s, &sh, &hit, live);
     FrameLanes frame;
     frame_about(s.ns, &frame);
-    float3 w_light = -ray.d; /* back along the light path */
-    float3 wl_local = to_local(&frame, w_light);
-    float wl_ng = pc_dot(w_light, s.ng);
-    float4 u_connect = sample4(h, key, PC_LT_CONNECT(h, v));
+    Lane3 w_light = lane3_neg(ray.d); /* back along the light path */
+    Lane3 wl_local = to_local(&frame, w_light);
+    LaneF wl_ng = pc_dot(w_light, s.ng);
+    LaneF uc0, uc1, uc2, uc3;
+    light_sample4_lanes(h, key, path, PC_LT_CONNECT(h, v), &uc0, &uc1, &uc2, &uc3);
 #ifdef PC_BDPT
     /* The densities of reaching this vertex, per area: dVCM /= p(light path reaches it), in solid angle
      * times cos / dist^2 (Georgiev's eq. 31-33; the cosines are the geometric normal's throughout). */
@@ -285,54 +357,76 @@ static inline void trace_light_path(const SceneData* sc, __constant const LightT
     dvc /= cos_in;
     dvm /= cos_in;
     prev_p = s.p;
+    LaneI connect = live & (mis->connect ? bsdf_is_delta_lanes(mat.type) == 0 : 0);
+#else
+    LaneI connect = live & !bsdf_is_delta_lanes(mat.type);
 #endif
 
-    /* Connection to the camera. */
-    CameraWiSample cs;
-#ifdef PC_BDPT
-    bool connect = mis->connect;
-#else
-    bool connect = true;
-#endif
-    if (connect && !bsdf_is_delta(m) && camera_sample_wi(h, s.p, u_connect.xy, &cs)) {
-      float3 wc_local = to_local(&frame, cs.wi);
-      float3 f = bsdf_eval(m, wc_local, wl_local);
+    /* Connection to the camera: the lens point lane by lane, into arrays. */
+    float cp_x[PC_LANES], cp_y[PC_LANES], cp_z[PC_LANES], cw_x[PC_LANES], cw_y[PC_LANES], cw_z[PC_LANES];
+    float c_dist[PC_LANES], c_we[PC_LANES], c_pdf[PC_LANES], r_x[PC_LANES], r_y[PC_LANES];
+    for (uint j = 0u; j < PC_LANES; ++j) {
+      cp_x[j] = cp_y[j] = cp_z[j] = cw_x[j] = cw_y[j] = cw_z[j] = c_we[j] = r_x[j] = r_y[j] = 0.0f;
+      c_dist[j] = c_pdf[j] = 1.0f;
+    }
+    uint seen = 0u;
+    PC_EACH_LANE(j, pc_lane_bits(connect)) {
+      CameraWiSample cs;
+      if (!camera_sample_wi(h, lane3_at(s.p, j), (float2)(pc_lane(uc0, j), pc_lane(uc1, j)), &cs)) continue;
+      seen |= 1u << j;
+      cp_x[j] = cs.p.x, cp_y[j] = cs.p.y, cp_z[j] = cs.p.z, cw_x[j] = cs.wi.x, cw_y[j] = cs.wi.y, cw_z[j] = cs.wi.z;
+      c_dist[j] = cs.dist, c_we[j] = cs.We, c_pdf[j] = cs.pdf, r_x[j] = cs.raster.x, r_y[j] = cs.raster.y;
+    }
+    Lane3 cs_p = lane3(lane_load(cp_x), lane_load(cp_y), lane_load(cp_z));
+    Lane3 cs_wi = lane3(lane_load(cw_x), lane_load(cw_y), lane_load(cw_z));
+    LaneF cs_dist = lane_load(c_dist), cs_we = lane_load(c_we), cs_pdf = lane_load(c_pdf);
+    LaneF raster_x = lane_load(r_x), raster_y = lane_load(r_y);
+    connect = pc_lanes_of_bits(seen, connect);
+    if (pc_any_(connect)) {
+      Lane3 wc_local = to_local(&frame, cs_wi);
+      Lane3 f = bsdf_eval_lanes(&mat, wc_local, wl_local, connect);
       /* Reflection only (no non-delta material transmits): the camera on the light's side of the surface. */
-      if (pc_dot(cs.wi, s.ng) * wl_ng > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f)) {
-        Ray shadow = spawn_ray(&s, cs.wi);
-        shadow.d = cs.p - shadow.o;
-        shadow.tmax = 1.0f - PC_SHADOW_EPSILON;
+      connect &= (pc_dot(cs_wi, s.ng) * wl_ng > 0.0f) & lane3_any_positive(f);
+      if (pc_any_(connect)) {
+        RayLanes shadow;
+        spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, cs_wi, &shadow);
+        shadow.d = lane3_sub(cs_p, shadow.o);
+        shadow.tmax = (LaneF)(1.0f - PC_SHADOW_EPSILON);
+        shadow.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-        shadow.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE + 2u * v + 1u);
+        shadow.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 1u);
 #endif
-        float g = fabs(wc_local.z) * shading_normal_factor(w_light, cs.wi, s.ns, s.ng);
+        LaneF g = fabs(wc_local.z) * shading_normal_factor(w_light, cs_wi, s.ns, s.ng);
         /* over the width x height paths of a sample: the film sums to the pixel mean times spp */
-        float per_path = g * cs.We / (cs.pdf * (float)(h->width * h->height));
+        LaneF per_path = g * cs_we / (cs_pdf * (float)(h->width * h->height));
 #ifdef PC_BDPT
         /* Against the camera subpath reaching this vertex (t >= 2): its density per area here, with the
          * image position uniform over the image, over the light subpath's (times the light paths per
          * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
-        float cam_pdf_a = camera_direction_pdf(h, -cs.wi) * fabs(pc_dot(cs.wi, s.ng)) / (cs.dist * cs.dist);
-        float rev = bsdf_pdf(m, wc_local, wl_local);
+        float cam_pdf_a = camera_direction_pdf(h, -cs_wi) * fabs(pc_dot(cs_wi, s.ng)) / (cs_dist * cs_dist);
+        float rev = bsdf_pdf_lanes(&mat, wc_local, wl_local, connect);
         per_path *= strategy_weight(lt, mis, v + 2u, 1u, cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
 #endif
-        Hit blocker;
-        if (per_path != 0.0f) { /* a NaN goes on, to be counted */
-          ++n->rays;
-          if (!trace_scene(sc, sc, &shadow, true, &blocker)) {
+        LaneI shoot = connect & (per_path != 0.0f); /* a NaN goes on, to be counted */
+        if (pc_any_(shoot)) {
+          n->rays += lane_count(shoot);
+          HitLanes blocker;
+          LaneI reach = shoot & !trace_lanes(sc, &shadow, shoot, true, &blocker);
+          Lane3 value = lane3_scale(lane3_mul(beta, f), per_path);
+          PC_EACH_LANE(j, pc_lane_bits(reach)) {
 #ifdef PC_MLT
-            splat->raster = cs.raster;
-            splat->value = beta * f * per_path;
+            splat->raster = (float2)(raster_x, raster_y);
+            splat->value = value;
             if (splat_is_valid(splat->value, n)) splat->luminance += luminance(splat->value);
 #else
-            splat_filtered(film, h, lt, cs.raster, parity, beta * f * per_path, n);
+            splat_filtered(film, h, lt, (float2)(pc_lane(raster_x, j), pc_lane(raster_y, j)), parity, lane3_at(value, j), n);
 #endif
           }
         }
       }
     }
 #ifdef PC_BDPT
-    if (!bsdf_is_delta(m) && v + 1u >= mis->first_length) {
+    if (!bsdf_is_delta_lanes(mat.type) && v + 1u >= mis->first_length) {
       __global LightVertex* lv = vertices + (*count)++;
       ++n->light_vertices;
       lv->p = (float4)(s.p, max_component(s.p_err));
@@ -340,7 +434,7 @@ static inline void trace_light_path(const SceneData* sc, __constant const LightT
       lv->ns = (float4)(s.ns, dvc);
       lv->wl = (float4)(w_light, dvm);
       lv->beta = (float4)(beta, 0.0f);
-      lv->color = (float4)(m.color.xyz, 0.0f);
+      lv->color = (float4)(mat.color, 0.0f);
       lv->material = sh.material;
       lv->prim = s.prim;
       lv->instance = s.instance;
@@ -353,21 +447,26 @@ static inline void trace_light_path(const SceneData* sc, __constant const LightT
 #endif
 
     /* The next vertex. */
-    float4 u_bsdf = sample4(h, key, PC_LT_BSDF(h, v));
-    MaterialLanes ml = material_lanes_of(m);
+    LaneF ub0, ub1, ub2, ub3;
+    light_sample4_lanes(h, key, path, PC_LT_BSDF(h, v), &ub0, &ub1, &ub2, &ub3);
     BsdfSampleLanes bs;
-    float3 wi;
-    if (!scatter_lanes(&ml, &frame, s.ng, wl_local, wl_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
+    Lane3 wi;
+    live = scatter_lanes(&mat, &frame, s.ng, wl_local, wl_ng, ub0, ub1, ub2, live, &bs, &wi);
+    if (!pc_any_(live)) break;
 #ifdef PC_BDPT
-    vcm_scatter_lanes(&ml, &bs, wl_local, wi, s.ng, 1, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
+    vcm_scatter_lanes(&mat, &bs, wl_local, wi, s.ng, live, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
 #endif
     /* Importance is not scaled by refraction: undo the radiance scaling (bs.eta2) the sample applied. */
-    beta *= bs.weight * (bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng));
+    beta = lane3_select(beta, lane3_mul(beta, lane3_scale(bs.weight, bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng))),
+                        live);
     /* Russian roulette on the throughput relative to the emitted one (light paths start at power scale). */
-    if (!roulette_lanes(max_component(beta) / beta0, u_connect.z, v + 1u > h->rr_depth, 1, &beta)) break;
-    ray = spawn_ray(&s, wi);
+    live = roulette_lanes(lane3_max_component(beta) / beta0, uc2, pc_lanes_of_bits(v + 1u > h->rr_depth ? ~0u : 0u, live),
+                          live, &beta);
+    if (!pc_any_(live)) break;
+    spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &ray);
+    ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-    ray.cutout_seed = cutout_seed(key, PC_LT_CUTOUT_BASE + 2u * v + 2u);
+    ray.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 2u);
 #endif
   }
 }

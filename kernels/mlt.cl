@@ -150,7 +150,7 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
   splat->value = (float3)(0.0f);
   splat->luminance = 0.0f;
   if (all ? depth_hi >= 1u : s >= 2u)
-    trace_light_path(sc, lt, emission_cdf, (__global uint*)0, key, n, &mis, vertices, &count, splat);
+    trace_light_paths_lanes(sc, lt, emission_cdf, (__global uint*)0, key, key.pixel, 1, n, &mis, vertices, &count, splat);
   if (t == 1u) {
     out->kind = PC_MLT_SPLAT;
     out->raster = splat->raster;

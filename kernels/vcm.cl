@@ -180,7 +180,8 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MisFactors mis = iteration_factors(lt, h, iteration_radius2(lt, sample_begin));
   uint count = 0u;
-  trace_light_path(&sc, lt, emission_cdf, film, key, &n, &mis, light_vertices + item * light_vertex_slots(h), &count);
+  trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, key.pixel, 1, &n, &mis, light_vertices + item * light_vertex_slots(h),
+                          &count);
   vertex_counts[item] = count;
   add_splat_counts(stats, &n);
 }
