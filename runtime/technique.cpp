@@ -32,6 +32,18 @@ void register_technique(Technique technique) {
   registry().push_back(std::move(technique));
 }
 
+TechniqueOption lanes_option(const std::string& what) {
+  return {"lanes", "1, 8 or 16 (" + what + " per work item; the same pixels)", [](double v, RenderOptions& o) {
+            if (v != 1 && v != 8 && v != 16) return false;
+            o.lanes = uint32_t(v);
+            return true;
+          }};
+}
+
+std::string lanes_build_option(const TechniqueBuild& b) {
+  return b.lanes > 1 ? " -DPC_LANES=" + std::to_string(b.lanes) : std::string();  // kernels/lanes.cl
+}
+
 TechniqueOption flag_option(const std::string& name, bool RenderOptions::*field) {
   return {name, "true or false", [field](double v, RenderOptions& o) {
             if (v != 0 && v != 1) return false;

@@ -84,6 +84,10 @@ struct TechniqueOption {
 // Options of the usual kinds, each stored into a field of RenderOptions: `true` or `false` (flag_option), a
 // whole number from 1 to `most` (count_option: "a whole number of WHAT, 1 to MOST"), a number that `fits`
 // (number_option, `expected` saying which).
+// The `lanes` option of the techniques that run over SIMD lanes (Technique::lanes; `what` runs in each lane),
+// and the -D flag of the width a program is built for.
+TechniqueOption lanes_option(const std::string& what);
+std::string lanes_build_option(const TechniqueBuild& build);
 TechniqueOption flag_option(const std::string& name, bool RenderOptions::*field);
 TechniqueOption count_option(const std::string& name, const std::string& what, uint32_t most, uint32_t RenderOptions::*field);
 TechniqueOption number_option(const std::string& name, const std::string& expected, std::function<bool(double)> fits,

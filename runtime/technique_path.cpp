@@ -14,14 +14,8 @@ Technique path_technique() {
   t.layers = {{"radiance", PC_LAYER_ORDERED, PC_RADIANCE_WORDS}};
   t.units = UnitKind::pixels;
   t.lanes = true;
-  t.options = {{"lanes", "1, 8 or 16 (paths per work item; the same pixels)", [](double v, RenderOptions& o) {
-                  if (v != 1 && v != 8 && v != 16) return false;
-                  o.lanes = uint32_t(v);
-                  return true;
-                }}};
-  t.build_options = [](const TechniqueBuild& b) {
-    return b.lanes > 1 ? " -DPC_LANES=" + std::to_string(b.lanes) : std::string();  // kernels/lanes.cl
-  };
+  t.options = {lanes_option("paths")};
+  t.build_options = lanes_build_option;
   t.develop = [](Film& film, const LightTransportHeader&, uint64_t*) { develop_radiance(film); };
   return t;
 }

@@ -19,6 +19,7 @@ namespace light_transport_test {
 
 struct Options {
   uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
+  uint32_t lanes = 0;  // light: light paths per work item (0: the device's width)
   std::string integrator = "light";
   size_t work_group = 0;
   bool pairs = false;
@@ -42,6 +43,7 @@ inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
   opt.pass_spp = o.pass_spp;
   opt.tile_pixels = o.tile_pixels;
   opt.work_group = o.work_group;
+  opt.lanes = o.lanes;
   opt.debug_splat_pairs = o.pairs;
   opt.debug_bdpt_strategy_s = o.strategy_s;
   opt.debug_bdpt_strategy_t = o.strategy_t;
