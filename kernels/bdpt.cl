@@ -1,7 +1,7 @@
-/* Bidirectional path tracing (`bdpt`, lane width 1). Work item i of sample s traces light subpath
- * (i, s) (light_path.cl: the `light` integrator's path, its camera connections splatted, its non-delta
- * vertices kept in private memory, at most max_depth of them) and then the camera subpath of pixel i
- * with key (i, s) (the path integrator's sample dimensions, below the light path's), and at each camera
+/* Bidirectional path tracing (`bdpt`, W = PC_LANES samples at once, a lane each: kernels/lanes.cl). Work
+ * item i of sample s traces light subpath (i, s) (light_path.cl: the `light` integrator's path, its camera
+ * connections splatted, its non-delta vertices kept in device memory, at most max_depth of them) and then
+ * the camera subpath of pixel i with key (i, s) (the path integrator's sample dimensions, below the light path's), and at each camera
  * vertex takes every strategy: the emitter it hits (s = 0), next-event estimation (s = 1) and a
  * connection to each light vertex (s >= 2); the light path's own camera connections are t = 1. A path
  * with k scattering events is made by all k + 2 strategies (t = 0, a light path hitting the lens, is not
@@ -20,144 +20,197 @@
  * sample, so that the squares estimate the pixel's variance; t = 1 splats land anywhere. */
 #define PC_BDPT 1
 #include "light_path.cl"
+#if (defined(PC_VCM) || defined(PC_MLT)) && PC_LANES > 1
+#error "vcm's and mlt's programs are one lane wide: merges and a chain's strategies are written for one lane"
+#endif
 #include "direct_light.cl"
 #include "connect.cl"
 
-/* The camera subpath of key (pixel px, py) and its strategies s = 0, 1 and >= 2 with the light subpath's
- * vertices lv[0 .. lv_count) (in order of length), weighted with the merging factors *mis. Returns the
- * pixel's radiance estimate. VCM (vcm.cl): where `own` is false, the unit holds another unit's light
- * subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each non-delta vertex, with
- * the grid's light vertices, into *merged); without connections (bpm, sppm) an emitter counts only where
- * the path to it is specular (merging makes the others), and SPPM stops at its first non-delta vertex,
- * after next-event estimation and merging there, unweighted. */
-static inline float3 trace_camera_subpath(const SceneData* sc, __constant const LightTransportHeader* lt,
-                                          __global const float* emission_cdf, SampleKey key, uint px, uint py,
-                                          const MisFactors* mis, bool own, __global const LightVertex* lv, uint lv_count,
-                                          uint* rays
+/* The camera subpaths of the lanes in m, lane j's of key (pixel[j], key.sample) (one lane: key) through image
+ * pixel (px[j], py[j]), and their strategies s = 0, 1 and >= 2 with lane j's light subpath vertices
+ * lv[j max_depth .. j max_depth + lv_count[j]) (in order of length), weighted with the merging factors *mis.
+ * Returns each lane's radiance estimate. The lanes go bounce by bounce together, each doing the one-lane
+ * operations, its connections lane by lane in order. VCM (vcm.cl, one lane): where `own` is false, the unit
+ * holds another unit's light subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each
+ * non-delta vertex, with the grid's light vertices, into *merged); without connections (bpm, sppm) an
+ * emitter counts only where the path to it is specular (merging makes the others), and SPPM stops at its
+ * first non-delta vertex, after next-event estimation and merging there, unweighted. */
+static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const LightTransportHeader* lt,
+                                          __global const float* emission_cdf, SampleKey key, LaneU pixel, LaneU px,
+                                          LaneU py, LaneI m, const MisFactors* mis, bool own,
+                                          __global const LightVertex* lv, const uint* lv_count, uint* rays
 #ifdef PC_VCM
                                    , const MergeGrid* grid, MergeSums* merged, SplatCounts* counts
 #endif
 ) {
   __constant const SceneHeader* h = sc->h;
-  Ray ray = camera_path_ray(h, key, px, py);
-  float3 throughput = (float3)(1.0f), radiance = (float3)(0.0f);
-  float eta_scale = 1.0f;
+  RayLanes ray;
+  {
+    LaneF u0, u1, u2, u3;
+    key_sample4_lanes(h, key, pixel, PC_DIM_CAMERA, &u0, &u1, &u2, &u3);
+    camera_ray_lanes(h, px, py, u0, u1, u2, u3, &ray.o, &ray.d);
+  }
+  ray.tmin = (LaneF)(0.0f);
+  ray.tmax = (LaneF)(INFINITY);
+  ray.skip_prim = ray.skip_instance = (LaneU)(PC_INVALID);
+  ray.cutout_seed = (LaneU)(0u);
+#ifdef PC_HAS_CUTOUTS
+  ray.cutout_seed = key_cutout_seed_lanes(h, key, pixel, PC_RAY_CAMERA);
+#endif
+  Lane3 throughput = lane3_splat((float3)(1.0f)), radiance = lane3_splat((float3)(0.0f));
+  LaneF eta_scale = (LaneF)(1.0f);
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera
    * connection (t = 1), counted as PC_BDPT_LIGHT_TRACING_COUNT of its paths. */
-  float dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = 0.0f, dvm = 0.0f;
-  bool specular = true; /* every scattering so far by a delta lobe */
+  LaneF dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = (LaneF)(0.0f), dvm = (LaneF)(0.0f);
+  LaneI specular = m; /* every scattering so far by a delta lobe */
   const bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
-  float3 prev_p = ray.o;
+  const uint slots = light_vertex_slots(h);
+  Lane3 prev_p = ray.o;
+  LaneI live = m;
   for (uint depth = 0;; ++depth) {
-    Hit hit;
-    ++*rays;
+    HitLanes hit;
+    *rays += lane_count(live);
     uint t_count = depth + 2u; /* camera vertices of a path ending at this hit: the lens point and depth + 1 */
-    if (!trace_scene(sc, sc, &ray, false, &hit)) {
+    LaneI found = trace_lanes(sc, &ray, live, false, &hit);
 #ifdef PC_HAS_ENVIRONMENT
-      if (own && h->env_light != PC_INVALID && (mis->connect || specular)) { /* s = 0 by the environment */
-        Light env = sc->lights[h->env_light];
-        float3 le = env_radiance(env, sc->textures, sc->texels, ray.d);
-        float others = 0.0f;
-        if (depth > 0u && mis->connect) {
-          float pos, dir;
-          light_emission_pdf(sc, lt, h->env_light, prev_p, ray.d, -ray.d, &pos, &dir);
-          float emit = emission_choice_pdf(emission_cdf, h->env_light) * pos * dir;
-          others = environment_light_pdf(sc, prev_p, ray.d) * dvcm + emit * dvc;
-        }
-        radiance += throughput * le * strategy_weight(lt, mis, 0u, t_count, others);
+    /* s = 0 by the environment */
+    LaneI escaped = own && h->env_light != PC_INVALID ? live & !found & (mis->connect ? live : specular) : (LaneI)(0);
+    if (pc_any_(escaped)) {
+      Light env = sc->lights[h->env_light];
+      Lane3 le = env_radiance_lanes(env, sc->textures, sc->texels, ray.d, escaped);
+      LaneF others = (LaneF)(0.0f);
+      if (depth > 0u && mis->connect) {
+        LaneF pos, dir;
+        LaneU index = (LaneU)(h->env_light);
+        light_emission_pdf_lanes(sc, lt, index, prev_p, ray.d, lane3_neg(ray.d), escaped, &pos, &dir);
+        LaneF emit = emission_choice_pdf_lanes(emission_cdf, index, escaped) * pos * dir;
+        others = environment_light_pdf_lanes(sc, prev_p, ray.d, escaped) * dvcm + emit * dvc;
       }
-#endif
-      break;
+      LaneF w = strategy_weight(lt, mis, (LaneU)(0u), (LaneU)(t_count), others);
+      radiance = lane3_select(radiance, lane3_add(radiance, lane3_scale(lane3_mul(throughput, le), w)), escaped);
     }
-    Surface s = scene_surface(sc, &ray, &hit);
-    PrimShading sh = sc->shading[s.prim];
-    float3 wo = -ray.d;
-    float wo_ng = pc_dot(wo, s.ng);
+#endif
+    live &= found;
+    if (!pc_any_(live)) break;
+    ShadingLanes sh;
+    SurfaceLanes s = scene_surface_lanes(sc, &ray, &hit, live, &sh);
+    Lane3 wo = lane3_neg(ray.d);
+    LaneF wo_ng = pc_dot(wo, s.ng);
     {
-      float3 seg = s.p - prev_p;
-      float dist2 = pc_dot(seg, seg), cos_in = fabs(wo_ng);
+      Lane3 seg = lane3_sub(s.p, prev_p);
+      LaneF dist2 = pc_dot(seg, seg), cos_in = fabs(wo_ng);
       dvcm *= dist2 / cos_in;
       dvc /= cos_in;
       dvm /= cos_in;
 #ifdef PC_HAS_AREA_LIGHTS
-      if (own && sh.light != PC_INVALID && (mis->connect || specular)) { /* s = 0 by an area light */
-        float3 le = emitted_towards(sc->lights[sh.light].emission.xyz, sh.flags, s.ng, s.p, ray.o);
-        float others = 0.0f;
+      /* s = 0 by an area light */
+      LaneI lit = own ? live & (sh.light != PC_INVALID) & (mis->connect ? live : specular) : (LaneI)(0);
+      if (pc_any_(lit)) {
+        Lane3 emission;
+        LaneF unused;
+        lane_gather4(&sc->lights->emission, (uint)(sizeof(Light) / sizeof(float4)), lane_safe_index(sh.light, lit), &emission,
+                     &unused);
+        Lane3 le = emitted_towards_lanes(emission, sh.flags, s.ng, s.p, ray.o);
+        LaneF others = (LaneF)(0.0f);
         if (depth > 0u && mis->connect) {
-          float pos, dir;
-          light_emission_pdf(sc, lt, sh.light, s.p, s.ng, wo, &pos, &dir);
-          float emit = emission_choice_pdf(emission_cdf, sh.light) * pos * dir;
-          float direct_a = light_pdf(sc, sh.light, prev_p, s.p, s.ng) * cos_in / dist2;
+          LaneF pos, dir;
+          light_emission_pdf_lanes(sc, lt, sh.light, s.p, s.ng, wo, lit, &pos, &dir);
+          LaneF emit = emission_choice_pdf_lanes(emission_cdf, sh.light, lit) * pos * dir;
+          LaneF direct_a = light_pdf_lanes(sc, sh.light, prev_p, s.p, s.ng, lit) * cos_in / dist2;
           others = direct_a * dvcm + emit * dvc;
         }
-        radiance += throughput * le * strategy_weight(lt, mis, 0u, t_count, others);
+        LaneF w = strategy_weight(lt, mis, (LaneU)(0u), (LaneU)(t_count), others);
+        radiance = lane3_select(radiance, lane3_add(radiance, lane3_scale(lane3_mul(throughput, le), w)), lit);
       }
 #endif
     }
     if (depth >= h->max_depth) break;
 
-    Material m = material_at(sc, sh.material, &s, &hit);
-    MaterialLanes ml = material_lanes_of(m);
+    MaterialLanes mat = material_at_lanes(sc, sh.material, &s, &sh, &hit, live);
     FrameLanes frame;
     frame_about(s.ns, &frame);
-    float3 wo_local = to_local(&frame, wo);
-    float4 u_light = sample4(h, key, PC_DIM_LIGHT(depth));
-    float4 u_bsdf = sample4(h, key, PC_DIM_BSDF(depth));
+    Lane3 wo_local = to_local(&frame, wo);
+    LaneF ul0, ul1, ul2, ul3, ub0, ub1, ub2, ub3;
+    key_sample4_lanes(h, key, pixel, PC_DIM_LIGHT(depth), &ul0, &ul1, &ul2, &ul3);
+    key_sample4_lanes(h, key, pixel, PC_DIM_BSDF(depth), &ub0, &ub1, &ub2, &ub3);
+    LaneI nondelta = live & !bsdf_is_delta_lanes(mat.type);
 
-    if (!bsdf_is_delta(m) && own && (mis->connect || sppm)) {
-      /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
-       * (SPPM: its direct light, unweighted). */
+    /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
+     * (SPPM: its direct light, unweighted). */
+    LaneI nee = own && (mis->connect || sppm) ? nondelta : (LaneI)(0);
+    if (pc_any_(nee)) {
       DirectLanes direct;
-      if (direct_light_lanes(sc, &s, &frame, &ml, wo_local, wo_ng, u_light.x, u_light.y, u_light.z, 1, &direct)) {
+      nee = direct_light_lanes(sc, &s, &frame, &mat, wo_local, wo_ng, ul0, ul1, ul2, nee, &direct);
+      if (pc_any_(nee)) {
         const LightSampleLanes* ls = &direct.ls;
-        float w = 1.0f;
+        LaneF w = (LaneF)(1.0f);
         if (!sppm) {
-          float direct_pdf = ls->pdf, cos_at_light = 1.0f;
-          if (!ls->infinite) {
-            float3 to = ls->p - s.p;
-            if (ls->delta) direct_pdf *= pc_dot(to, to); /* point, spot: nee_pdf_w's convention */
-            else cos_at_light = fabs(pc_dot(ls->n, ls->wi));
-          }
-          float pos, dir;
-          light_emission_pdf(sc, lt, ls->light, ls->p, ls->n, -ls->wi, &pos, &dir);
-          float emit = emission_choice_pdf(emission_cdf, ls->light) * pos * dir;
-          float bsdf_dir = ls->delta ? 0.0f : bsdf_pdf(m, wo_local, direct.wi_local);
-          float bsdf_rev = bsdf_pdf(m, direct.wi_local, wo_local);
-          float others = bsdf_dir / direct_pdf + emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) *
+          LaneI finite = !ls->infinite;
+          Lane3 to = lane3_sub(ls->p, s.p);
+          /* point, spot: nee_pdf_w's convention */
+          LaneF direct_pdf = select(ls->pdf, ls->pdf * pc_dot(to, to), finite & ls->delta);
+          LaneF cos_at_light = select((LaneF)(1.0f), fabs(pc_dot(ls->n, ls->wi)), finite & !ls->delta);
+          LaneF pos, dir;
+          light_emission_pdf_lanes(sc, lt, ls->light, ls->p, ls->n, lane3_neg(ls->wi), nee, &pos, &dir);
+          LaneF emit = emission_choice_pdf_lanes(emission_cdf, ls->light, nee) * pos * dir;
+          LaneF bsdf_dir = select(bsdf_pdf_lanes(&mat, wo_local, direct.wi_local, nee), (LaneF)(0.0f), ls->delta);
+          LaneF bsdf_rev = bsdf_pdf_lanes(&mat, direct.wi_local, wo_local, nee);
+          LaneF others = bsdf_dir / direct_pdf + emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) *
                                                      (mis->vm + dvcm + dvc * bsdf_rev);
-          w = strategy_weight(lt, mis, 1u, t_count, others);
+          w = strategy_weight(lt, mis, (LaneU)(1u), (LaneU)(t_count), others);
         }
 #ifdef PC_HAS_CUTOUTS
-        direct.shadow.cutout_seed = cutout_seed(key, PC_RAY_SHADOW(depth));
+        direct.shadow.cutout_seed = key_cutout_seed_lanes(h, key, pixel, PC_RAY_SHADOW(depth));
 #endif
-        Hit blocker;
-        if (w != 0.0f) {
-          ++*rays;
-          if (!trace_scene(sc, sc, &direct.shadow, true, &blocker)) radiance += direct_contribution_lanes(throughput, &direct, w);
+        LaneI shoot = nee & (w != 0.0f);
+        if (pc_any_(shoot)) {
+          *rays += lane_count(shoot);
+          HitLanes blocker;
+          LaneI reach = shoot & !trace_lanes(sc, &direct.shadow, shoot, true, &blocker);
+          radiance = lane3_select(radiance, lane3_add(radiance, direct_contribution_lanes(throughput, &direct, w)), reach);
         }
       }
     }
-    if (!bsdf_is_delta(m) && own && mis->connect) {
-      /* s >= 2: a connection to each light vertex the depth limit allows. */
-      for (uint k = 0; k < lv_count && lv[k].length + depth + 1u <= h->max_depth; ++k) {
-        float others;
-        float3 c = connect_vertices(sc, &s, m, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, lv + k, &others);
-        if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
-        float w = strategy_weight(lt, mis, lv[k].length + 1u, t_count, others);
-        if (w == 0.0f) continue;
-        float3 y_err = (float3)(lv[k].p.w);
-        Ray shadow = spawn_ray_to(s.p, s.p_err, s.ng, s.prim, s.instance, lv[k].p.xyz, y_err, lv[k].ng.xyz);
-#ifdef PC_HAS_CUTOUTS
-        shadow.cutout_seed = cutout_seed(key, PC_BDPT_CUTOUT_BASE + depth * h->max_depth + k);
-#endif
-        Hit blocker;
-        ++*rays;
-        if (!trace_scene(sc, sc, &shadow, true, &blocker)) radiance += throughput * c * w;
+    /* s >= 2: a connection to each light vertex the depth limit allows, lane j's k-th with the others' k-th. */
+    LaneI connecting = own && mis->connect ? nondelta : (LaneI)(0);
+    uint most = 0u;
+    PC_EACH_LANE(j, pc_lane_bits(connecting)) most = max(most, lv_count[j]);
+    for (uint k = 0; k < most; ++k) {
+      uint slot_of[PC_LANES], length_of[PC_LANES], valid = 0u;
+      for (uint j = 0u; j < PC_LANES; ++j) slot_of[j] = length_of[j] = 0u;
+      PC_EACH_LANE(j, pc_lane_bits(connecting)) {
+        if (k >= lv_count[j]) continue;
+        slot_of[j] = j * slots + k;
+        length_of[j] = lv[slot_of[j]].length;
+        if (length_of[j] + depth + 1u <= h->max_depth) valid |= 1u << j;
       }
+      /* a lane's vertices are in order of length: past the limit at k, past it after k */
+      connecting = pc_lanes_of_bits(valid, connecting);
+      if (!pc_any_(connecting)) break;
+      LaneU slot = lane_load(slot_of), length = lane_load(length_of);
+      LaneF others, y_err;
+      Lane3 y_p, y_ng;
+      Lane3 c = connect_vertices(sc, &s, &mat, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, lv, slot, connecting, &others, &y_p,
+                                 &y_err, &y_ng);
+      LaneI shoot = connecting & lane3_any_positive(c);
+      if (!pc_any_(shoot)) continue;
+      LaneF w = strategy_weight(lt, mis, length + 1u, (LaneU)(t_count), others);
+      shoot &= w != 0.0f;
+      if (!pc_any_(shoot)) continue;
+      RayLanes shadow;
+      spawn_ray_to_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, y_p, lane3(y_err, y_err, y_err), y_ng, &shadow);
+      shadow.cutout_seed = (LaneU)(0u);
+#ifdef PC_HAS_CUTOUTS
+      shadow.cutout_seed = key_cutout_seed_lanes(h, key, pixel, PC_BDPT_CUTOUT_BASE + depth * h->max_depth + k);
+#endif
+      *rays += lane_count(shoot);
+      HitLanes blocker;
+      LaneI reach = shoot & !trace_lanes(sc, &shadow, shoot, true, &blocker);
+      radiance = lane3_select(radiance, lane3_add(radiance, lane3_scale(lane3_mul(throughput, c), w)), reach);
     }
 #ifdef PC_VCM
-    if (!bsdf_is_delta(m) && (lt->vcm_mode & PC_VCM_MERGE) != 0u) {
-      merge_at(sc, grid, &s, m, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, lt, merged, counts);
+    if (pc_any_(nondelta) && (lt->vcm_mode & PC_VCM_MERGE) != 0u) {
+      merge_at(sc, grid, &s, &mat, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, lt, merged, counts);
       if (sppm) break; /* SPPM's visible point */
     }
 #endif
@@ -166,18 +219,22 @@ static inline float3 trace_camera_subpath(const SceneData* sc, __constant const 
     if (t_count >= mlt_camera_stop(mis)) break; /* the strategies' last camera vertex was this one */
 #endif
     BsdfSampleLanes bs;
-    float3 wi;
-    if (!scatter_lanes(&ml, &frame, s.ng, wo_local, wo_ng, u_bsdf.x, u_bsdf.y, u_bsdf.z, 1, &bs, &wi)) break;
-    vcm_scatter_lanes(&ml, &bs, wo_local, wi, s.ng, 1, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
-    specular = specular && bs.delta;
-    throughput *= bs.weight;
-    eta_scale *= bs.eta2;
+    Lane3 wi;
+    live = scatter_lanes(&mat, &frame, s.ng, wo_local, wo_ng, ub0, ub1, ub2, live, &bs, &wi);
+    if (!pc_any_(live)) break;
+    vcm_scatter_lanes(&mat, &bs, wo_local, wi, s.ng, live, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
+    specular &= bs.delta;
+    throughput = lane3_select(throughput, lane3_mul(throughput, bs.weight), live);
+    eta_scale = select(eta_scale, eta_scale * bs.eta2, live);
     prev_p = s.p;
     /* the path integrator's roulette */
-    if (!roulette_lanes(max_component(throughput) * eta_scale, u_light.w, depth + 1u > h->rr_depth, 1, &throughput)) break;
-    ray = spawn_ray(&s, wi);
+    live = roulette_lanes(lane3_max_component(throughput) * eta_scale, ul3, pc_lanes_of_bits(depth + 1u > h->rr_depth ? ~0u : 0u, live),
+                          live, &throughput);
+    if (!pc_any_(live)) break;
+    spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &ray);
+    ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-    ray.cutout_seed = cutout_seed(key, PC_RAY_NEXT(depth));
+    ray.cutout_seed = key_cutout_seed_lanes(h, key, pixel, PC_RAY_NEXT(depth));
 #endif
   }
   return radiance;
@@ -186,27 +243,45 @@ static inline float3 trace_camera_subpath(const SceneData* sc, __constant const 
 #if !defined(PC_VCM) && !defined(PC_MLT)
 /* One work unit, as light_integrator.cl's light_pass: the BDPT samples of pixels [path_begin, path_begin +
  * path_count) (a light subpath and a camera subpath each) for samples [sample_begin, sample_begin +
- * sample_count), into the splat film (cleared by the host per unit); work item i keeps its light subpath's
- * vertices in light_vertices[i max_depth ..). */
+ * sample_count), into the splat film (cleared by the host per unit). Work item i takes pixels i G .. i G + G
+ * - 1 (G = PC_ITEM_PIXELS: W x PC_LANE_PIXELS, 1 for one lane), W at a time, pixel p's light subpath's
+ * vertices in light_vertices[(p - path_begin) max_depth ..). */
+#if PC_LANES > 1
+#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
+#else
+#define PC_ITEM_PIXELS 1u
+#endif
 PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                    __global LightVertex* light_vertices, uint path_begin, uint path_count,
                                    uint sample_begin, uint sample_count, uint item) {
   SceneData sc = *scene;
   __constant const SceneHeader* h = sc.h;
-  if (item >= path_count) return;
-  uint pixel = path_begin + item;
-  SampleKey key = light_path_key(h, pixel, sample_begin);
+  uint first = item * PC_ITEM_PIXELS;
+  if (first >= path_count) return;
+  uint lane_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) lane_of[j] = j;
+  LaneU lane = lane_load(lane_of);
+  SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, true, 1u};
-  __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
     key.sample = s;
-    uint count = 0u;
-    trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, key.pixel, 1, &n, &mis, vertices, &count);
-    float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, true,
-                                    vertices, count, &n.rays);
-    if (splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, s & 1u, L);
+    for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
+      LaneU index = (LaneU)(b) + lane, pixel = (LaneU)(path_begin) + index;
+      LaneI m = index < path_count;
+      key.pixel = path_begin + b;
+      __global LightVertex* vertices = light_vertices + b * light_vertex_slots(h);
+      uint count[PC_LANES];
+      for (uint j = 0u; j < PC_LANES; ++j) count[j] = 0u;
+      trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, pixel, m, &n, &mis, vertices, count);
+      Lane3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, m, &mis, true,
+                                      vertices, count, &n.rays);
+      PC_EACH_LANE(j, pc_lane_bits(m)) {
+        float3 value = lane3_at(L, j);
+        if (splat_is_valid(value, &n)) n.overflows += splat_camera(film, lt, path_begin + b + j, s & 1u, value);
+      }
+    }
   }
   add_splat_counts(stats, &n);
 }

@@ -64,10 +64,12 @@ static inline float camera_we(__constant const SceneHeader* h, float3 o, float3 
 
 /* The density per solid angle of camera ray direction d (unit) from any lens point, the image position
  * uniform over the whole image plane extended past its border (filter excluded): 1 / (A cos^3 theta). */
-static inline float camera_direction_pdf(__constant const SceneHeader* h, float3 d) {
-  float c = pc_dot(d, h->cam_forward.xyz);
-  return c > 0.0f ? 1.0f / (camera_image_area(h) * c * c * c) : 0.0f;
-}
+#define PC_CAMERA_DIRECTION_PDF(V3, F, FORWARD)                                                           \
+  static inline PC_OVL F camera_direction_pdf(__constant const SceneHeader* h, V3 d) {                    \
+    F c = pc_dot(d, FORWARD);                                                                             \
+    return select((F)(0.0f), 1.0f / (camera_image_area(h) * c * c * c), c > 0.0f);                        \
+  }
+PC_CAMERA_DIRECTION_PDF(float3, float, h->cam_forward.xyz) /* light_path.cl adds the program's lanes */
 
 /* Densities of the camera ray (o, d): the lens point per area (1 for a pinhole: a delta) and the direction
  * per solid angle, pixel position uniform over the image: camera_direction_pdf inside it, 0 outside. */

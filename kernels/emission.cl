@@ -59,59 +59,85 @@ static inline float emission_choice_pdf(__global const float* emission_cdf, uint
 }
 
 /* Directional density of emitting d from a point of an area light with normal n (flags of its
- * primitive): cosine-weighted on the side(s) it emits. */
-static inline float area_emission_pdf_dir(uint flags, float3 n, float3 d) {
-  float c = pc_dot(n, d);
-  if (flags & PC_FLAG_TWO_SIDED) return 0.5f * fabs(c) * PC_INV_PI;
-  return c > 0.0f ? c * PC_INV_PI : 0.0f;
+ * primitive): cosine-weighted on the side(s) it emits. For one lane (emission sampling, lane by lane) and
+ * for the program's lanes. */
+#define PC_AREA_EMISSION_PDF_DIR(V3, F, U)                                                                \
+  static inline PC_OVL F area_emission_pdf_dir(U flags, V3 n, V3 d) {                                     \
+    F c = pc_dot(n, d);                                                                                   \
+    return select(select((F)(0.0f), c * PC_INV_PI, c > 0.0f), 0.5f * fabs(c) * PC_INV_PI,                \
+                  (flags & PC_FLAG_TWO_SIDED) != 0u);                                                     \
+  }
+PC_AREA_EMISSION_PDF_DIR(float3, float, uint)
+#if PC_LANES > 1
+PC_AREA_EMISSION_PDF_DIR(Lane3, LaneF, LaneU)
+#endif
+#undef PC_AREA_EMISSION_PDF_DIR
+
+/* emission_choice_pdf of the lanes in m. */
+static inline LaneF emission_choice_pdf_lanes(__global const float* emission_cdf, LaneU index, LaneI m) {
+  LaneU at = lane_safe_index(index, m);
+  return lane_gather_float(emission_cdf + 1, 1u, at) - lane_gather_float(emission_cdf, 1u, at);
 }
 
 /* Positional and directional densities of light `index` emitting direction d from point p (normal n
- * for area lights), choice excluded. For lights at infinity, d is the direction of travel. */
-static inline void light_emission_pdf(const SceneData* sc, __constant const LightTransportHeader* lt, uint index, float3 p,
-                                      float3 n, float3 d, float* pdf_pos, float* pdf_dir) {
-  Light light = sc->lights[index];
+ * for area lights), choice excluded, for the lanes in m (the others: 0). For lights at infinity, d is the
+ * direction of travel. */
+static inline void light_emission_pdf_lanes(const SceneData* sc, __constant const LightTransportHeader* lt, LaneU index,
+                                            Lane3 p, Lane3 n, Lane3 d, LaneI m, LaneF* pdf_pos, LaneF* pdf_dir) {
+  /* Each type's fields only where a lane has that type: one lane reads what its light needs. */
+  __global const Light* lights = sc->lights;
+  LaneU at = lane_safe_index(index, m), type = lane_gather_uint(PC_FIELD_U(lights, type), at);
   float r = lt->bounds.w;
-  *pdf_pos = 0.0f;
-  *pdf_dir = 0.0f;
-  switch (light.type) {
+  *pdf_pos = *pdf_dir = (LaneF)(0.0f);
 #ifdef PC_HAS_AREA_LIGHTS
-    case PC_LIGHT_AREA: {
-      Primitive prim = sc->prims[light.slot];
-      *pdf_pos = 1.0f / light.area;
+  LaneI area = m & (type == PC_LIGHT_AREA);
+  if (pc_any_(area)) {
+    LaneF pos = 1.0f / lane_gather_float(PC_FIELD_F(lights, area), at);
 #ifdef PC_HAS_SPHERES
-      if (prim_kind_of(prim) == PC_PRIM_SPHERE) *pdf_pos = 1.0f / (4.0f * PC_PI * prim.b.x * prim.b.x);
+    Lane3 a, b, c;
+    LaneI sphere;
+    gather_primitive_shapes(sc->prims, lane_gather_uint(PC_FIELD_U(lights, slot), at), area, &a, &b, &c, &sphere);
+    pos = select(pos, 1.0f / (4.0f * PC_PI * b.x * b.x), sphere);
 #endif
-      *pdf_dir = area_emission_pdf_dir(sc->shading[light.prim].flags, n, d);
-      break;
-    }
+    LaneU prim = lane_safe_index(lane_gather_uint(PC_FIELD_U(lights, prim), at), area);
+    LaneU flags = lane_gather_uint(PC_FIELD_U(sc->shading, flags), prim);
+    *pdf_pos = select(*pdf_pos, pos, area);
+    *pdf_dir = select(*pdf_dir, area_emission_pdf_dir(flags, n, d), area);
+  }
 #endif
 #ifdef PC_HAS_POINT_LIGHTS
-    case PC_LIGHT_POINT:
-      *pdf_pos = 1.0f;
-      *pdf_dir = 0.25f * PC_INV_PI;
-      break;
-    case PC_LIGHT_SPOT:
-      *pdf_pos = 1.0f;
-      *pdf_dir = pc_dot(light.direction.xyz, d) >= light.cos_outer ? uniform_cone_pdf(light.cos_outer) : 0.0f;
-      break;
+  LaneI point = m & (type == PC_LIGHT_POINT), spot = m & (type == PC_LIGHT_SPOT);
+  *pdf_pos = select(*pdf_pos, (LaneF)(1.0f), point | spot);
+  *pdf_dir = select(*pdf_dir, (LaneF)(0.25f * PC_INV_PI), point);
+  if (pc_any_(spot)) {
+    Lane3 axis = lane3(lane_gather_float(PC_FIELD_AT(lights, direction, 0), at), lane_gather_float(PC_FIELD_AT(lights, direction, 1), at),
+                       lane_gather_float(PC_FIELD_AT(lights, direction, 2), at));
+    LaneF cos_outer = lane_gather_float(PC_FIELD_F(lights, cos_outer), at);
+    LaneF cone = select((LaneF)(0.0f), 1.0f / (2.0f * PC_PI * (1.0f - cos_outer)), pc_dot(axis, d) >= cos_outer);
+    *pdf_dir = select(*pdf_dir, cone, spot);
+  }
 #endif
 #ifdef PC_HAS_DIRECTIONAL_LIGHTS
-    case PC_LIGHT_DIRECTIONAL:
-      *pdf_pos = 1.0f / (PC_PI * r * r);
-      *pdf_dir = 1.0f;
-      break;
+  LaneI directional = m & (type == PC_LIGHT_DIRECTIONAL);
+  *pdf_pos = select(*pdf_pos, (LaneF)(1.0f / (PC_PI * r * r)), directional);
+  *pdf_dir = select(*pdf_dir, (LaneF)(1.0f), directional);
 #endif
 #ifdef PC_HAS_ENVIRONMENT
-    case PC_LIGHT_ENVIRONMENT:
-      *pdf_pos = 1.0f / (PC_PI * r * r);
-      *pdf_dir = env_pdf(light, sc->textures, sc->env_dist, -d);
-      break;
-#endif
-    default:
-      break;
+  LaneI env = m & (type == PC_LIGHT_ENVIRONMENT);
+  if (pc_any_(env)) {
+    *pdf_pos = select(*pdf_pos, (LaneF)(1.0f / (PC_PI * r * r)), env);
+    *pdf_dir = select(*pdf_dir, env_pdf_lanes(lights[sc->h->env_light], sc->textures, sc->env_dist, lane3_neg(d), env), env);
   }
+#endif
 }
+
+#if PC_LANES == 1
+/* light_emission_pdf_lanes of one lane (the sampling tests' kernels). */
+static inline void light_emission_pdf(const SceneData* sc, __constant const LightTransportHeader* lt, uint index, float3 p,
+                                      float3 n, float3 d, float* pdf_pos, float* pdf_dir) {
+  light_emission_pdf_lanes(sc, lt, index, p, n, d, 1, pdf_pos, pdf_dir);
+}
+#endif
 
 /* Samples the start of a light path: u_choice chooses the light, u_pos.xy the point (u_pos.z the side of a
  * two-sided emitter), u_dir the direction. False when nothing is emitted. */

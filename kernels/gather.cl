@@ -188,12 +188,16 @@ PC_KERNEL_BODY void ir_gather_item(const SceneData* scene, __constant const Ligh
     L += gather_direct(&sc, key, &g, &n.rays);
     float3 indirect = (float3)(0.0f);
     uint slots = light_vertex_slots(h), paths = lt->light_paths;
+    MaterialLanes m = material_lanes_of(g.m);
     for (uint j = 0; j < paths; ++j)
       for (uint k = 0; k < vertex_counts[j]; ++k) {
         __global const LightVertex* y = light_vertices + j * slots + k;
         if (y->length + g.depth + 1u > h->max_depth) break; /* in order of length */
         float others;
-        float3 c = connect_vertices(&sc, &g.s, g.m, &g.frame, g.wo_local, g.wo_ng, 0.0f, 0.0f, 0.0f, y, &others);
+        float3 y_p, y_ng;
+        float y_err;
+        float3 c = connect_vertices(&sc, &g.s, &m, &g.frame, g.wo_local, g.wo_ng, 0.0f, 0.0f, 0.0f, light_vertices,
+                                    j * slots + k, 1, &others, &y_p, &y_err, &y_ng);
         if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
         if (lt->clamp > 0.0f) {
           float3 d = y->p.xyz - g.s.p;

@@ -1,4 +1,4 @@
-/* Light paths, one per lane of the program's width (kernels/lanes.cl; BDPT's programs are one lane wide):
+/* Light paths, one per lane of the program's width (kernels/lanes.cl; vcm's and mlt's programs are one wide):
  * emitted from a light chosen by power (emission.cl), connected to the camera at every non-delta vertex
  * (camera_importance.cl), shadow-tested and splatted into the pixels its image position lands in
  * (splat_film.cl), weighted by the pixel filter. The `light` integrator traces these
@@ -167,31 +167,34 @@ static inline uint light_vertex_slots(__constant const SceneHeader* h) { return 
  * (normal ny), or in direction d for a light at infinity: per solid angle at x, light choice included;
  * for a point or spot light the choice times the squared distance (its solid-angle density at the light
  * being a delta of area density 1; SmallVCM's convention). */
-static inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 y, float3 ny, float3 d) {
-  Light light = sc->lights[index];
-  switch (light.type) {
+static inline LaneF nee_pdf_w(const SceneData* sc, LaneU index, Lane3 x, Lane3 y, Lane3 ny, Lane3 d, LaneI m) {
+  LaneU type = lane_gather_uint(PC_FIELD_U(sc->lights, type), lane_safe_index(index, m));
+  LaneF pdf = (LaneF)(0.0f);
 #ifdef PC_HAS_AREA_LIGHTS
-    case PC_LIGHT_AREA:
-      return light_pdf(sc, index, x, y, ny);
+  LaneI area = m & (type == PC_LIGHT_AREA);
+  if (pc_any_(area)) pdf = select(pdf, light_pdf_lanes(sc, index, x, y, ny, area), area);
 #endif
+  /* The others: their choice, times the squared distance for point and spot lights, the map's density for
+     the environment. */
+  LaneI chosen = m & (type != PC_LIGHT_AREA);
+  if (pc_any_(chosen)) {
+    LaneU unused;
+    LaneF choice = light_choice_lanes(sc, x, index, (LaneF)(0.0f), chosen, &unused);
 #ifdef PC_HAS_POINT_LIGHTS
-    case PC_LIGHT_POINT:
-    case PC_LIGHT_SPOT: {
-      float3 to = y - x;
-      return light_choice_pdf(sc, x, index) * pc_dot(to, to);
-    }
+    LaneI point = chosen & ((type == PC_LIGHT_POINT) | (type == PC_LIGHT_SPOT));
+    Lane3 to = lane3_sub(y, x);
+    pdf = select(pdf, choice * pc_dot(to, to), point);
 #endif
 #ifdef PC_HAS_DIRECTIONAL_LIGHTS
-    case PC_LIGHT_DIRECTIONAL:
-      return light_choice_pdf(sc, x, index);
+    pdf = select(pdf, choice, chosen & (type == PC_LIGHT_DIRECTIONAL));
 #endif
 #ifdef PC_HAS_ENVIRONMENT
-    case PC_LIGHT_ENVIRONMENT:
-      return light_choice_pdf(sc, x, index) * env_pdf(light, sc->textures, sc->env_dist, d);
+    LaneI env = chosen & (type == PC_LIGHT_ENVIRONMENT);
+    if (pc_any_(env))
+      pdf = select(pdf, choice * env_pdf_lanes(sc->lights[sc->h->env_light], sc->textures, sc->env_dist, d, env), env);
 #endif
-    default:
-      return 0.0f;
   }
+  return pdf;
 }
 
 /* The balance heuristic counts light tracing (t = 1) as this fraction of its light paths: the balance
@@ -209,19 +212,21 @@ static inline float nee_pdf_w(const SceneData* sc, uint index, float3 x, float3 
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
  * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
  * unweighted, and no other; for a Metropolis sample (mis->only) that strategy alone, weighted. */
-static inline float strategy_weight(__constant const LightTransportHeader* lt, const MisFactors* mis, uint s, uint t, float others) {
+static inline LaneF strategy_weight(__constant const LightTransportHeader* lt, const MisFactors* mis, LaneU s, LaneU t,
+                                    LaneF others) {
 #ifdef PC_MLT
   if (mis->only_s == PC_INVALID ? s + t < mis->depth_lo + 2u || s + t > mis->depth_hi + 2u : s != mis->only_s || t != mis->only_t)
     return 0.0f;
 #endif
-  if (lt->only_strategy != PC_INVALID) return lt->only_strategy == (s | (t << 16)) ? 1.0f : 0.0f;
+  if (lt->only_strategy != PC_INVALID) return select((LaneF)(0.0f), (LaneF)(1.0f), (LaneU)(lt->only_strategy) == (s | (t << 16)));
   return 1.0f / (1.0f + others);
 }
 #endif
 
-/* The four numbers of sample group `group` of each lane's light path (key.sample, key.seed; lane j's path
- * index path[j]): sample4 of key with one lane (a Metropolis chain's state included), sample4_lanes with more. */
-static inline void light_sample4_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint group, LaneF* x,
+/* The four numbers of sample group `group` of each lane's path (key.sample, key.seed; lane j's pixel or light
+ * path index path[j]): sample4 of key with one lane (a Metropolis chain's state included), sample4_lanes with
+ * more. */
+static inline void key_sample4_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint group, LaneF* x,
                                        LaneF* y, LaneF* z, LaneF* w) {
 #if PC_LANES == 1
   float4 u = sample4(h, key, group);
@@ -235,9 +240,9 @@ static inline void light_sample4_lanes(__constant const SceneHeader* h, SampleKe
 }
 
 #ifdef PC_HAS_CUTOUTS
-/* The cut-out seed of ray ray_index of each lane's light path (cutout.cl's cutout_seed of its key; with more
- * lanes than one, the key's seed is the scene's). */
-static inline LaneU light_cutout_seed_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint ray_index) {
+/* The cut-out seed of ray ray_index of each lane's path (cutout.cl's cutout_seed of its key; with more lanes
+ * than one, the key's seed is the scene's). */
+static inline LaneU key_cutout_seed_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint ray_index) {
 #if PC_LANES == 1
   return cutout_seed(key, ray_index);
 #else
@@ -246,16 +251,19 @@ static inline LaneU light_cutout_seed_lanes(__constant const SceneHeader* h, Sam
 }
 #endif
 
-#if defined(PC_BDPT) && PC_LANES > 1
-#error "BDPT's programs are one lane wide: its light subpath's strategies are written for one lane"
+#if defined(PC_MLT) && PC_LANES > 1
+#error "mlt's programs are one lane wide: a chain's light subpath keeps one splat"
+#endif
+#if PC_LANES > 1
+PC_CAMERA_DIRECTION_PDF(Lane3, LaneF, lane3_splat(h->cam_forward.xyz))
 #endif
 
 /* Traces the light paths of the lanes in m, lane j's keyed by (path[j], key.sample) (with one lane: key, whose
  * pixel is path; BDPT and the integrators built on it pass one lane, 1), and splats their camera connections: the lanes go bounce by bounce together, each doing the
  * one-lane operations (the emission and the camera's lens point lane by lane, with the one-lane code), so a
  * path's splats are the same bits at every width; the film's fixed-point sums do not depend on their order.
- * BDPT (one lane): with MIS weights (and the merging factors *mis), and its non-delta vertices in
- * vertices[0 .. *count) (room for max_depth). */
+ * BDPT: with MIS weights (and the merging factors *mis), and lane j's non-delta vertices in
+ * vertices[j max_depth .. j max_depth + count[j]) (room for max_depth each). */
 static inline void trace_light_paths_lanes(const SceneData* sc, __constant const LightTransportHeader* lt,
                                            __global const float* emission_cdf, __global uint* film, SampleKey key,
                                            LaneU path, LaneI m, SplatCounts* n
@@ -269,8 +277,8 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
   __constant const SceneHeader* h = sc->h;
   if (h->max_depth == 0u) return; /* no scattering: only directly seen lights, which light paths cannot see */
   LaneF up0, up1, up2, up3, ud0, ud1, ud2, ud3;
-  light_sample4_lanes(h, key, path, PC_LT_EMIT_POS(h), &up0, &up1, &up2, &up3);
-  light_sample4_lanes(h, key, path, PC_LT_EMIT_DIR(h), &ud0, &ud1, &ud2, &ud3);
+  key_sample4_lanes(h, key, path, PC_LT_EMIT_POS(h), &up0, &up1, &up2, &up3);
+  key_sample4_lanes(h, key, path, PC_LT_EMIT_DIR(h), &ud0, &ud1, &ud2, &ud3);
   /* The lanes' first rays and throughputs, lane by lane into arrays (one vector load each after). */
   float beta_x[PC_LANES], beta_y[PC_LANES], beta_z[PC_LANES], beta_max[PC_LANES];
   float o_x[PC_LANES], o_y[PC_LANES], o_z[PC_LANES], d_x[PC_LANES], d_y[PC_LANES], d_z[PC_LANES];
@@ -283,16 +291,19 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
 #ifdef PC_BDPT
   /* dVC starts as the emission's cosine over its density (0 for a delta light: no strategy but this one
    * reaches its paths' first vertex); dVCM needs next-event estimation's density, which the light tree
-   * makes depend on the receiver, and is set at the first vertex. */
-  EmissionSample e;
-  float emit_pdf = 0.0f, cos_light = 1.0f, dvc = 0.0f, dvcm = 0.0f, dvm = 0.0f;
-  float3 prev_p = (float3)(0.0f);
+   * makes depend on the receiver, and is set at the first vertex (from the light, its point and normal). */
+  float p_x[PC_LANES], p_y[PC_LANES], p_z[PC_LANES], n_x[PC_LANES], n_y[PC_LANES], n_z[PC_LANES];
+  float emit_pdf_of[PC_LANES], cos_light_of[PC_LANES], dvc_of[PC_LANES];
+  uint light_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    p_x[j] = p_y[j] = p_z[j] = n_x[j] = n_y[j] = n_z[j] = dvc_of[j] = 0.0f;
+    emit_pdf_of[j] = cos_light_of[j] = 1.0f;
+    light_of[j] = 0u;
+  }
 #endif
   uint emitted = 0u; /* the lanes whose light emits */
   PC_EACH_LANE(j, pc_lane_bits(m)) {
-#ifndef PC_BDPT
     EmissionSample e;
-#endif
     if (!sample_emission(sc, lt, emission_cdf, pc_lane(up0, j), (float3)(pc_lane(up1, j), pc_lane(up2, j), pc_lane(up3, j)),
                          (float2)(pc_lane(ud0, j), pc_lane(ud1, j)), &e))
       continue;
@@ -303,12 +314,13 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
     o_x[j] = o.x, o_y[j] = o.y, o_z[j] = o.z, d_x[j] = e.d.x, d_y[j] = e.d.y, d_z[j] = e.d.z;
     skip[j] = e.prim;
 #ifdef PC_BDPT
-    emit_pdf = e.pdf_choice * e.pdf_pos * e.pdf_dir;
+    float emit_pdf = e.pdf_choice * e.pdf_pos * e.pdf_dir;
     bool area = e.prim != PC_INVALID;
-    cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
-    dvc = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf;
-    dvm = dvc * mis->vc;
-    prev_p = e.p;
+    float cos_light = area ? fabs(pc_dot(e.n, e.d)) : 1.0f;
+    emit_pdf_of[j] = emit_pdf, cos_light_of[j] = cos_light;
+    dvc_of[j] = e.delta_pos || e.delta_dir ? 0.0f : cos_light / emit_pdf;
+    p_x[j] = e.p.x, p_y[j] = e.p.y, p_z[j] = e.p.z, n_x[j] = e.n.x, n_y[j] = e.n.y, n_z[j] = e.n.z;
+    light_of[j] = e.light;
 #endif
   }
   Lane3 beta = lane3(lane_load(beta_x), lane_load(beta_y), lane_load(beta_z));
@@ -321,10 +333,16 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
   ray.skip_prim = lane_load(skip);
   ray.skip_instance = (LaneU)(0u);
   ray.cutout_seed = (LaneU)(0u);
+#ifdef PC_BDPT
+  LaneF emit_pdf = lane_load(emit_pdf_of), cos_light = lane_load(cos_light_of), dvc = lane_load(dvc_of), dvcm = (LaneF)(0.0f);
+  LaneF dvm = dvc * mis->vc;
+  Lane3 prev_p = lane3(lane_load(p_x), lane_load(p_y), lane_load(p_z)), light_n = lane3(lane_load(n_x), lane_load(n_y), lane_load(n_z));
+  LaneU light = lane_load(light_of);
+#endif
   LaneI live = pc_lanes_of_bits(emitted, m);
   if (!pc_any_(live)) return;
 #ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE);
+  ray.cutout_seed = key_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE);
 #endif
   uint parity = key.sample & 1u;
   for (uint v = 0;; ++v) { /* v + 1 scattering events at the vertex found now */
@@ -341,25 +359,26 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
     Lane3 wl_local = to_local(&frame, w_light);
     LaneF wl_ng = pc_dot(w_light, s.ng);
     LaneF uc0, uc1, uc2, uc3;
-    light_sample4_lanes(h, key, path, PC_LT_CONNECT(h, v), &uc0, &uc1, &uc2, &uc3);
+    key_sample4_lanes(h, key, path, PC_LT_CONNECT(h, v), &uc0, &uc1, &uc2, &uc3);
 #ifdef PC_BDPT
     /* The densities of reaching this vertex, per area: dVCM /= p(light path reaches it), in solid angle
      * times cos / dist^2 (Georgiev's eq. 31-33; the cosines are the geometric normal's throughout). */
-    float cos_in = fabs(wl_ng);
-    if (v == 0u) {
-      float direct = nee_pdf_w(sc, e.light, s.p, e.p, e.n, -e.d);
+    LaneF cos_in = fabs(wl_ng);
+    if (v == 0u) { /* prev_p is the light's point, ray.d the emitted direction */
+      LaneF direct = nee_pdf_w(sc, light, s.p, prev_p, light_n, lane3_neg(ray.d), live);
       dvcm = direct * cos_light / emit_pdf;
     } else {
-      float3 seg = s.p - prev_p;
+      Lane3 seg = lane3_sub(s.p, prev_p);
       dvcm *= pc_dot(seg, seg);
     }
     dvcm /= cos_in;
     dvc /= cos_in;
     dvm /= cos_in;
     prev_p = s.p;
-    LaneI connect = live & (mis->connect ? bsdf_is_delta_lanes(mat.type) == 0 : 0);
-#else
+#endif
     LaneI connect = live & !bsdf_is_delta_lanes(mat.type);
+#ifdef PC_BDPT
+    if (!mis->connect) connect = (LaneI)(0);
 #endif
 
     /* Connection to the camera: the lens point lane by lane, into arrays. */
@@ -394,7 +413,7 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
         shadow.tmax = (LaneF)(1.0f - PC_SHADOW_EPSILON);
         shadow.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-        shadow.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 1u);
+        shadow.cutout_seed = key_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 1u);
 #endif
         LaneF g = fabs(wc_local.z) * shading_normal_factor(w_light, cs_wi, s.ns, s.ng);
         /* over the width x height paths of a sample: the film sums to the pixel mean times spp */
@@ -403,9 +422,10 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
         /* Against the camera subpath reaching this vertex (t >= 2): its density per area here, with the
          * image position uniform over the image, over the light subpath's (times the light paths per
          * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
-        float cam_pdf_a = camera_direction_pdf(h, -cs_wi) * fabs(pc_dot(cs_wi, s.ng)) / (cs_dist * cs_dist);
-        float rev = bsdf_pdf_lanes(&mat, wc_local, wl_local, connect);
-        per_path *= strategy_weight(lt, mis, v + 2u, 1u, cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
+        LaneF cam_pdf_a = camera_direction_pdf(h, lane3_neg(cs_wi)) * fabs(pc_dot(cs_wi, s.ng)) / (cs_dist * cs_dist);
+        LaneF rev = bsdf_pdf_lanes(&mat, wc_local, wl_local, connect);
+        per_path *= strategy_weight(lt, mis, (LaneU)(v + 2u), (LaneU)(1u),
+                                    cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
 #endif
         LaneI shoot = connect & (per_path != 0.0f); /* a NaN goes on, to be counted */
         if (pc_any_(shoot)) {
@@ -426,19 +446,23 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
       }
     }
 #ifdef PC_BDPT
-    if (!bsdf_is_delta_lanes(mat.type) && v + 1u >= mis->first_length) {
-      __global LightVertex* lv = vertices + (*count)++;
-      ++n->light_vertices;
-      lv->p = (float4)(s.p, max_component(s.p_err));
-      lv->ng = (float4)(s.ng, dvcm);
-      lv->ns = (float4)(s.ns, dvc);
-      lv->wl = (float4)(w_light, dvm);
-      lv->beta = (float4)(beta, 0.0f);
-      lv->color = (float4)(mat.color, 0.0f);
-      lv->material = sh.material;
-      lv->prim = s.prim;
-      lv->instance = s.instance;
-      lv->length = v + 1u;
+    /* The non-delta vertices, lane j's at vertices[j max_depth + count[j]]. */
+    if (v + 1u >= mis->first_length) {
+      LaneF p_err = lane3_max_component(s.p_err);
+      PC_EACH_LANE(j, pc_lane_bits(live & !bsdf_is_delta_lanes(mat.type))) {
+        __global LightVertex* lv = vertices + j * light_vertex_slots(h) + count[j]++;
+        ++n->light_vertices;
+        lv->p = (float4)(lane3_at(s.p, j), pc_lane(p_err, j));
+        lv->ng = (float4)(lane3_at(s.ng, j), pc_lane(dvcm, j));
+        lv->ns = (float4)(lane3_at(s.ns, j), pc_lane(dvc, j));
+        lv->wl = (float4)(lane3_at(w_light, j), pc_lane(dvm, j));
+        lv->beta = (float4)(lane3_at(beta, j), 0.0f);
+        lv->color = (float4)(lane3_at(mat.color, j), 0.0f);
+        lv->material = pc_lane(sh.material, j);
+        lv->prim = pc_lane(s.prim, j);
+        lv->instance = pc_lane(s.instance, j);
+        lv->length = v + 1u;
+      }
     }
 #endif
     if (v + 1u >= h->max_depth) break;
@@ -448,7 +472,7 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
 
     /* The next vertex. */
     LaneF ub0, ub1, ub2, ub3;
-    light_sample4_lanes(h, key, path, PC_LT_BSDF(h, v), &ub0, &ub1, &ub2, &ub3);
+    key_sample4_lanes(h, key, path, PC_LT_BSDF(h, v), &ub0, &ub1, &ub2, &ub3);
     BsdfSampleLanes bs;
     Lane3 wi;
     live = scatter_lanes(&mat, &frame, s.ng, wl_local, wl_ng, ub0, ub1, ub2, live, &bs, &wi);
@@ -466,7 +490,7 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
     spawn_ray_lanes(s.p, s.p_err, s.ng, s.prim, s.instance, wi, &ray);
     ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-    ray.cutout_seed = light_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 2u);
+    ray.cutout_seed = key_cutout_seed_lanes(h, key, path, PC_LT_CUTOUT_BASE + 2u * v + 2u);
 #endif
   }
 }

@@ -37,23 +37,30 @@ static inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit
  * colour (1 for textures from the scene file; MTL's Kd, possibly scaled down, for map_Kd). Vertex colours,
  * interpolated over the triangle, multiply it too (glTF's base colour = factor x texture x COLOR_0); a
  * sphere's are white. */
+/* materials[material] of the lanes in m into *out, its colour the table's (the others get the first such
+ * lane's); *at the lanes' groups of materials, for more fields. (Through pointers: surface.cl's
+ * spawn_ray_lanes says why.) */
+PC_LANE_INLINE void material_lanes_gather(const SceneData* sc, LaneU material, LaneI m, LaneGroups* at, MaterialLanes* out) {
+  /* Fields a program's material types do not read are dead code here, and their gathers with them. */
+  lane_groups(material, m, at); /* a scene has few materials */
+  __global const Material* all = sc->materials;
+  out->type = lane_group_gather_uint(PC_FIELD_U(all, type), at);
+  out->color = lane_group_gather3(PC_FIELD_F(all, color), at);
+  out->specular = lane_group_gather3(PC_FIELD_F(all, specular), at);
+  out->k = lane_group_gather3(PC_FIELD_F(all, k), at);
+  out->alpha = lane_group_gather_float(PC_FIELD_F(all, alpha), at);
+  out->sigma = lane_group_gather_float(PC_FIELD_F(all, sigma), at);
+  out->exponent = lane_group_gather_float(PC_FIELD_F(all, exponent), at);
+  out->ior = lane_group_gather_float(PC_FIELD_F(all, ior), at);
+}
+
 PC_OUT_OF_LINE MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
                                                const ShadingLanes* shading, const HitLanes* hit, LaneI m) {
-  /* Fields a program's material types do not read are dead code here, and their gathers with them. */
-  LaneGroups at; /* a scene has few materials */
-  lane_groups(material, m, &at);
-  __global const Material* all = sc->materials;
+  LaneGroups at;
   MaterialLanes out;
-  out.type = lane_group_gather_uint(PC_FIELD_U(all, type), &at);
-  out.color = lane_group_gather3(PC_FIELD_F(all, color), &at);
-  out.specular = lane_group_gather3(PC_FIELD_F(all, specular), &at);
-  out.k = lane_group_gather3(PC_FIELD_F(all, k), &at);
-  out.alpha = lane_group_gather_float(PC_FIELD_F(all, alpha), &at);
-  out.sigma = lane_group_gather_float(PC_FIELD_F(all, sigma), &at);
-  out.exponent = lane_group_gather_float(PC_FIELD_F(all, exponent), &at);
-  out.ior = lane_group_gather_float(PC_FIELD_F(all, ior), &at);
+  material_lanes_gather(sc, material, m, &at, &out);
 #ifdef PC_HAS_TEXTURES
-  LaneU texture = lane_group_gather_uint(PC_FIELD_U(all, color_texture), &at);
+  LaneU texture = lane_group_gather_uint(PC_FIELD_U(sc->materials, color_texture), &at);
   LaneI textured = m & (texture != PC_INVALID);
   PC_EACH_LANE(j, pc_lane_bits(textured)) {
     Surface one;

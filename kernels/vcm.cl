@@ -117,7 +117,7 @@ static inline void merge_add(MergeSums* m, float3 c, __constant const LightTrans
  * f(wo, wl) beta / (pi r^2 N) times the shading normal's cosine over the geometric one (the photon's
  * density is per area, the camera's integral over the shading normal's cosine, as in path tracing), weighted
  * by MIS against every strategy making the path (SmallVCM's eq.), or not at all for SPPM. */
-static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, Material m, const FrameLanes* f,
+static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, const MaterialLanes* m, const FrameLanes* f,
                             float3 wo_local, float wo_ng, uint depth, float3 throughput, float dvcm, float dvm, float vc,
                             bool sppm, __constant const LightTransportHeader* lt, MergeSums* out, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
@@ -142,11 +142,11 @@ static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surfa
       float wl_ng = pc_dot(wl, s->ng);
       if (!(wl_ng * wo_ng > 0.0f)) continue; /* light arriving on the camera's side */
       float3 wl_local = to_local(f, wl);
-      float3 fv = bsdf_eval(m, wo_local, wl_local);
+      float3 fv = bsdf_eval_lanes(m, wo_local, wl_local, 1);
       if (!(fv.x > 0.0f || fv.y > 0.0f || fv.z > 0.0f)) continue;
       float w = 1.0f;
       if (!sppm) {
-        float camera_dir = bsdf_pdf(m, wo_local, wl_local), camera_rev = bsdf_pdf(m, wl_local, wo_local);
+        float camera_dir = bsdf_pdf_lanes(m, wo_local, wl_local, 1), camera_rev = bsdf_pdf_lanes(m, wl_local, wo_local, 1);
         float w_light = v->ng.w * vc + v->wl.w * camera_dir;
         float w_camera = dvcm * vc + dvm * camera_rev;
         w = 1.0f / (w_light + 1.0f + w_camera);
@@ -261,9 +261,9 @@ PC_KERNEL_BODY void vcm_camera_item(const SceneData* scene, __constant const Lig
   uint slots = light_vertex_slots(h);
   MergeSums merged = {{0ul, 0ul, 0ul}, {0ul, 0ul, 0ul}, 0u};
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
-  float3 L = trace_camera_subpath(&sc, lt, emission_cdf, key, pixel % h->width, pixel / h->width, &mis, own,
-                                  light_vertices + (own ? item * slots : 0u), own ? vertex_counts[item] : 0u, &n.rays,
-                                  &grid, &merged, &n);
+  uint count = own ? vertex_counts[item] : 0u;
+  float3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, 1, &mis, own,
+                                   light_vertices + (own ? item * slots : 0u), &count, &n.rays, &grid, &merged, &n);
   uint parity = sample_begin & 1u;
   if (own && splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, parity, L);
   volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
