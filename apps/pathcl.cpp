@@ -670,7 +670,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
   render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: 64, or 8 for 8 or 16 lanes)");
   render_cmd->add_option("--lanes", ra.lanes,
-                         "paths per work item of the path and light integrators: 1, 8 or 16 (the same pixels); 0: the "
+                         "paths per work item of the path, light and bdpt integrators: 1, 8 or 16 (the same pixels); 0: the "
                          "device's "
                          "(16 or 8 on CPU devices, 1 on GPUs)");
   render_cmd->add_flag("--all-features", ra.all_features, "build the unspecialised kernel");

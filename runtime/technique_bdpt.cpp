@@ -11,9 +11,7 @@ Technique bdpt_technique() {
   t.id = PC_INTEGRATOR_BDPT;
   t.summary = "bidirectional path tracing, every strategy weighted by MIS";
   t.kernel_file = "bdpt.cl";
-  t.lanes = false;  // one lane: its camera subpaths are written for one (light tracing's paths run over lanes)
-  t.options = {};
-  t.build_options = splat_build_options;
+  t.options = {lanes_option("samples")};  // light tracing's lanes
   t.phases = {{"render", "bdpt_pass", {"lt", "emission_cdf", "film", "stats", "light_vertices", "unit"}, {}}};
   // Each work item keeps its light subpath in device memory (max_depth slots): units as large as it allows.
   t.buffers = {{"light_vertices", light_vertex_bytes}};

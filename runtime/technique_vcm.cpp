@@ -30,6 +30,8 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.summary = summary;
   t.kernel_file = "vcm.cl";
   t.per_sample = true;
+  t.lanes = false;  // one lane: merges are written for one (kernels/bdpt.cl)
+  t.build_options = splat_build_options;
   // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
   // its vertex count, the grid's buckets (a power of two >= c, one end and the prefix sum's block offsets)
   // and entries (a vertex's position and slot: 4 words).

@@ -142,6 +142,10 @@ TEST(Bdpt, SplatFilmIsBitwiseDeterministic) {
 
 // bdpt takes any max_depth the path integrator takes (FurnaceMeanWithinFourStandardErrors renders 100):
 // beyond path's bound both refuse alike.
+// A work item renders 8 or 16 BDPT samples at once, a lane each (kernels/bdpt.cl): every width gives the
+// one-lane film bit for bit (light_transport_support.h).
+TEST(Bdpt, EveryLaneWidthGivesTheOneLaneFilm) { expect_one_lane_bits_at_every_width("bdpt"); }
+
 TEST(Bdpt, RefusesMaxDepthBeyondPathsBound) {
   DeviceScene scene = furnace_scene();
   RenderOptions opt;

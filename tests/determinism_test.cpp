@@ -142,12 +142,13 @@ TEST(Determinism, LanesOtherThanOneEightAndSixteenAreRefused) {
   opt.lanes = 4;
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
   opt.lanes = 8;
-  opt.integrator = "bdpt";
+  opt.integrator = "vcm";
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
 }
 
 // The default (lanes 0) is each device's own width: 8 or 16 on a CPU device, 1 on a GPU; PATHCL_LANES sets
-// it for every device and refuses other values; the other integrators run one path per work item.
+// it for every device and refuses other values, for path, light and bdpt; the other integrators run one
+// path per work item.
 TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
   const char* outer = std::getenv("PATHCL_LANES");  // restored at the end
   std::string outer_lanes = outer ? outer : "";
@@ -175,7 +176,11 @@ TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
   setenv("PATHCL_LANES", "4", 1);
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
   unsetenv("PATHCL_LANES");
-  opt.integrator = "bdpt";
+  for (const char* lanes : {"light", "bdpt"}) {
+    opt.integrator = lanes;
+    EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, path_lanes(device)) << lanes;
+  }
+  opt.integrator = "vcm";
   EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, 1u);
   if (outer) setenv("PATHCL_LANES", outer_lanes.c_str(), 1);
 }

@@ -129,32 +129,5 @@ TEST(LightIntegrator, SplatFilmIsBitwiseDeterministic) {
 }
 
 // A work item traces 8 or 16 light paths at once, a lane each (kernels/light_path.cl): every width gives the
-// one-lane splats bit for bit, ray counts included, with every material and light type (materials.json:
-// area, point, spot, directional and environment lights, a thin lens, a gaussian filter) and with instances
-// and cut-outs, on a film whose path count is no multiple of the lanes, whole and in units that split a work
-// item's paths.
-TEST(LightIntegrator, EveryLaneWidthGivesTheOneLaneSplats) {
-  for (const std::string& file : {std::string(PATHCL_SOURCE_DIR) + "/scenes/materials.json",
-                                  std::string(PATHCL_TEST_SCENES) + "/instances.json"}) {
-    DeviceScene scene = load_device_scene(file);
-    scene.header.width = 23;
-    scene.header.height = 17;
-    Options o;
-    o.spp = 4;
-    o.max_depth = 6;
-    o.lanes = 1;
-    RenderResult one = render_with(scene, o);
-    ASSERT_GT(image_mean(one.film), 0.0) << file;
-    for (uint32_t lanes : {8u, 16u}) {
-      for (bool split : {false, true}) {
-        Options l = o;
-        l.lanes = lanes;
-        if (split) l.pass_spp = 3, l.tile_pixels = 37;
-        RenderResult r = render_with(scene, l);
-        std::string what = file + ", " + std::to_string(lanes) + " lanes" + (split ? ", split" : "");
-        EXPECT_EQ(r.film.words, one.film.words) << what;
-        EXPECT_EQ(r.rays, one.rays) << what;
-      }
-    }
-  }
-}
+// one-lane splats bit for bit (light_transport_support.h).
+TEST(LightIntegrator, EveryLaneWidthGivesTheOneLaneSplats) { expect_one_lane_bits_at_every_width("light"); }

@@ -19,7 +19,7 @@ namespace light_transport_test {
 
 struct Options {
   uint32_t spp = 16, max_depth = 8, seed = 1, pass_spp = 0, tile_pixels = 0;
-  uint32_t lanes = 0;  // light: light paths per work item (0: the device's width)
+  uint32_t lanes = 0;  // light, bdpt: paths or samples per work item (0: the device's width)
   std::string integrator = "light";
   size_t work_group = 0;
   bool pairs = false;
@@ -137,6 +137,37 @@ inline PixelComparison expect_same_pixels(const Film& a, const Film& b, const st
 // a work-group size of 16, units of 3 spp over 37 paths, 32-bit word pairs instead of 64-bit atomics, and
 // a render resumed from the half-way film of another (o.spp a power of two), and renders that a stop rule
 // (target error, time) ended.
+// The integrator over 8 and 16 lanes gives its one-lane film bit for bit, ray counts included, with every
+// material and light type (materials.json: area, point, spot, directional and environment lights, a thin
+// lens, a gaussian filter) and with instances and cut-outs, on a film whose path count is no multiple of
+// the lanes, whole and in units that split a work item's paths.
+inline void expect_one_lane_bits_at_every_width(const std::string& integrator) {
+  for (const std::string& file : {std::string(PATHCL_SOURCE_DIR) + "/scenes/materials.json",
+                                  std::string(PATHCL_TEST_SCENES) + "/instances.json"}) {
+    DeviceScene scene = load_device_scene(file);
+    scene.header.width = 23;
+    scene.header.height = 17;
+    Options o;
+    o.integrator = integrator;
+    o.spp = 4;
+    o.max_depth = 6;
+    o.lanes = 1;
+    RenderResult one = render_with(scene, o);
+    ASSERT_GT(image_mean(one.film), 0.0) << file;
+    for (uint32_t lanes : {8u, 16u}) {
+      for (bool split : {false, true}) {
+        Options l = o;
+        l.lanes = lanes;
+        if (split) l.pass_spp = 3, l.tile_pixels = 37;
+        RenderResult r = render_with(scene, l);
+        std::string what = file + ", " + std::to_string(lanes) + " lanes" + (split ? ", split" : "");
+        EXPECT_EQ(r.film.words, one.film.words) << what;
+        EXPECT_EQ(r.rays, one.rays) << what;
+      }
+    }
+  }
+}
+
 inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options& o) {
   Film reference = render_with(scene, o).film;
   ASSERT_GT(image_mean(reference), 0.0);
