@@ -246,11 +246,6 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
  * sample_count), into the splat film (cleared by the host per unit). Work item i takes pixels i G .. i G + G
  * - 1 (G = PC_ITEM_PIXELS: W x PC_LANE_PIXELS, 1 for one lane), W at a time, pixel p's light subpath's
  * vertices in light_vertices[(p - path_begin) max_depth ..). */
-#if PC_LANES > 1
-#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
-#else
-#define PC_ITEM_PIXELS 1u
-#endif
 PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                    __global LightVertex* light_vertices, uint path_begin, uint path_count,
@@ -259,9 +254,7 @@ PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const Ligh
   __constant const SceneHeader* h = sc.h;
   uint first = item * PC_ITEM_PIXELS;
   if (first >= path_count) return;
-  uint lane_of[PC_LANES];
-  for (uint j = 0u; j < PC_LANES; ++j) lane_of[j] = j;
-  LaneU lane = lane_load(lane_of);
+  LaneU lane = lane_indices();
   SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   const MisFactors mis = {0.0f, 0.0f, true, 1u};

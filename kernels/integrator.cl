@@ -211,10 +211,8 @@ static inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself.
  * stats (UnitStats): rays (64 bits) and hazard counts, added with integer atomics. */
 #if PC_LANES > 1
-#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
 #define PC_RESULTS (4u * PC_LANES) /* at most 64: a bit each in `ready` */
 #else
-#define PC_ITEM_PIXELS 1u
 #define PC_RESULTS 1u
 #endif
 PC_KERNEL_BODY void render_pass_item(const SceneData* scene, __global float4* film, __global UnitStats* stats,

@@ -141,6 +141,19 @@ typedef lane3f16 Lane3;
 
 static inline uint lane_count(LaneI m) { return popcount(pc_lane_bits(m)); }
 
+/* The pixels (or paths) a work item takes: W x PC_LANE_PIXELS with lanes, 1 with one (the host's item_pixels,
+ * runtime/device_worker.cpp); and each lane's index j. */
+#if PC_LANES > 1
+#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
+#else
+#define PC_ITEM_PIXELS 1u
+#endif
+static inline LaneU lane_indices(void) {
+  uint j_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) j_of[j] = j;
+  return lane_load(j_of);
+}
+
 /* The first lane set in m (m must have one). */
 static inline uint lane_first(LaneI m) {
   return pc_lowest_bit(pc_lane_bits(m));

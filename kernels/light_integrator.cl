@@ -9,11 +9,6 @@
  * sample_count), splatted into film (PC_SPLAT_WORDS 64-bit sums per pixel, cleared by the host per unit).
  * Work item i traces paths i G .. i G + G - 1 (G = PC_ITEM_PIXELS: W x PC_LANE_PIXELS, 1 for one lane), W at
  * a time. Which work item or lane runs which path, and in which order splats arrive, changes no bit of the film. */
-#if PC_LANES > 1
-#define PC_ITEM_PIXELS (PC_LANES * PC_LANE_PIXELS)
-#else
-#define PC_ITEM_PIXELS 1u
-#endif
 PC_KERNEL_BODY void light_pass_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                     __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                     uint path_begin, uint path_count, uint sample_begin, uint sample_count, uint item) {
@@ -21,9 +16,7 @@ PC_KERNEL_BODY void light_pass_item(const SceneData* scene, __constant const Lig
   __constant const SceneHeader* h = sc.h;
   uint first = item * PC_ITEM_PIXELS;
   if (first >= path_count) return;
-  uint lane_of[PC_LANES];
-  for (uint j = 0u; j < PC_LANES; ++j) lane_of[j] = j;
-  LaneU lane = lane_load(lane_of);
+  LaneU lane = lane_indices();
   SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   for (uint s = sample_begin; s < sample_begin + sample_count; ++s) {
