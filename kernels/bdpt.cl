@@ -20,8 +20,8 @@
  * sample, so that the squares estimate the pixel's variance; t = 1 splats land anywhere. */
 #define PC_BDPT 1
 #include "light_path.cl"
-#if (defined(PC_VCM) || defined(PC_MLT)) && PC_LANES > 1
-#error "vcm's and mlt's programs are one lane wide: merges and a chain's strategies are written for one lane"
+#if defined(PC_VCM) && PC_LANES > 1
+#error "the merging integrators' programs are one lane wide: merges are written for one lane"
 #endif
 #include "direct_light.cl"
 #include "connect.cl"
@@ -45,18 +45,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
 ) {
   __constant const SceneHeader* h = sc->h;
   RayLanes ray;
-  {
-    LaneF u0, u1, u2, u3;
-    key_sample4_lanes(h, key, pixel, PC_DIM_CAMERA, &u0, &u1, &u2, &u3);
-    camera_ray_lanes(h, px, py, u0, u1, u2, u3, &ray.o, &ray.d);
-  }
-  ray.tmin = (LaneF)(0.0f);
-  ray.tmax = (LaneF)(INFINITY);
-  ray.skip_prim = ray.skip_instance = (LaneU)(PC_INVALID);
-  ray.cutout_seed = (LaneU)(0u);
-#ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = key_cutout_seed_lanes(h, key, pixel, PC_RAY_CAMERA);
-#endif
+  camera_path_rays(h, key, pixel, px, py, &ray);
   Lane3 throughput = lane3_splat((float3)(1.0f)), radiance = lane3_splat((float3)(0.0f));
   LaneF eta_scale = (LaneF)(1.0f);
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera

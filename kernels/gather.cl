@@ -110,7 +110,8 @@ static inline bool walk_to_non_delta(const SceneData* sc, SampleKey key, Ray ray
 
 /* The camera path of `key` (at its pixel) to its first non-delta vertex (walk_to_non_delta). */
 static inline bool camera_to_non_delta(const SceneData* sc, SampleKey key, float3* radiance, uint* rays, GatherPoint* g) {
-  Ray ray = camera_path_ray(sc->h, key, key.pixel % sc->h->width, key.pixel / sc->h->width);
+  Ray ray;
+  camera_path_rays(sc->h, key, key.pixel, key.pixel % sc->h->width, key.pixel / sc->h->width, &ray);
   return walk_to_non_delta(sc, key, ray, (float3)(1.0f), 0u, true, radiance, rays, g);
 }
 

@@ -67,20 +67,6 @@ static inline SampleKey light_path_key(__constant const SceneHeader* h, uint pat
   return key;
 }
 
-/* The camera ray of key's camera path at pixel (px, py) (BDPT's camera subpath, the gathering integrators'). */
-static inline Ray camera_path_ray(__constant const SceneHeader* h, SampleKey key, uint px, uint py) {
-  Ray ray;
-  camera_ray(h, px, py, sample4(h, key, PC_DIM_CAMERA), &ray.o, &ray.d);
-  ray.tmin = 0.0f;
-  ray.tmax = INFINITY;
-  ray.skip_prim = PC_INVALID;
-  ray.skip_instance = PC_INVALID;
-#ifdef PC_HAS_CUTOUTS
-  ray.cutout_seed = cutout_seed(key, PC_RAY_CAMERA);
-#endif
-  return ray;
-}
-
 /* The adjoint BSDF's shading-normal factor at a vertex (see the top of the file), by lane. */
 static inline LaneF shading_normal_factor(Lane3 w_light, Lane3 w_out, Lane3 ns, Lane3 ng) {
   LaneF num = fabs(pc_dot(w_light, ns)) * fabs(pc_dot(w_out, ng));
@@ -227,7 +213,7 @@ static inline LaneF strategy_weight(__constant const LightTransportHeader* lt, c
  * path index path[j]): sample4 of key with one lane (a Metropolis chain's state included), sample4_lanes with
  * more. */
 static inline void key_sample4_lanes(__constant const SceneHeader* h, SampleKey key, LaneU path, uint group, LaneF* x,
-                                       LaneF* y, LaneF* z, LaneF* w) {
+                                     LaneF* y, LaneF* z, LaneF* w) {
 #if PC_LANES == 1
   float4 u = sample4(h, key, group);
   *x = u.x;
@@ -251,6 +237,22 @@ static inline LaneU key_cutout_seed_lanes(__constant const SceneHeader* h, Sampl
 }
 #endif
 
+/* The camera rays of each lane's camera path (keyed as key_sample4_lanes) through pixel (px, py): BDPT's camera
+ * subpaths, the gathering integrators'. */
+static inline void camera_path_rays(__constant const SceneHeader* h, SampleKey key, LaneU path, LaneU px, LaneU py,
+                                    RayLanes* ray) {
+  LaneF u0, u1, u2, u3;
+  key_sample4_lanes(h, key, path, PC_DIM_CAMERA, &u0, &u1, &u2, &u3);
+  camera_ray_lanes(h, px, py, u0, u1, u2, u3, &ray->o, &ray->d);
+  ray->tmin = (LaneF)(0.0f);
+  ray->tmax = (LaneF)(INFINITY);
+  ray->skip_prim = ray->skip_instance = (LaneU)(PC_INVALID);
+  ray->cutout_seed = (LaneU)(0u);
+#ifdef PC_HAS_CUTOUTS
+  ray->cutout_seed = key_cutout_seed_lanes(h, key, path, PC_RAY_CAMERA);
+#endif
+}
+
 #if defined(PC_MLT) && PC_LANES > 1
 #error "mlt's programs are one lane wide: a chain's light subpath keeps one splat"
 #endif
@@ -259,9 +261,10 @@ PC_CAMERA_DIRECTION_PDF(Lane3, LaneF, lane3_splat(h->cam_forward.xyz))
 #endif
 
 /* Traces the light paths of the lanes in m, lane j's keyed by (path[j], key.sample) (with one lane: key, whose
- * pixel is path; BDPT and the integrators built on it pass one lane, 1), and splats their camera connections: the lanes go bounce by bounce together, each doing the
- * one-lane operations (the emission and the camera's lens point lane by lane, with the one-lane code), so a
- * path's splats are the same bits at every width; the film's fixed-point sums do not depend on their order.
+ * pixel is path; vcm, mlt and the gathering integrators pass one lane, 1), and splats their camera
+ * connections: the lanes go bounce by bounce together, each doing the one-lane operations (the emission and
+ * the camera's lens point lane by lane, with the one-lane code), so a path's splats are the same bits at
+ * every width; the film's fixed-point sums do not depend on their order.
  * BDPT: with MIS weights (and the merging factors *mis), and lane j's non-delta vertices in
  * vertices[j max_depth .. j max_depth + count[j]) (room for max_depth each). */
 static inline void trace_light_paths_lanes(const SceneData* sc, __constant const LightTransportHeader* lt,
