@@ -20,25 +20,23 @@
  * sample, so that the squares estimate the pixel's variance; t = 1 splats land anywhere. */
 #define PC_BDPT 1
 #include "light_path.cl"
-#if defined(PC_VCM) && PC_LANES > 1
-#error "the merging integrators' programs are one lane wide: merges are written for one lane"
-#endif
 #include "direct_light.cl"
 #include "connect.cl"
 
 /* The camera subpaths of the lanes in m, lane j's of key (pixel[j], key.sample) (one lane: key) through image
  * pixel (px[j], py[j]), and their strategies s = 0, 1 and >= 2 with lane j's light subpath vertices
- * lv[j max_depth .. j max_depth + lv_count[j]) (in order of length), weighted with the merging factors *mis.
+ * lv[lv_first[j] .. lv_first[j] + lv_count[j]) (in order of length), weighted with the merging factors *mis.
  * Returns each lane's radiance estimate. The lanes go bounce by bounce together, each doing the one-lane
- * operations, its connections lane by lane in order. VCM (vcm.cl, one lane): where `own` is false, the unit
+ * operations, its connections lane by lane in order. VCM (vcm.cl): in the lanes outside `own`, the unit
  * holds another unit's light subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each
- * non-delta vertex, with the grid's light vertices, into *merged); without connections (bpm, sppm) an
+ * non-delta vertex, with the grid's light vertices, lane j's into merged[j]); without connections (bpm, sppm) an
  * emitter counts only where the path to it is specular (merging makes the others), and SPPM stops at its
  * first non-delta vertex, after next-event estimation and merging there, unweighted. */
 static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const LightTransportHeader* lt,
                                           __global const float* emission_cdf, SampleKey key, LaneU pixel, LaneU px,
-                                          LaneU py, LaneI m, const MisFactors* mis, bool own,
-                                          __global const LightVertex* lv, const uint* lv_count, uint* rays
+                                          LaneU py, LaneI m, const MisFactors* mis, LaneI own,
+                                          __global const LightVertex* lv, const uint* lv_first, const uint* lv_count,
+                                          uint* rays
 #ifdef PC_VCM
                                    , const MergeGrid* grid, MergeSums* merged, SplatCounts* counts
 #endif
@@ -53,7 +51,6 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
   LaneF dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = (LaneF)(0.0f), dvm = (LaneF)(0.0f);
   LaneI specular = m; /* every scattering so far by a delta lobe */
   const bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
-  const uint slots = light_vertex_slots(h);
   Lane3 prev_p = ray.o;
   LaneI live = m;
   for (uint depth = 0;; ++depth) {
@@ -63,7 +60,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
     LaneI found = trace_lanes(sc, &ray, live, false, &hit);
 #ifdef PC_HAS_ENVIRONMENT
     /* s = 0 by the environment */
-    LaneI escaped = own && h->env_light != PC_INVALID ? live & !found & (mis->connect ? live : specular) : (LaneI)(0);
+    LaneI escaped = h->env_light != PC_INVALID ? own & live & !found & (mis->connect ? live : specular) : (LaneI)(0);
     if (pc_any_(escaped)) {
       Light env = sc->lights[h->env_light];
       Lane3 le = env_radiance_lanes(env, sc->textures, sc->texels, ray.d, escaped);
@@ -93,7 +90,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       dvm /= cos_in;
 #ifdef PC_HAS_AREA_LIGHTS
       /* s = 0 by an area light */
-      LaneI lit = own ? live & (sh.light != PC_INVALID) & (mis->connect ? live : specular) : (LaneI)(0);
+      LaneI lit = own & live & (sh.light != PC_INVALID) & (mis->connect ? live : specular);
       if (pc_any_(lit)) {
         Lane3 emission;
         LaneF unused;
@@ -126,7 +123,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
 
     /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
      * (SPPM: its direct light, unweighted). */
-    LaneI nee = own && (mis->connect || sppm) ? nondelta : (LaneI)(0);
+    LaneI nee = mis->connect || sppm ? own & nondelta : (LaneI)(0);
     if (pc_any_(nee)) {
       DirectLanes direct;
       nee = direct_light_lanes(sc, &s, &frame, &mat, wo_local, wo_ng, ul0, ul1, ul2, nee, &direct);
@@ -161,7 +158,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       }
     }
     /* s >= 2: a connection to each light vertex the depth limit allows, lane j's k-th with the others' k-th. */
-    LaneI connecting = own && mis->connect ? nondelta : (LaneI)(0);
+    LaneI connecting = mis->connect ? own & nondelta : (LaneI)(0);
     uint most = 0u;
     PC_EACH_LANE(j, pc_lane_bits(connecting)) most = max(most, lv_count[j]);
     for (uint k = 0; k < most; ++k) {
@@ -169,7 +166,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       for (uint j = 0u; j < PC_LANES; ++j) slot_of[j] = length_of[j] = 0u;
       PC_EACH_LANE(j, pc_lane_bits(connecting)) {
         if (k >= lv_count[j]) continue;
-        slot_of[j] = j * slots + k;
+        slot_of[j] = lv_first[j] + k;
         length_of[j] = lv[slot_of[j]].length;
         if (length_of[j] + depth + 1u <= h->max_depth) valid |= 1u << j;
       }
@@ -199,8 +196,12 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
     }
 #ifdef PC_VCM
     if (pc_any_(nondelta) && (lt->vcm_mode & PC_VCM_MERGE) != 0u) {
-      merge_at(sc, grid, &s, &mat, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, lt, merged, counts);
-      if (sppm) break; /* SPPM's visible point */
+      merge_at(sc, grid, &s, &mat, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, nondelta, lt, merged,
+               counts);
+      if (sppm) { /* SPPM's visible points */
+        live &= !nondelta;
+        if (!pc_any_(live)) break;
+      }
     }
 #endif
 
@@ -254,11 +255,11 @@ PC_KERNEL_BODY void bdpt_pass_item(const SceneData* scene, __constant const Ligh
       LaneI m = index < path_count;
       key.pixel = path_begin + b;
       __global LightVertex* vertices = light_vertices + b * light_vertex_slots(h);
-      uint count[PC_LANES];
-      for (uint j = 0u; j < PC_LANES; ++j) count[j] = 0u;
+      uint count[PC_LANES], first_slot[PC_LANES];
+      for (uint j = 0u; j < PC_LANES; ++j) count[j] = 0u, first_slot[j] = j * light_vertex_slots(h);
       trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, pixel, m, &n, &mis, vertices, count);
-      Lane3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, m, &mis, true,
-                                      vertices, count, &n.rays);
+      Lane3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, m, &mis, m,
+                                      vertices, first_slot, count, &n.rays);
       PC_EACH_LANE(j, pc_lane_bits(m)) {
         float3 value = lane3_at(L, j);
         if (splat_is_valid(value, &n)) n.overflows += splat_camera(film, lt, path_begin + b + j, s & 1u, value);

@@ -114,20 +114,23 @@ typedef float LaneF;
 typedef int LaneI;
 typedef uint LaneU;
 typedef lane3f Lane3;
-/* The lanes from PC_LANES consecutive values. */
+/* The lanes from PC_LANES consecutive values; a LaneF's bits as a LaneU. */
 #define lane_load(p) (*(p))
+#define lane_as_u(x) as_uint(x)
 #elif PC_LANES == 8
 typedef float8 LaneF;
 typedef int8 LaneI;
 typedef uint8 LaneU;
 typedef lane3f8 Lane3;
 #define lane_load(p) vload8(0, p)
+#define lane_as_u(x) as_uint8(x)
 #elif PC_LANES == 16
 typedef float16 LaneF;
 typedef int16 LaneI;
 typedef uint16 LaneU;
 typedef lane3f16 Lane3;
 #define lane_load(p) vload16(0, p)
+#define lane_as_u(x) as_uint16(x)
 #else
 #error "PC_LANES: 1, 8 or 16 paths per work item"
 #endif

@@ -1,4 +1,4 @@
-/* Light paths, one per lane of the program's width (kernels/lanes.cl; vcm's and mlt's programs are one wide):
+/* Light paths, one per lane of the program's width (kernels/lanes.cl; mlt's programs are one wide):
  * emitted from a light chosen by power (emission.cl), connected to the camera at every non-delta vertex
  * (camera_importance.cl), shadow-tested and splatted into the pixels its image position lands in
  * (splat_film.cl), weighted by the pixel filter. The `light` integrator traces these
@@ -261,7 +261,7 @@ PC_CAMERA_DIRECTION_PDF(Lane3, LaneF, lane3_splat(h->cam_forward.xyz))
 #endif
 
 /* Traces the light paths of the lanes in m, lane j's keyed by (path[j], key.sample) (with one lane: key, whose
- * pixel is path; vcm, mlt and the gathering integrators pass one lane, 1), and splats their camera
+ * pixel is path; mlt and the gathering integrators pass one lane, 1), and splats their camera
  * connections: the lanes go bounce by bounce together, each doing the one-lane operations (the emission and
  * the camera's lens point lane by lane, with the one-lane code), so a path's splats are the same bits at
  * every width; the film's fixed-point sums do not depend on their order.

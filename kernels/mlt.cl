@@ -164,7 +164,9 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
     }
     out->kind = PC_MLT_PIXEL;
     out->raster = (float2)((float)px, (float)py);
-    out->value = trace_camera_subpaths(sc, lt, emission_cdf, key, key.pixel, px, py, 1, &mis, true, vertices, &count, &n->rays) *
+    const uint first_slot = 0u;
+    out->value = trace_camera_subpaths(sc, lt, emission_cdf, key, key.pixel, px, py, 1, &mis, 1, vertices, &first_slot, &count,
+                                       &n->rays) *
                  (all ? 1.0f : (float)strategies);
   }
   if (!splat_is_valid(out->value, n)) out->value = (float3)(0.0f);

@@ -1,10 +1,10 @@
 /* The scattering stage the integrators share, written once over this program's lanes (kernels/lanes.cl):
  * the shading frame and the change to and from it; the BSDF's sample, its direction in the scene and the
  * side test (scatter_lanes); Russian roulette (roulette_lanes); BDPT's partial MIS sums after scattering
- * (vcm_scatter_lanes). Direct lighting is direct_light.cl's. The path integrator, light tracing, BDPT and the
- * AOV pass run them at their W (1, 8 or 16 lanes); the merging, Metropolis and gathering integrators, whose
- * programs are one lane wide, at W = 1, where LaneF is float, Lane3 float3 and a mask 0 or 1 (a Material
- * becomes one lane with material_lanes_of).
+ * (vcm_scatter_lanes). Direct lighting is direct_light.cl's. The path integrator, light tracing, BDPT, the
+ * merging integrators and the AOV pass run them at their W (1, 8 or 16 lanes); the Metropolis and gathering
+ * integrators, whose programs are one lane wide, at W = 1, where LaneF is float, Lane3 float3 and a mask 0
+ * or 1 (a Material becomes one lane with material_lanes_of).
  * Each does the operations the integrators did before it, in the same order: the same bits. */
 #ifndef PATHCL_SCATTER_CL
 #define PATHCL_SCATTER_CL

@@ -1,4 +1,4 @@
-/* Photon merging (lane width 1): vertex connection and merging (`vcm`; Georgiev et al., "Light Transport
+/* Photon merging, W = PC_LANES paths at once (kernels/lanes.cl): vertex connection and merging (`vcm`; Georgiev et al., "Light Transport
  * Simulation with Vertex Connection and Merging", 2012, in SmallVCM's formulation with the partial sums
  * dVCM, dVC and dVM), bidirectional photon mapping (`bpm`: merging without connections) and stochastic
  * progressive photon mapping (`sppm`: camera paths to their first non-delta vertex, next-event estimation
@@ -32,7 +32,9 @@
 #include "scan.cl"
 
 /* The hash grid of a unit's light vertices in iteration i: cells 2 r_i wide about the scene's centre,
- * hashed into `table` buckets (a power of two >= the unit's paths); cells[b] .. cells[b + 1] are bucket
+ * hashed into `table` buckets (a power of two >= PC_GRID_BUCKETS_PER_PATH times the unit's paths: with
+ * one a path, a bucket held 2.5 vertices of the Cornell box, other cells' nearly all, and a query's walk
+ * made its camera phase 10 % longer than with four); cells[b] .. cells[b + 1] are bucket
  * b's entries, each a vertex's position and (the bits of w) its slot of light_vertices: a query reads its
  * buckets' positions one after the other, and a vertex only where it is within the radius (those of a
  * large image are far beyond the caches: the Cornell box's camera phase at 512 x 512 was 1.27 x longer
@@ -55,7 +57,7 @@ typedef struct {
 
 static inline uint grid_table(uint paths) {
   uint t = 1u;
-  while (t < paths) t <<= 1;
+  while (t < paths * PC_GRID_BUCKETS_PER_PATH) t <<= 1;
   return t;
 }
 
@@ -111,48 +113,104 @@ static inline void merge_add(MergeSums* m, float3 c, __constant const LightTrans
   }
 }
 
-/* Merges camera vertex s (material m, frame f, wo_local towards the previous camera vertex; depth scattering
- * events before it, throughput, partial sums dvcm and dvm) with the grid's light vertices within the
- * radius: each as if the light path had scattered here towards the camera, its density estimate
- * f(wo, wl) beta / (pi r^2 N) times the shading normal's cosine over the geometric one (the photon's
- * density is per area, the camera's integral over the shading normal's cosine, as in path tracing), weighted
- * by MIS against every strategy making the path (SmallVCM's eq.), or not at all for SPPM. */
-static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surface* s, const MaterialLanes* m, const FrameLanes* f,
-                            float3 wo_local, float wo_ng, uint depth, float3 throughput, float dvcm, float dvm, float vc,
-                            bool sppm, __constant const LightTransportHeader* lt, MergeSums* out, SplatCounts* n) {
-  __constant const SceneHeader* h = sc->h;
-  /* The 2 x 2 x 2 cells about s->p that a ball of radius r about it can reach (cells are 2 r wide). */
-  float3 q = (s->p - g->origin) * g->inv_cell, fl = floor(q);
+/* The entries [begin, end) of the grid buckets a ball of radius r about p can reach: the 2 x 2 x 2 cells about
+ * it (cells are 2 r wide), each bucket once (two cells hashed into one bucket: its entries once); empty
+ * ranges for the others. */
+static inline void merge_buckets(const MergeGrid* g, float3 p, uint* begin, uint* end) {
+  float3 q = (p - g->origin) * g->inv_cell, fl = floor(q);
   int x = grid_coordinate(fl.x), y = grid_coordinate(fl.y), z = grid_coordinate(fl.z);
   int dx = q.x - fl.x < 0.5f ? -1 : 1, dy = q.y - fl.y < 0.5f ? -1 : 1, dz = q.z - fl.z < 0.5f ? -1 : 1;
   uint seen[8];
   for (uint corner = 0; corner < 8u; ++corner) {
     uint b = grid_bucket(x + ((corner & 1u) ? dx : 0), y + ((corner & 2u) ? dy : 0), z + ((corner & 4u) ? dz : 0), g->table);
     seen[corner] = b;
-    bool again = false; /* two cells hashed into one bucket: its entries once */
+    bool again = false;
     for (uint j = 0; j < corner; ++j) again |= seen[j] == b;
-    if (again) continue;
-    for (uint e = g->cells[b]; e < g->cells[b + 1u]; ++e) {
-      float4 entry = g->entries[e];
-      float3 d = entry.xyz - s->p;
-      if (!(pc_dot(d, d) <= g->radius2)) continue;
-      __global const LightVertex* v = g->vertices + as_uint(entry.w);
-      if (v->length + depth > h->max_depth) continue;
-      float3 wl = v->wl.xyz;
-      float wl_ng = pc_dot(wl, s->ng);
-      if (!(wl_ng * wo_ng > 0.0f)) continue; /* light arriving on the camera's side */
-      float3 wl_local = to_local(f, wl);
-      float3 fv = bsdf_eval_lanes(m, wo_local, wl_local, 1);
-      if (!(fv.x > 0.0f || fv.y > 0.0f || fv.z > 0.0f)) continue;
-      float w = 1.0f;
+    begin[corner] = again ? 0u : g->cells[b];
+    end[corner] = again ? 0u : g->cells[b + 1u];
+  }
+}
+
+/* The light vertices a lane finds within the radius before their merges are taken, W at a time. */
+#define PC_MERGE_BATCH 8u
+
+/* Merges camera vertex s of the lanes in m (material mat, frame f, wo_local towards the previous camera
+ * vertex; depth scattering events before it, throughput, partial sums dvcm and dvm) with the grid's light
+ * vertices within the radius, lane j's into out[j]: each as if the light path had scattered here towards the
+ * camera, its density estimate f(wo, wl) beta / (pi r^2 N) times the shading normal's cosine over the
+ * geometric one (the photon's density is per area, the camera's integral over the shading normal's cosine,
+ * as in path tracing), weighted by MIS against every strategy making the path (SmallVCM's eq.), or not at
+ * all for SPPM. Each lane walks its buckets alone (most entries are beyond the radius: a distance test each),
+ * keeping up to PC_MERGE_BATCH vertices within it; then the lanes take their k-th vertices' merges together.
+ * Each merge is the one-lane value, and its fixed-point sum does not depend on the order. */
+static inline void merge_at(const SceneData* sc, const MergeGrid* g, const SurfaceLanes* s, const MaterialLanes* mat,
+                            const FrameLanes* f, Lane3 wo_local, LaneF wo_ng, uint depth, Lane3 throughput, LaneF dvcm,
+                            LaneF dvm, float vc, bool sppm, LaneI m, __constant const LightTransportHeader* lt,
+                            MergeSums* out, SplatCounts* n) {
+  __constant const SceneHeader* h = sc->h;
+  const uint stride = (uint)(sizeof(LightVertex) / sizeof(float4));
+  uint begin_of[8][PC_LANES], end_of[8][PC_LANES], corner_of[PC_LANES], e_of[PC_LANES], found[PC_MERGE_BATCH][PC_LANES],
+      count_of[PC_LANES];
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    corner_of[j] = e_of[j] = 0u;
+    for (uint k = 0; k < PC_MERGE_BATCH; ++k) found[k][j] = 0u;
+  }
+  PC_EACH_LANE(j, pc_lane_bits(m)) {
+    uint b[8], e[8];
+    merge_buckets(g, lane3_at(s->p, j), b, e);
+    for (uint c = 0; c < 8u; ++c) begin_of[c][j] = b[c], end_of[c][j] = e[c];
+    e_of[j] = b[0];
+  }
+  __global const LightVertex* lv = g->vertices;
+  for (uint left = pc_lane_bits(m); left != 0u;) { /* the lanes with entries to walk */
+    uint most = 0u;
+    for (uint j = 0u; j < PC_LANES; ++j) count_of[j] = 0u;
+    PC_EACH_LANE(j, left) {
+      float3 p = lane3_at(s->p, j);
+      uint c = corner_of[j], e = e_of[j], k = 0u;
+      while (c < 8u && k < PC_MERGE_BATCH) {
+        if (e >= end_of[c][j]) {
+          if (++c < 8u) e = begin_of[c][j];
+          continue;
+        }
+        float4 entry = g->entries[e++];
+        float3 d = entry.xyz - p;
+        if (pc_dot(d, d) <= g->radius2) found[k++][j] = as_uint(entry.w);
+      }
+      corner_of[j] = c, e_of[j] = e, count_of[j] = k;
+      most = max(most, k);
+      if (c == 8u) left &= ~(1u << j);
+    }
+    for (uint k = 0; k < most; ++k) {
+      uint valid = 0u;
+      for (uint j = 0u; j < PC_LANES; ++j) valid |= (uint)(count_of[j] > k) << j;
+      LaneI near = pc_lanes_of_bits(valid, m);
+      LaneU slot = lane_safe_index(lane_load(found[k]), near);
+      LaneU length = lane_gather_uint(PC_FIELD_U(lv, length), slot);
+      near &= length + depth <= h->max_depth;
+      if (!pc_any_(near)) continue;
+      Lane3 wl, beta, unused3;
+      LaneF v_dvm, v_dvcm, unused;
+      lane_gather4(&lv->wl, stride, slot, &wl, &v_dvm);
+      LaneF wl_ng = pc_dot(wl, s->ng);
+      near &= wl_ng * wo_ng > 0.0f; /* light arriving on the camera's side */
+      if (!pc_any_(near)) continue;
+      Lane3 wl_local = to_local(f, wl);
+      Lane3 fv = bsdf_eval_lanes(mat, wo_local, wl_local, near);
+      near &= lane3_any_positive(fv);
+      if (!pc_any_(near)) continue;
+      lane_gather4(&lv->ng, stride, slot, &unused3, &v_dvcm);
+      lane_gather4(&lv->beta, stride, slot, &beta, &unused);
+      LaneF w = (LaneF)(1.0f);
       if (!sppm) {
-        float camera_dir = bsdf_pdf_lanes(m, wo_local, wl_local, 1), camera_rev = bsdf_pdf_lanes(m, wl_local, wo_local, 1);
-        float w_light = v->ng.w * vc + v->wl.w * camera_dir;
-        float w_camera = dvcm * vc + dvm * camera_rev;
+        LaneF camera_dir = bsdf_pdf_lanes(mat, wo_local, wl_local, near), camera_rev = bsdf_pdf_lanes(mat, wl_local, wo_local, near);
+        LaneF w_light = v_dvcm * vc + v_dvm * camera_dir;
+        LaneF w_camera = dvcm * vc + dvm * camera_rev;
         w = 1.0f / (w_light + 1.0f + w_camera);
       }
-      float scale = w * fabs(wl_local.z) / fabs(wl_ng) * g->normalization;
-      merge_add(out, throughput * fv * v->beta.xyz * scale, lt, n);
+      LaneF scale = w * fabs(wl_local.z) / fabs(wl_ng) * g->normalization;
+      Lane3 c = lane3_scale(lane3_mul(lane3_mul(throughput, fv), beta), scale);
+      PC_EACH_LANE(j, pc_lane_bits(near)) merge_add(out + j, lane3_at(c, j), lt, n);
     }
   }
 }
@@ -169,20 +227,29 @@ __kernel void vcm_clear(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   if (path_count > 0u && i <= grid_table(path_count)) cells[i] = 0u;
 }
 
+/* Work item i traces light paths i G .. i G + G - 1 of the unit (G = PC_ITEM_PIXELS), W at a time. */
 PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                    __global LightVertex* light_vertices, __global uint* vertex_counts, PC_VCM_UNIT,
                                    uint item) {
   SceneData sc = *scene;
   __constant const SceneHeader* h = sc.h;
-  if (item >= path_count) return;
-  SampleKey key = light_path_key(h, path_begin + item, sample_begin);
+  uint first = item * PC_ITEM_PIXELS;
+  if (first >= path_count) return;
+  LaneU lane = lane_indices();
+  SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MisFactors mis = iteration_factors(lt, h, iteration_radius2(lt, sample_begin));
-  uint count = 0u;
-  trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, key.pixel, 1, &n, &mis, light_vertices + item * light_vertex_slots(h),
-                          &count);
-  vertex_counts[item] = count;
+  for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
+    LaneU index = (LaneU)(b) + lane;
+    LaneI m = index < path_count;
+    key.pixel = path_begin + b;
+    uint count[PC_LANES];
+    for (uint j = 0u; j < PC_LANES; ++j) count[j] = 0u;
+    trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, (LaneU)(path_begin) + index, m, &n, &mis,
+                            light_vertices + b * light_vertex_slots(h), count);
+    PC_EACH_LANE(j, pc_lane_bits(m)) vertex_counts[b + j] = count[j];
+  }
   add_splat_counts(stats, &n);
 }
 __kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
@@ -236,15 +303,15 @@ __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader
   }
 }
 
-/* One work item per pixel of the image. */
+/* Work item i takes pixels i G .. i G + G - 1 of the image (G = PC_ITEM_PIXELS), W at a time. */
 PC_KERNEL_BODY void vcm_camera_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                     __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
                                     __global const LightVertex* light_vertices, __global const uint* vertex_counts,
-                                    __global const uint* cells, __global const float4* entries, PC_VCM_UNIT, uint pixel) {
+                                    __global const uint* cells, __global const float4* entries, PC_VCM_UNIT, uint item) {
   SceneData sc = *scene;
   __constant const SceneHeader* h = sc.h;
-  if (path_count == 0u || pixel >= h->width * h->height) return;
-  SampleKey key = light_path_key(h, pixel, sample_begin);
+  const uint pixels = h->width * h->height, first = item * PC_ITEM_PIXELS;
+  if (path_count == 0u || first >= pixels) return;
   float radius2 = iteration_radius2(lt, sample_begin);
   MisFactors mis = iteration_factors(lt, h, radius2);
   MergeGrid grid;
@@ -255,23 +322,40 @@ PC_KERNEL_BODY void vcm_camera_item(const SceneData* scene, __constant const Lig
   grid.origin = lt->bounds.xyz;
   grid.inv_cell = grid_inv_cell(radius2);
   grid.radius2 = radius2;
-  grid.normalization = 1.0f / (PC_PI * radius2 * (float)(h->width * h->height));
-  uint item = pixel - path_begin; /* the pixel's light path in the unit, if it is there */
-  bool own = pixel >= path_begin && item < path_count;
-  uint slots = light_vertex_slots(h);
-  MergeSums merged = {{0ul, 0ul, 0ul}, {0ul, 0ul, 0ul}, 0u};
+  grid.normalization = 1.0f / (PC_PI * radius2 * (float)pixels);
+  const uint slots = light_vertex_slots(h), parity = sample_begin & 1u;
+  LaneU lane = lane_indices();
+  SampleKey key = light_path_key(h, first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
-  uint count = own ? vertex_counts[item] : 0u;
-  float3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, 1, &mis, own,
-                                   light_vertices + (own ? item * slots : 0u), &count, &n.rays, &grid, &merged, &n);
-  uint parity = sample_begin & 1u;
-  if (own && splat_is_valid(L, &n)) n.overflows += splat_camera(film, lt, pixel, parity, L);
-  volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * pixel);
-  for (uint k = 0; k < 3u; ++k) {
-    if (merged.sum[k]) splat_add_u64(p + 2u * (3u * parity + k), merged.sum[k]);
-    if (merged.squares[k]) splat_add_u64(p + 2u * (6u + k), merged.squares[k]);
+  for (uint b = first; b < min(first + PC_ITEM_PIXELS, pixels); b += PC_LANES) {
+    LaneU pixel = (LaneU)(b) + lane;
+    LaneI m = pixel < pixels;
+    key.pixel = b;
+    /* A pixel's own strategies where its light path (pixel - path_begin of the unit) is the unit's. */
+    uint count[PC_LANES], first_slot[PC_LANES], own_bits = 0u;
+    MergeSums merged[PC_LANES];
+    for (uint j = 0u; j < PC_LANES; ++j) {
+      uint p = b + j;
+      bool own = p >= path_begin && p - path_begin < path_count;
+      own_bits |= own ? 1u << j : 0u;
+      count[j] = own ? vertex_counts[p - path_begin] : 0u;
+      first_slot[j] = own ? (p - path_begin) * slots : 0u;
+      merged[j] = (MergeSums){{0ul, 0ul, 0ul}, {0ul, 0ul, 0ul}, 0u};
+    }
+    LaneI own = pc_lanes_of_bits(own_bits, m);
+    Lane3 L = trace_camera_subpaths(&sc, lt, emission_cdf, key, pixel, pixel % h->width, pixel / h->width, m, &mis, own,
+                                    light_vertices, first_slot, count, &n.rays, &grid, merged, &n);
+    PC_EACH_LANE(j, pc_lane_bits(m)) {
+      float3 value = lane3_at(L, j);
+      if ((own_bits >> j & 1u) != 0u && splat_is_valid(value, &n)) n.overflows += splat_camera(film, lt, b + j, parity, value);
+      volatile __global uint* p = (volatile __global uint*)film + 2u * (PC_SPLAT_WORDS * (b + j));
+      for (uint k = 0; k < 3u; ++k) {
+        if (merged[j].sum[k]) splat_add_u64(p + 2u * (3u * parity + k), merged[j].sum[k]);
+        if (merged[j].squares[k]) splat_add_u64(p + 2u * (6u + k), merged[j].squares[k]);
+      }
+      n.overflows += merged[j].overflows;
+    }
   }
-  n.overflows += merged.overflows;
   add_splat_counts(stats, &n);
 }
 __kernel void vcm_camera(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,

@@ -180,7 +180,7 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
       Phase& p = phases_[i];
       set_unit_args(p, pixel_begin, pixel_count, pixel_stride, s, per_sample ? 1 : sample_count);
       const size_t items =
-          p.items ? p.items(pixel_count, layout_.pixels) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
+          p.items ? p.items(pixel_count, layout_.pixels, p.item_pixels) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
       double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items, p.work_group) : 0.0;
       if (out) {
         out->kernel_ms += ms;

@@ -35,7 +35,7 @@ class DeviceWorker : public UnitWorker {
     cl_uint first_unit_arg = 0;
     size_t work_group = 0;
     uint32_t item_pixels = 1;
-    std::function<size_t(uint32_t count, uint32_t pixels)> items;  // TechniquePhase::items
+    std::function<size_t(uint32_t count, uint32_t pixels, uint32_t item_pixels)> items;  // TechniquePhase::items
     bool strided = true;  // takes pixel_stride (pixel units and the AOV pass; light paths are not strided)
   };
   // Runs every phase over pixels (or paths) pixel_begin + i * stride, i < count, samples [s0, s0 + sn).

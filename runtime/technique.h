@@ -43,7 +43,7 @@ struct TechniqueBuild {
 //   "unit"          the unit's range: uint begin, uint count, [uint stride (pixel units only),]
 //                   uint sample_begin, uint sample_count
 // A phase runs ceil(count / P) work items for a unit of `count` pixels or paths (P: 1, or the lane kernels'
-// pixels per work item), or as many as its `items` says: a phase over something else than the unit's
+// pixels per work item, PC_ITEM_PIXELS), or as many as its `items` says: a phase over something else than the unit's
 // pixels (a photon grid's cells, one work item for a serial scan, two per pixel) gets the unit's range
 // all the same and finds its own work from it. Phases run in order; each is timed and named in --stats.
 // A phase's kernel must do nothing for a unit of count 0: the worker launches each so once at set-up.
@@ -51,8 +51,9 @@ struct TechniquePhase {
   std::string name;  // "render"
   std::string entry;
   std::vector<std::string> args;
-  // Work items for a unit of `count` pixels or paths in a film of `pixels`; empty: ceil(count / P).
-  std::function<size_t(uint32_t count, uint32_t pixels)> items;
+  // Work items for a unit of `count` pixels or paths in a film of `pixels`, P of them a work item with lanes;
+  // empty: ceil(count / P).
+  std::function<size_t(uint32_t count, uint32_t pixels, uint32_t item_pixels)> items;
 };
 
 // What a technique's buffers and its largest unit depend on: the film, the render's depth, the device.

@@ -48,11 +48,11 @@ Technique mlt_technique() {
   const std::vector<std::string> scan = {"lt", "bootstrap", "unit"};
   t.phases = {
       {"bootstrap", "mlt_bootstrap", {"lt", "emission_cdf", "stats", "light_vertices", "bootstrap", "unit"},
-       [](uint32_t, uint32_t pixels) { return bootstrap_items(pixels); }},
-      {"scan", "mlt_scan_blocks", scan, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
-      {"scan_offsets", "mlt_scan_offsets", scan, [](uint32_t, uint32_t) { return size_t(1); }},
-      {"scan_add", "mlt_scan_add", scan, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
-      {"bootstrap_done", "mlt_bootstrap_done", scan, [](uint32_t, uint32_t) { return size_t(1); }},
+       [](uint32_t, uint32_t pixels, uint32_t) { return bootstrap_items(pixels); }},
+      {"scan", "mlt_scan_blocks", scan, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
+      {"scan_offsets", "mlt_scan_offsets", scan, [](uint32_t, uint32_t, uint32_t) { return size_t(1); }},
+      {"scan_add", "mlt_scan_add", scan, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
+      {"bootstrap_done", "mlt_bootstrap_done", scan, [](uint32_t, uint32_t, uint32_t) { return size_t(1); }},
       {"chains", "mlt_chains", {"lt", "emission_cdf", "film", "stats", "light_vertices", "bootstrap", "unit"}, {}},
   };
   // Light vertex slots for each chain of the largest unit, or each bootstrap work item; the candidates'

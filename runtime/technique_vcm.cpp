@@ -19,7 +19,7 @@ constexpr size_t kGridEntryBytes = 4 * sizeof(float);
 // kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
 size_t grid_table(uint32_t paths) {
   size_t t = 1;
-  while (t < paths) t <<= 1;
+  while (t < size_t(paths) * PC_GRID_BUCKETS_PER_PATH) t <<= 1;
   return t;
 }
 
@@ -30,30 +30,32 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   t.summary = summary;
   t.kernel_file = "vcm.cl";
   t.per_sample = true;
-  t.lanes = false;  // one lane: merges are written for one (kernels/bdpt.cl)
-  t.build_options = splat_build_options;
   // Buffers for the largest unit (light paths [b, b + c) of an iteration): max_depth vertex slots per path,
-  // its vertex count, the grid's buckets (a power of two >= c, one end and the prefix sum's block offsets)
+  // its vertex count, the grid's buckets (a power of two >= PC_GRID_BUCKETS_PER_PATH c, one end and the prefix
+  // sum's block offsets)
   // and entries (a vertex's position and slot: 4 words).
   t.buffers = {{"light_vertices", light_vertex_bytes},
                {"vertex_counts", [](const TechniqueSizes& s) { return s.unit_items * sizeof(uint32_t); }},
                {"cells", [](const TechniqueSizes& s) { return (grid_table(s.unit_items) + 1 + PC_SCAN_BLOCKS) * sizeof(uint32_t); }},
                {"entries", [](const TechniqueSizes& s) { return s.unit_items * light_vertex_slots(s) * kGridEntryBytes; }}};
   t.max_unit_items = [](const TechniqueSizes& s) {
-    return light_vertex_unit_paths(s, light_vertex_slots(s) * kGridEntryBytes + 3 * sizeof(uint32_t));
+    // a path's entries, its vertex count and its buckets (twice PC_GRID_BUCKETS_PER_PATH: the power of two)
+    return light_vertex_unit_paths(s, light_vertex_slots(s) * kGridEntryBytes + (1 + 2 * PC_GRID_BUCKETS_PER_PATH) * sizeof(uint32_t));
   };
+  // The grid's count and scatter take a light path a work item, whatever the lanes.
+  const auto one_per_path = [](uint32_t count, uint32_t, uint32_t) { return size_t(count); };
   const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
   t.phases = {
-      {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t) { return grid_table(count) + 1; }},
+      {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t, uint32_t) { return grid_table(count) + 1; }},
       {"light", "vcm_light", paths, {}},
-      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}, {}},
-      {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
-      {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(1); }},
-      {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
-      {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}, {}},
+      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}, one_per_path},
+      {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
+      {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(1); }},
+      {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
+      {"scatter", "vcm_scatter", {"lt", "light_vertices", "vertex_counts", "cells", "entries", "unit"}, one_per_path},
       {"camera", "vcm_camera",
        {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "entries", "unit"},
-       [](uint32_t, uint32_t pixels) { return size_t(pixels); }},
+       [](uint32_t, uint32_t pixels, uint32_t item_pixels) { return size_t((pixels + item_pixels - 1) / item_pixels); }},
   };
   // A unit traces every camera path of its iteration: whole iterations where the time allows.
   t.cpu_unit_seconds = 2.0;
@@ -69,7 +71,8 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
     lt.radius = float(o.radius > 0 ? o.radius : footprints * default_merging_radius(scene, lt));
     lt.alpha = float(o.alpha);
   };
-  t.options = {number_option("radius", "a radius > 0 (scene units)", [](double v) { return v > 0 && std::isfinite(v); },
+  t.options = {lanes_option("light and camera paths"),
+               number_option("radius", "a radius > 0 (scene units)", [](double v) { return v > 0 && std::isfinite(v); },
                              &RenderOptions::radius),
                number_option("alpha", "a number in (0, 1]", [](double v) { return v > 0 && v <= 1; }, &RenderOptions::alpha)};
   return t;

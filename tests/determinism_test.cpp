@@ -142,13 +142,13 @@ TEST(Determinism, LanesOtherThanOneEightAndSixteenAreRefused) {
   opt.lanes = 4;
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
   opt.lanes = 8;
-  opt.integrator = "vcm";
+  opt.integrator = "mlt";
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
 }
 
 // The default (lanes 0) is each device's own width: 8 or 16 on a CPU device, 1 on a GPU; PATHCL_LANES sets
-// it for every device and refuses other values, for path, light and bdpt; the other integrators run one
-// path per work item.
+// it for every device and refuses other values, for path, light, bdpt and the merging integrators; the
+// others run one path per work item.
 TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
   const char* outer = std::getenv("PATHCL_LANES");  // restored at the end
   std::string outer_lanes = outer ? outer : "";
@@ -176,11 +176,11 @@ TEST(Determinism, DefaultLanesAreTheDevicesOwn) {
   setenv("PATHCL_LANES", "4", 1);
   EXPECT_THROW(render(test_device(), small_cornell(), opt), UsageError);
   unsetenv("PATHCL_LANES");
-  for (const char* lanes : {"light", "bdpt"}) {
+  for (const char* lanes : {"light", "bdpt", "vcm"}) {
     opt.integrator = lanes;
     EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, path_lanes(device)) << lanes;
   }
-  opt.integrator = "vcm";
+  opt.integrator = "instant_radiosity";
   EXPECT_EQ(render(test_device(), small_cornell(), opt).devices[0].lanes, 1u);
   if (outer) setenv("PATHCL_LANES", outer_lanes.c_str(), 1);
 }

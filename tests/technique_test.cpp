@@ -48,7 +48,7 @@ const Technique& constant_technique() {
     t.id = 1000;
     t.summary = "test only: a constant per pixel";
     t.kernel_file = "test_constant.cl";
-    t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count, uint32_t) { return 2 * size_t(count); }},
+    t.phases = {{"weigh", "weigh", {"weights", "unit"}, [](uint32_t count, uint32_t, uint32_t) { return 2 * size_t(count); }},
                 {"add", "add", {"film", "stats", "weights", "unit"}, {}}};
     t.buffers = {{"weights", [](const TechniqueSizes& s) { return 2 * s.pixels * sizeof(float); }}};
     t.layers = {{"constant", PC_LAYER_ORDERED, 2}};
@@ -117,10 +117,10 @@ TEST(Technique, RegistryRefusesTakenNamesAndNamesItsTechniques) {
     EXPECT_EQ(std::string(e.what()).rfind("scene.json: render.integrator: unknown integrator \"lite\" (expected path, light, bdpt, vcm, bpm, sppm, instant_radiosity, radiosity, mlt or test-constant)", 0), 0u) << e.what();
   }
   RenderOptions o;
-  o.integrator = "vcm";
+  o.integrator = "mlt";
   o.lanes = 8;
-  EXPECT_THROW(check_technique_options(technique_named("vcm", "test"), o), UsageError);
-  for (const char* name : {"light", "bdpt"}) {
+  EXPECT_THROW(check_technique_options(technique_named("mlt", "test"), o), UsageError);
+  for (const char* name : {"light", "bdpt", "vcm", "bpm", "sppm"}) {
     o.integrator = name;
     EXPECT_NO_THROW(check_technique_options(technique_named(name, "test"), o)) << name;
   }
@@ -160,7 +160,7 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
   EXPECT_EQ(message("sppm", R"({"radius": 0})"), "s.json: render.integrator.radius: expected a radius > 0 (scene units), got 0");
   EXPECT_EQ(message("vcm", R"({"merge": "no"})"), "s.json: render.integrator.merge: expected true or false, got \"no\"");
   EXPECT_EQ(message("sppm", R"({"merge": false})"),
-            "s.json: render.integrator.merge: the sppm integrator has no option \"merge\" (it has radius, alpha)");
+            "s.json: render.integrator.merge: the sppm integrator has no option \"merge\" (it has lanes, radius, alpha)");
   // The gathering integrators' light paths per iteration, instant radiosity's clamp, radiosity's final gather.
   apply_technique_options(technique_named("instant_radiosity", "test"), R"({"light_paths": 32, "clamp": 2.5})",
                           "s.json: render.integrator", o);
@@ -198,7 +198,7 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
   EXPECT_NE(read_text_file(dir + "/l.json").find("\"lanes\": 8"), std::string::npos);
   ASSERT_EQ(run_pathcl("render " + path + " -q --lanes 1 -o " + dir + "/l.exr --stats " + dir + "/l.json", &err), 0) << err;
   EXPECT_NE(read_text_file(dir + "/l.json").find("\"lanes\": 1"), std::string::npos);
-  scene.replace(scene.find(R"("type": "path", "lanes": 8)"), 26, R"("type": "sppm", "lanes": 8)");
+  scene.replace(scene.find(R"("type": "path", "lanes": 8)"), 26, R"("type": "mlt", "lanes": 8)");
   EXPECT_EQ(run_pathcl("render " + write_temp_file("bad.json", scene) + " -q -o " + dir + "/b.exr", &err), 2);
-  EXPECT_NE(err.find("bad.json: render.integrator.lanes: the sppm integrator has no option \"lanes\""), std::string::npos) << err;
+  EXPECT_NE(err.find("bad.json: render.integrator.lanes: the mlt integrator has no option \"lanes\""), std::string::npos) << err;
 }

@@ -176,6 +176,16 @@ TEST(Vcm, SplatFilmIsBitwiseDeterministic) {
   }
 }
 
+// A work item takes 8 or 16 light paths and then 8 or 16 camera paths at once, a lane each, their merges
+// lane by lane (kernels/vcm.cl): every width gives the one-lane film bit for bit for vcm, bpm and sppm (one
+// program: light_transport_support.h).
+TEST(Vcm, EveryLaneWidthGivesTheOneLaneFilm) {
+  for (const char* integrator : kMerging) {
+    SCOPED_TRACE(integrator);
+    expect_one_lane_bits_at_every_width(integrator);
+  }
+}
+
 // A unit holds at most what the device's buffers allow (Technique::max_unit_items): on a device with 1 MiB
 // allocations and 4 MiB of memory a 64 x 64 film at max_depth 8 takes units of a few hundred light paths, its
 // vertices within the allocation, all buffers within a quarter of the memory; an iteration of more paths is

@@ -27,6 +27,9 @@
  * takes n + 1 + PC_SCAN_BLOCKS. */
 #define PC_SCAN_BLOCKS 256u
 
+/* Buckets of vcm's hash grid per light path of a unit (kernels/vcm.cl's grid_table). */
+#define PC_GRID_BUCKETS_PER_PATH 4u
+
 /* The splat film: per pixel PC_SPLAT_WORDS unsigned 64-bit fixed-point sums (each two uint words, low
  * word first), added with integer atomics in any order to the same bits:
  *   [0, 3)  RGB of the even-numbered samples' splats, in units of 1 / splat_scale
