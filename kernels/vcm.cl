@@ -14,8 +14,8 @@
  * sample), its phases:
  *   vcm_clear    the grid's buckets to zero
  *   vcm_light    traces the c light paths, their non-delta vertices at slots (path - b) max_depth + k of
- *                light_vertices (never an atomic counter), their camera connections splatted
- *   vcm_count    counts the vertices in each bucket of the hash grid (cells 2 r wide; integer atomics)
+ *                light_vertices (never an atomic counter), their camera connections splatted, and counts
+ *                the vertices in each bucket of the hash grid (cells 2 r wide; integer atomics)
  *   vcm_scan_*   bucket ends by a prefix sum (blocks of buckets in parallel, then their offsets)
  *   vcm_scatter  each vertex's slot into its bucket's entries
  *   vcm_camera   every pixel's camera path: its own strategies where light path p is the unit's (the
@@ -227,11 +227,12 @@ __kernel void vcm_clear(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
   if (path_count > 0u && i <= grid_table(path_count)) cells[i] = 0u;
 }
 
-/* Work item i traces light paths i G .. i G + G - 1 of the unit (G = PC_ITEM_PIXELS), W at a time. */
+/* Work item i traces light paths i G .. i G + G - 1 of the unit (G = PC_ITEM_PIXELS), W at a time, and
+ * counts their vertices into the grid's buckets. */
 PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, __global uint* film, __global SplatStats* stats,
-                                   __global LightVertex* light_vertices, __global uint* vertex_counts, PC_VCM_UNIT,
-                                   uint item) {
+                                   __global LightVertex* light_vertices, __global uint* vertex_counts,
+                                   __global uint* cells, PC_VCM_UNIT, uint item) {
   SceneData sc = *scene;
   __constant const SceneHeader* h = sc.h;
   uint first = item * PC_ITEM_PIXELS;
@@ -239,7 +240,9 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
   LaneU lane = lane_indices();
   SampleKey key = light_path_key(h, path_begin + first, sample_begin);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
-  MisFactors mis = iteration_factors(lt, h, iteration_radius2(lt, sample_begin));
+  float radius2 = iteration_radius2(lt, sample_begin), inv_cell = grid_inv_cell(radius2);
+  MisFactors mis = iteration_factors(lt, h, radius2);
+  const uint table = grid_table(path_count), slots = light_vertex_slots(h);
   for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
     LaneU index = (LaneU)(b) + lane;
     LaneI m = index < path_count;
@@ -247,27 +250,21 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
     uint count[PC_LANES];
     for (uint j = 0u; j < PC_LANES; ++j) count[j] = 0u;
     trace_light_paths_lanes(&sc, lt, emission_cdf, film, key, (LaneU)(path_begin) + index, m, &n, &mis,
-                            light_vertices + b * light_vertex_slots(h), count);
-    PC_EACH_LANE(j, pc_lane_bits(m)) vertex_counts[b + j] = count[j];
+                            light_vertices + b * slots, count);
+    PC_EACH_LANE(j, pc_lane_bits(m)) {
+      vertex_counts[b + j] = count[j];
+      for (uint k = 0; k < count[j]; ++k)
+        atomic_inc(cells + grid_bucket_of(light_vertices[(b + j) * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
+    }
   }
   add_splat_counts(stats, &n);
 }
 __kernel void vcm_light(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
                         __global uint* film, __global SplatStats* stats, __global LightVertex* light_vertices,
-                        __global uint* vertex_counts, PC_VCM_UNIT) {
+                        __global uint* vertex_counts, __global uint* cells, PC_VCM_UNIT) {
   SceneData sc = PC_SCENE_DATA;
-  vcm_light_item(&sc, lt, emission_cdf, film, stats, light_vertices, vertex_counts, path_begin, path_count,
+  vcm_light_item(&sc, lt, emission_cdf, film, stats, light_vertices, vertex_counts, cells, path_begin, path_count,
                  sample_begin, sample_count, get_global_id(0));
-}
-
-__kernel void vcm_count(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,
-                        __global const uint* vertex_counts, __global uint* cells, PC_VCM_UNIT) {
-  uint item = get_global_id(0);
-  if (item >= path_count) return;
-  float inv_cell = grid_inv_cell(iteration_radius2(lt, sample_begin));
-  uint table = grid_table(path_count), slots = light_vertex_slots(h);
-  for (uint k = 0; k < vertex_counts[item]; ++k)
-    atomic_inc(cells + grid_bucket_of(light_vertices[item * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
 }
 
 /* The buckets' ends by scan.cl's prefix sum (the blocks' offsets after the buckets' end, cells[table + 1 +

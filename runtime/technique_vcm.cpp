@@ -44,11 +44,10 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   };
   // The grid's count and scatter take a light path a work item, whatever the lanes.
   const auto one_per_path = [](uint32_t count, uint32_t, uint32_t) { return size_t(count); };
-  const std::vector<std::string> paths = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "unit"};
+  const std::vector<std::string> light = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "unit"};
   t.phases = {
       {"clear", "vcm_clear", {"cells", "unit"}, [](uint32_t count, uint32_t, uint32_t) { return grid_table(count) + 1; }},
-      {"light", "vcm_light", paths, {}},
-      {"count", "vcm_count", {"lt", "light_vertices", "vertex_counts", "cells", "unit"}, one_per_path},
+      {"light", "vcm_light", light, {}},
       {"scan", "vcm_scan_blocks", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
       {"scan_offsets", "vcm_scan_offsets", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(1); }},
       {"scan_add", "vcm_scan_add", {"cells", "unit"}, [](uint32_t, uint32_t, uint32_t) { return size_t(PC_SCAN_BLOCKS); }},
