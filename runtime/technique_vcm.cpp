@@ -42,7 +42,7 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
     // a path's entries, its vertex count and its buckets (twice PC_GRID_BUCKETS_PER_PATH: the power of two)
     return light_vertex_unit_paths(s, light_vertex_slots(s) * kGridEntryBytes + (1 + 2 * PC_GRID_BUCKETS_PER_PATH) * sizeof(uint32_t));
   };
-  // The grid's count and scatter take a light path a work item, whatever the lanes.
+  // The grid's scatter takes a light path a work item, whatever the lanes.
   const auto one_per_path = [](uint32_t count, uint32_t, uint32_t) { return size_t(count); };
   const std::vector<std::string> light = {"lt", "emission_cdf", "film", "stats", "light_vertices", "vertex_counts", "cells", "unit"};
   t.phases = {
