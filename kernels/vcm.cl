@@ -149,17 +149,15 @@ static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surfa
                             MergeSums* out, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
   const uint stride = (uint)(sizeof(LightVertex) / sizeof(float4));
-  uint begin_of[8][PC_LANES], end_of[8][PC_LANES], corner_of[PC_LANES], e_of[PC_LANES], found[PC_MERGE_BATCH][PC_LANES],
+  uint begin_of[PC_LANES][8], end_of[PC_LANES][8], corner_of[PC_LANES], e_of[PC_LANES], found[PC_MERGE_BATCH][PC_LANES],
       count_of[PC_LANES];
   for (uint j = 0u; j < PC_LANES; ++j) {
     corner_of[j] = e_of[j] = 0u;
     for (uint k = 0; k < PC_MERGE_BATCH; ++k) found[k][j] = 0u;
   }
   PC_EACH_LANE(j, pc_lane_bits(m)) {
-    uint b[8], e[8];
-    merge_buckets(g, lane3_at(s->p, j), b, e);
-    for (uint c = 0; c < 8u; ++c) begin_of[c][j] = b[c], end_of[c][j] = e[c];
-    e_of[j] = b[0];
+    merge_buckets(g, lane3_at(s->p, j), begin_of[j], end_of[j]);
+    e_of[j] = begin_of[j][0];
   }
   __global const LightVertex* lv = g->vertices;
   for (uint left = pc_lane_bits(m); left != 0u;) { /* the lanes with entries to walk */
@@ -169,8 +167,8 @@ static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surfa
       float3 p = lane3_at(s->p, j);
       uint c = corner_of[j], e = e_of[j], k = 0u;
       while (c < 8u && k < PC_MERGE_BATCH) {
-        if (e >= end_of[c][j]) {
-          if (++c < 8u) e = begin_of[c][j];
+        if (e >= end_of[j][c]) {
+          if (++c < 8u) e = begin_of[j][c];
           continue;
         }
         float4 entry = g->entries[e++];
