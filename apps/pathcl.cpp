@@ -447,6 +447,8 @@ int run_render(const RenderArgs& a, RankJob& job) {
     if (r.light.radius > 0) {  // the merging integrators: the first iteration's radius, its exponent
       j["merging_radius"] = r.light.radius;
       j["merging_alpha"] = r.light.alpha;
+      const uint32_t vcm = PC_VCM_CONNECT | PC_VCM_MERGE;  // vcm merging: merging's factor in its MIS weights
+      if ((r.light.vcm_mode & vcm) == vcm) j["merging_mis"] = r.light.merge_mis;
     }
     if (r.light_vertices > 0) {  // bdpt and the merging integrators: light vertices kept, per iteration
       j["light_vertices"] = r.light_vertices;

@@ -52,10 +52,12 @@ struct RenderOptions {
   uint32_t lanes = 0;
   // Photon merging (vcm, bpm, sppm; kernels/vcm.cl): the first iteration's radius in scene units (0: a pixel's
   // footprint where the camera looks, default_merging_radius; half of it for vcm), its reduction exponent, and
-  // whether vcm merges (false: bdpt's estimator, the same bits).
+  // whether vcm merges (false: bdpt's estimator, the same bits), and merging's factor in vcm's MIS weights
+  // (0: the default; kernels/vcm.cl's iteration_factors).
   double radius = 0;
   double alpha = 0.75;
   bool merge = true;
+  double merge_mis = 0;
   // The gathering integrators (instant_radiosity, radiosity; kernels/gather.cl): light paths per iteration
   // (0: the technique's default), instant radiosity's clamp of the geometry term (0: none) and whether
   // radiosity's camera paths gather one bounce (false: each triangle's radiosity shown).

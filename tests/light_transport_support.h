@@ -29,6 +29,7 @@ struct Options {
   int strategy_s = -1, strategy_t = -1;  // bdpt: this strategy alone
   bool merge = true;                      // vcm: merging (false: bdpt's estimator)
   double radius = 0;                      // vcm, bpm, sppm: the first iteration's radius (0: the default)
+  double merge_mis = 0;                   // vcm: merging's factor in the MIS weights (0: the default)
   uint32_t light_paths = 0;               // instant_radiosity, radiosity: light paths per iteration (0: the default)
   double clamp = 0;                       // instant_radiosity: the geometry term's clamp (0: none)
   bool final_gather = true;               // radiosity
@@ -53,6 +54,7 @@ inline RenderResult render_with(const DeviceScene& scene, const Options& o) {
   opt.resume = o.resume;
   opt.merge = o.merge;
   opt.radius = o.radius;
+  opt.merge_mis = o.merge_mis;
   opt.light_paths = o.light_paths;
   opt.clamp = o.clamp;
   opt.final_gather = o.final_gather;
@@ -198,6 +200,7 @@ inline void expect_bitwise_deterministic(const DeviceScene& scene, const Options
   partial.integrator = o.integrator;
   partial.merge = o.merge;
   partial.radius = o.radius;
+  partial.merge_mis = o.merge_mis;
   partial.light_paths = o.light_paths;
   partial.clamp = o.clamp;
   partial.final_gather = o.final_gather;

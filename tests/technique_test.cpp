@@ -150,13 +150,19 @@ TEST(Technique, OptionsOfItsOwnAreCheckedByIt) {
   EXPECT_EQ(message("light", R"({"lanes": 3})"),
             "s.json: render.integrator.lanes: expected 1, 8 or 16 (light paths per work item; the same pixels), got 3");
   EXPECT_EQ(message("path", R"({"radius": 1})"), "s.json: render.integrator.radius: the path integrator has no option \"radius\" (it has lanes)");
-  // The merging integrators' radius, alpha and (vcm) merge, a boolean.
-  apply_technique_options(technique_named("vcm", "test"), R"({"radius": 0.5, "alpha": 0.5, "merge": false})",
+  // The merging integrators' radius, alpha and (vcm) merge, a boolean, and merge_mis, merging's factor in
+  // vcm's MIS weights (bpm and sppm weigh nothing against their merges).
+  apply_technique_options(technique_named("vcm", "test"), R"({"radius": 0.5, "alpha": 0.5, "merge": false, "merge_mis": 0.5})",
                           "s.json: render.integrator", o);
   EXPECT_EQ(o.radius, 0.5);
   EXPECT_EQ(o.alpha, 0.5);
   EXPECT_FALSE(o.merge);
+  EXPECT_EQ(o.merge_mis, 0.5);
   EXPECT_EQ(message("vcm", R"({"alpha": 1.5})"), "s.json: render.integrator.alpha: expected a number in (0, 1], got 1.5");
+  EXPECT_EQ(message("vcm", R"({"merge_mis": 0})"),
+            "s.json: render.integrator.merge_mis: expected a number in (0, 1] (merging's factor in the MIS weights), got 0");
+  EXPECT_EQ(message("bpm", R"({"merge_mis": 1})"),
+            "s.json: render.integrator.merge_mis: the bpm integrator has no option \"merge_mis\" (it has lanes, radius, alpha)");
   EXPECT_EQ(message("sppm", R"({"radius": 0})"), "s.json: render.integrator.radius: expected a radius > 0 (scene units), got 0");
   EXPECT_EQ(message("vcm", R"({"merge": "no"})"), "s.json: render.integrator.merge: expected true or false, got \"no\"");
   EXPECT_EQ(message("sppm", R"({"merge": false})"),

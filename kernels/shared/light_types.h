@@ -47,7 +47,8 @@
  * only_strategy: PC_INVALID for BDPT's every strategy; else (tests) s + (t << 16) of the one strategy it
  * takes, unweighted.
  * The merging integrators (kernels/vcm.cl): iteration i (the sample index) merges within radius
- * radius * (i + 1)^((alpha - 1) / 2), taking the strategies of vcm_mode (PC_VCM_*).
+ * radius * (i + 1)^((alpha - 1) / 2), taking the strategies of vcm_mode (PC_VCM_*), merging's density
+ * scaled by merge_mis in the MIS weights (vcm.cl's iteration_factors).
  * The gathering integrators (kernels/gather.cl): light_paths per iteration, instant radiosity's clamp of
  * the geometry term (0: none), radiosity's fixed-point scale of its per-triangle power sums and whether its
  * camera paths gather (final_gather) or show each triangle's radiosity.
@@ -55,7 +56,7 @@
  * steps' largest move.
  * bounds (16) + splat_scale (4) + square_scale (4) + light_count (4) + only_strategy (4) + radius (4) +
  * alpha (4) + vcm_mode (4) + light_paths (4) + clamp (4) + bin_scale (4) + final_gather (4) + bootstrap (4)
- * + large_step (4) + mutation_size (4) + pad (8) = 80 bytes. */
+ * + large_step (4) + mutation_size (4) + merge_mis (4) + pad (4) = 80 bytes. */
 typedef struct {
   pc_float4 bounds;   /* xyz: centre of the scene's bounding sphere (device coordinates), w: its radius */
   float splat_scale;  /* fixed-point units per unit of pixel value (a power of two) */
@@ -72,7 +73,8 @@ typedef struct {
   pc_uint bootstrap;     /* mlt */
   float large_step;
   float mutation_size;
-  pc_uint pad[2];
+  float merge_mis;       /* vcm: merging's factor in its MIS weights (1: SmallVCM's balance heuristic; bpm, sppm: 1) */
+  pc_uint pad;
 } LightTransportHeader;
 
 /* Statistics of one light-tracing work unit, added with integer atomics: rays (64 bits as two words),
@@ -111,7 +113,7 @@ typedef struct {
   X(LightTransportHeader, light_count) X(LightTransportHeader, only_strategy) X(LightTransportHeader, radius) \
   X(LightTransportHeader, alpha) X(LightTransportHeader, vcm_mode) X(LightTransportHeader, light_paths)       \
   X(LightTransportHeader, clamp) X(LightTransportHeader, bin_scale) X(LightTransportHeader, final_gather)         \
-  X(LightTransportHeader, bootstrap) X(LightTransportHeader, large_step) X(LightTransportHeader, mutation_size) X(LightVertex, wl) X(LightVertex, material) \
+  X(LightTransportHeader, bootstrap) X(LightTransportHeader, large_step) X(LightTransportHeader, mutation_size) X(LightTransportHeader, merge_mis) X(LightVertex, wl) X(LightVertex, material) \
   X(LightVertex, length) X(SplatStats, light_vertices) X(SplatStats, rays_lo) X(SplatStats, rays_hi) X(SplatStats, nan_splats) \
   X(SplatStats, inf_splats) X(SplatStats, negative_splats) X(SplatStats, overflows)
 
