@@ -670,7 +670,8 @@ int main(int argc, char** argv) {
                        "depends on the split)");
   render_cmd->add_option("--stats", ra.stats, "write statistics as JSON");
   render_cmd->add_option("--pass-spp", ra.pass_spp, "samples per pixel per kernel launch (0: adapt launches to 50-100 ms)");
-  render_cmd->add_option("--work-group", ra.work_group, "work-group size (0: 64, or 8 for 8 or 16 lanes)");
+  render_cmd->add_option("--work-group", ra.work_group,
+                         "work-group size (0: 64, or 8 for 8 or 16 lanes; on CPU devices smaller for launches of few work items)");
   render_cmd->add_option("--lanes", ra.lanes,
                          "paths per work item of the path, light and bdpt integrators: 1, 8 or 16 (the same pixels); 0: the "
                          "device's "

@@ -239,6 +239,13 @@ size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested
   return requested > 0 ? requested : std::min<size_t>(lanes > 1 ? 8 : 64, limit);
 }
 
+size_t launch_work_group(const DeviceInfo& device, size_t work_group, bool chosen, size_t items) {
+  if (chosen || !device.is_cpu) return work_group;
+  const size_t groups = 8 * std::max<size_t>(device.compute_units, 1);
+  while (work_group > 1 && items < groups * work_group) work_group /= 2;
+  return work_group;
+}
+
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
   if (work_group == 0 && items > 0)
     for (work_group = 64; items % work_group != 0;) work_group /= 2;

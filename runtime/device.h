@@ -109,6 +109,15 @@ ClBuffer upload(ClContext& cl, const std::vector<T>& data) {
 // from the global size's factors (4094 of 53,222 packets of 16 rays: 13 groups for 2 threads).
 size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested, uint32_t lanes, const std::string& what);
 
+// The work group of one launch of `items` work items of a kernel whose work group is `work_group`
+// (kernel_work_group's): itself where the user chose it (`chosen`, a --work-group option) or the device is no
+// CPU; on a CPU device, whose work groups each run whole on one of its threads, halved (down to 1) while the
+// launch would give its compute units fewer than 8 groups each. A small image's launch is few items of W x 16
+// pixels (the Cornell box at 96 x 72 with 16 lanes: 27), and in groups of 8 its 2 threads took the time of
+// 16 items where 14 would do (one thread idle a third of the second round). Any size gives the same bits;
+// PoCL compiles one work-group function for every size (list_devices' POCL_WORK_GROUP_SPECIALIZATION=0).
+size_t launch_work_group(const DeviceInfo& device, size_t work_group, bool chosen, size_t items);
+
 // Runs a 1-D kernel over work items [offset, offset + items) (rounded up to the work-group size) and returns
 // the kernel's time on the device in milliseconds, from profiling events. work_group 0: the largest power of
 // two up to 64 that divides items (the tests' kernels, which have no bound on their index), not the driver's

@@ -34,6 +34,7 @@ class DeviceWorker : public UnitWorker {
     std::unique_ptr<ClKernel> kernel;
     cl_uint first_unit_arg = 0;
     size_t work_group = 0;
+    bool work_group_chosen = false;  // --work-group: every launch takes it (else launch_work_group adapts it)
     uint32_t item_pixels = 1;
     std::function<size_t(uint32_t count, uint32_t pixels, uint32_t item_pixels)> items;  // TechniquePhase::items
     bool strided = true;  // takes pixel_stride (pixel units and the AOV pass; light paths are not strided)

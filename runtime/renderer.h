@@ -46,7 +46,7 @@ struct RenderOptions {
   uint32_t pass_spp = 0;        // samples per unit; 0 adapts units to the devices' rates
   uint32_t tile_pixels = 0;     // pixels per tile; 0: about 256 tiles
   uint32_t max_unit_pixels = 0; // 0: as the devices' rates allow
-  size_t work_group = 0;        // 0: 64 (or the kernel's limit); 8 for the lane kernels
+  size_t work_group = 0;        // 0: 64 (or the kernel's limit); 8 for the lane kernels; less for small CPU launches
   // Paths per work item of techniques over lanes (path, kernels/lanes.cl): 1, 8 or 16, the same pixels; 0:
   // each device's own (path_lanes, runtime/device.h), 1 for the other techniques.
   uint32_t lanes = 0;

@@ -72,6 +72,28 @@ TEST(Determinism, WorkGroupSizeDoesNotChangePixels) {
   for (size_t wg : {size_t(16), size_t(64)}) EXPECT_TRUE(bitwise_equal(reference, render_with(scene, 9, 4, wg))) << wg;
 }
 
+// A launch's work group (runtime/device.h, launch_work_group): on a CPU device of 2 compute units, the lane
+// kernels' 8 halved until the launch gives each unit 8 groups (the Cornell box at 96 x 72, 16 lanes: 27 items
+// of 256 pixels, groups of 1), kept at 8 for 128 items or more; the tests' kernels' 64 the same way; kept
+// where --work-group chose it and on GPUs, whose groups fill SIMD units. The pixels are the same bits
+// (WorkGroupSizeDoesNotChangePixels compares the default's with chosen sizes').
+TEST(Determinism, SmallLaunchesTakeSmallerWorkGroupsOnCpus) {
+  DeviceInfo cpu;
+  cpu.is_cpu = true;
+  cpu.compute_units = 2;
+  EXPECT_EQ(launch_work_group(cpu, 8, false, 27), 1u);
+  EXPECT_EQ(launch_work_group(cpu, 8, false, 40), 2u);
+  EXPECT_EQ(launch_work_group(cpu, 8, false, 64), 4u);
+  EXPECT_EQ(launch_work_group(cpu, 8, false, 128), 8u);
+  EXPECT_EQ(launch_work_group(cpu, 64, false, 6912), 64u);
+  EXPECT_EQ(launch_work_group(cpu, 64, false, 100), 4u);
+  EXPECT_EQ(launch_work_group(cpu, 8, true, 27), 8u);
+  DeviceInfo gpu;
+  gpu.is_gpu = true;
+  gpu.compute_units = 132;
+  EXPECT_EQ(launch_work_group(gpu, 64, false, 27), 64u);
+}
+
 // Every bundled scene and every test scene that loads.
 std::vector<std::string> all_scene_files() {
   std::vector<std::string> files;
