@@ -261,6 +261,17 @@ nlohmann::json phase_stats(const RenderResult& r) {
 // header's "aovs" lists them, and with ids "shape_id_names" and "material_id_names" say what each id is: a
 // JSON array of the shapes' labels ("shapes[3] (meshes/box.obj)") or the materials' names, id 1 first (0 is
 // no hit).
+// The merging integrators' settings (vcm, bpm, sppm; none for the others), for --stats and the EXR header:
+// the first iteration's radius in scene units, its exponent and, where vcm merges, merging's factor in its
+// MIS weights.
+std::vector<std::pair<std::string, float>> merging_settings(const LightTransportHeader& lt) {
+  if (!(lt.radius > 0)) return {};
+  std::vector<std::pair<std::string, float>> s = {{"merging_radius", lt.radius}, {"merging_alpha", lt.alpha}};
+  const uint32_t vcm = PC_VCM_CONNECT | PC_VCM_MERGE;
+  if ((lt.vcm_mode & vcm) == vcm) s.push_back({"merging_mis", lt.merge_mis});
+  return s;
+}
+
 void add_aov_layers(const Film& film, const SceneDescription& scene, Image& image) {
   std::string names;
   for (const Film::Aov& aov : film.aovs) {
@@ -393,6 +404,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
                       {"device", used_devices(r)}, {"seed", std::to_string(opt.seed)},
                       {"max_depth", std::to_string(opt.max_depth)}, {"sampler", sampler_name(opt.sampler)},
                       {"stop_reason", r.stop_reason}, {"determinism", r.determinism}};
+  for (const auto& [key, value] : merging_settings(r.light)) image.attributes[key] = nlohmann::json(value).dump();
   add_aov_layers(r.film, s.description, image);
   double denoise_seconds = 0;
   if (a.denoise) {  // the beauty denoised, the raw one kept beside it (layer "raw")
@@ -444,12 +456,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
       j["ranks"] = rank_stats(r, job.size(), lost);
       j["lost_ranks"] = lost.size();
     }
-    if (r.light.radius > 0) {  // the merging integrators: the first iteration's radius, its exponent
-      j["merging_radius"] = r.light.radius;
-      j["merging_alpha"] = r.light.alpha;
-      const uint32_t vcm = PC_VCM_CONNECT | PC_VCM_MERGE;  // vcm merging: merging's factor in its MIS weights
-      if ((r.light.vcm_mode & vcm) == vcm) j["merging_mis"] = r.light.merge_mis;
-    }
+    for (const auto& [key, value] : merging_settings(r.light)) j[key] = value;
     if (r.light_vertices > 0) {  // bdpt and the merging integrators: light vertices kept, per iteration
       j["light_vertices"] = r.light_vertices;
       j["light_vertices_per_iteration"] = double(r.light_vertices) / std::max(rendered_spp, 1u);

@@ -1,6 +1,7 @@
 // The command line: exit codes, messages, and that bad input never leaves an output file.
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -129,6 +130,34 @@ TEST(Cli, RenderWritesExrPngAndStats) {
   // A second render of the same features takes the kernel from the cache.
   ASSERT_EQ(run_pathcl("render " + scene("tiny.json") + " -o " + out + " --stats " + stats + " --spp 1"), 0);
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(stats))["kernel_from_cache"].get<bool>());
+  EXPECT_EQ(read_exr(out).attributes.count("merging_radius"), 0u);
+
+  // The merging integrators' settings, in the statistics and the EXR header: vcm's merge_mis where the
+  // scene sets it (and its default, 0.25, where not), bpm without one.
+  nlohmann::json tiny = nlohmann::json::parse(read_text_file(scene("tiny.json")));
+  tiny["shapes"][0]["file"] = fs::absolute(fs::path(scene("tiny.json")).parent_path() / tiny["shapes"][0]["file"].get<std::string>()).string();
+  tiny["render"]["integrator"] = {{"type", "vcm"}, {"radius", 0.5}, {"merge_mis", 1}};
+  const std::string vcm = write_temp_file("vcm-tiny.json", tiny.dump());
+  for (const auto& [args, mis] : std::vector<std::pair<std::string, double>>{{vcm, 1.0}, {scene("tiny.json") + " --integrator vcm", 0.25},
+                                                                             {scene("tiny.json") + " --integrator bpm", 0.0}}) {
+    ASSERT_EQ(run_pathcl("render " + args + " --spp 1 --lanes 1 -o " + out + " --stats " + stats, &err), 0) << err;
+    j = nlohmann::json::parse(std::ifstream(stats));
+    const std::map<std::string, std::string> header = read_exr(out).attributes;
+    for (const char* key : {"merging_radius", "merging_alpha"}) {
+      ASSERT_TRUE(j.contains(key)) << args << ": " << key;
+      EXPECT_EQ(header.at(key), j[key].dump()) << args << ": " << key;
+    }
+    EXPECT_GT(j["merging_radius"].get<double>(), 0.0);
+    if (args == vcm) EXPECT_EQ(j["merging_radius"], 0.5);
+    EXPECT_EQ(j["merging_alpha"], 0.75);
+    if (mis > 0) {
+      EXPECT_EQ(j["merging_mis"], mis) << args;
+      EXPECT_EQ(header.at("merging_mis"), j["merging_mis"].dump()) << args;
+    } else {
+      EXPECT_FALSE(j.contains("merging_mis")) << args;
+      EXPECT_EQ(header.count("merging_mis"), 0u) << args;
+    }
+  }
 }
 
 // Checked before the scene is loaded, so no render is lost at its end to a path that cannot be written.
