@@ -250,17 +250,6 @@ nlohmann::json rank_stats(const RenderResult& r, int ranks, const std::vector<Ra
   return list;
 }
 
-// Device time of each named launch, in seconds.
-nlohmann::json phase_stats(const RenderResult& r) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const PhaseTime& p : r.phases) j[p.name] = p.ms * 1e-3;
-  return j;
-}
-
-// The film's AOVs as EXR layers named as --aov takes them, channels by kind (AovInfo::channels); the
-// header's "aovs" lists them, and with ids "shape_id_names" and "material_id_names" say what each id is: a
-// JSON array of the shapes' labels ("shapes[3] (meshes/box.obj)") or the materials' names, id 1 first (0 is
-// no hit).
 // The merging integrators' settings (vcm, bpm, sppm; none for the others), for --stats and the EXR header:
 // the first iteration's radius in scene units, its exponent and, where vcm merges, merging's factor in its
 // MIS weights.
@@ -272,6 +261,17 @@ std::vector<std::pair<std::string, float>> merging_settings(const LightTransport
   return s;
 }
 
+// Device time of each named launch, in seconds.
+nlohmann::json phase_stats(const RenderResult& r) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const PhaseTime& p : r.phases) j[p.name] = p.ms * 1e-3;
+  return j;
+}
+
+// The film's AOVs as EXR layers named as --aov takes them, channels by kind (AovInfo::channels); the
+// header's "aovs" lists them, and with ids "shape_id_names" and "material_id_names" say what each id is: a
+// JSON array of the shapes' labels ("shapes[3] (meshes/box.obj)") or the materials' names, id 1 first (0 is
+// no hit).
 void add_aov_layers(const Film& film, const SceneDescription& scene, Image& image) {
   std::string names;
   for (const Film::Aov& aov : film.aovs) {

@@ -114,7 +114,7 @@ size_t kernel_work_group(const ClContext& cl, cl_kernel kernel, size_t requested
 // CPU; on a CPU device, whose work groups each run whole on one of its threads, halved (down to 1) while the
 // launch would give its compute units fewer than 8 groups each. A small image's launch is few items of W x 16
 // pixels (the Cornell box at 96 x 72 with 16 lanes: 27), and in groups of 8 its 2 threads took the time of
-// 16 items where 14 would do (one thread idle a third of the second round). Any size gives the same bits;
+// 16 items where 14 would do (one thread idle for most of the second round). Any size gives the same bits;
 // PoCL compiles one work-group function for every size (list_devices' POCL_WORK_GROUP_SPECIALIZATION=0).
 size_t launch_work_group(const DeviceInfo& device, size_t work_group, bool chosen, size_t items);
 
