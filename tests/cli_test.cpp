@@ -148,7 +148,9 @@ TEST(Cli, RenderWritesExrPngAndStats) {
       EXPECT_EQ(header.at(key), j[key].dump()) << args << ": " << key;
     }
     EXPECT_GT(j["merging_radius"].get<double>(), 0.0);
-    if (args == vcm) EXPECT_EQ(j["merging_radius"], 0.5);
+    if (args == vcm) {
+      EXPECT_EQ(j["merging_radius"], 0.5);
+    }
     EXPECT_EQ(j["merging_alpha"], 0.75);
     if (mis > 0) {
       EXPECT_EQ(j["merging_mis"], mis) << args;
