@@ -247,6 +247,7 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
   float radius2 = iteration_radius2(lt, sample_begin), inv_cell = grid_inv_cell(radius2);
   MisFactors mis = iteration_factors(lt, h, radius2);
   const uint table = grid_table(path_count), slots = light_vertex_slots(h);
+  const bool merge = (lt->vcm_mode & PC_VCM_MERGE) != 0u; /* else no grid: vcm with "merge": false is bdpt */
   for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
     LaneU index = (LaneU)(b) + lane;
     LaneI m = index < path_count;
@@ -257,7 +258,7 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
                             light_vertices + b * slots, count);
     PC_EACH_LANE(j, pc_lane_bits(m)) {
       vertex_counts[b + j] = count[j];
-      for (uint k = 0; k < count[j]; ++k)
+      for (uint k = 0; merge && k < count[j]; ++k)
         atomic_inc(cells + grid_bucket_of(light_vertices[(b + j) * slots + k].p.xyz, lt->bounds.xyz, inv_cell, table));
     }
   }
@@ -294,7 +295,7 @@ __kernel void vcm_scan_add(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
 __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,
                           __global const uint* vertex_counts, __global uint* cells, __global float4* entries, PC_VCM_UNIT) {
   uint item = get_global_id(0);
-  if (item >= path_count) return;
+  if (item >= path_count || !(lt->vcm_mode & PC_VCM_MERGE)) return;
   float inv_cell = grid_inv_cell(iteration_radius2(lt, sample_begin));
   uint table = grid_table(path_count), slots = light_vertex_slots(h);
   for (uint k = 0; k < vertex_counts[item]; ++k) {
