@@ -195,7 +195,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       radiance = lane3_select(radiance, lane3_add(radiance, lane3_scale(lane3_mul(throughput, c), w)), reach);
     }
 #ifdef PC_VCM
-    if (pc_any_(nondelta) && (lt->vcm_mode & PC_VCM_MERGE) != 0u) {
+    if (pc_any_(nondelta) && vcm_merges(lt)) {
       merge_at(sc, grid, &s, &mat, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, nondelta, lt, merged,
                counts);
       if (sppm) { /* SPPM's visible points */

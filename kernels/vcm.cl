@@ -65,6 +65,9 @@ static inline float iteration_radius2(__constant const LightTransportHeader* lt,
   return lt->radius * lt->radius * pc_powr((float)(iteration + 1u), lt->alpha - 1.0f);
 }
 
+/* Whether the iteration merges (vcm with "merge": false does not: bdpt's estimator, and no grid is built). */
+static inline bool vcm_merges(__constant const LightTransportHeader* lt) { return (lt->vcm_mode & PC_VCM_MERGE) != 0u; }
+
 /* The merging factors of an iteration (light_path.cl's MisFactors). Merging's density in the weights is
  * eta = merge_mis pi r^2 N. SmallVCM's balance heuristic (merge_mis 1) takes a merge for a sample of density
  * pi r^2 N p; but how many light vertices fall within r fluctuates too, which that density does not see, so
@@ -74,7 +77,7 @@ static inline float iteration_radius2(__constant const LightTransportHeader* lt,
  * estimate (MergeGrid.normalization) is not scaled. */
 static inline MisFactors iteration_factors(__constant const LightTransportHeader* lt, __constant const SceneHeader* h, float radius2) {
   MisFactors m;
-  bool merge = (lt->vcm_mode & PC_VCM_MERGE) != 0u, sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
+  bool merge = vcm_merges(lt), sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
   m.connect = (lt->vcm_mode & PC_VCM_CONNECT) != 0u;
   float eta = lt->merge_mis * (PC_PI * radius2 * (float)(h->width * h->height));
   m.vm = merge && !sppm ? eta : 0.0f;
@@ -247,7 +250,7 @@ PC_KERNEL_BODY void vcm_light_item(const SceneData* scene, __constant const Ligh
   float radius2 = iteration_radius2(lt, sample_begin), inv_cell = grid_inv_cell(radius2);
   MisFactors mis = iteration_factors(lt, h, radius2);
   const uint table = grid_table(path_count), slots = light_vertex_slots(h);
-  const bool merge = (lt->vcm_mode & PC_VCM_MERGE) != 0u; /* else no grid: vcm with "merge": false is bdpt */
+  const bool merge = vcm_merges(lt);
   for (uint b = first; b < min(first + PC_ITEM_PIXELS, path_count); b += PC_LANES) {
     LaneU index = (LaneU)(b) + lane;
     LaneI m = index < path_count;
@@ -295,7 +298,7 @@ __kernel void vcm_scan_add(PC_SCENE_PARAMS, __global uint* cells, PC_VCM_UNIT) {
 __kernel void vcm_scatter(PC_SCENE_PARAMS, __constant const LightTransportHeader* lt, __global const LightVertex* light_vertices,
                           __global const uint* vertex_counts, __global uint* cells, __global float4* entries, PC_VCM_UNIT) {
   uint item = get_global_id(0);
-  if (item >= path_count || !(lt->vcm_mode & PC_VCM_MERGE)) return;
+  if (item >= path_count || !vcm_merges(lt)) return;
   float inv_cell = grid_inv_cell(iteration_radius2(lt, sample_begin));
   uint table = grid_table(path_count), slots = light_vertex_slots(h);
   for (uint k = 0; k < vertex_counts[item]; ++k) {

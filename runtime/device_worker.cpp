@@ -19,6 +19,7 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
   layout_ = settings.layout;
   fault_ = settings.fault;
   lanes_ = !t.lanes ? 1 : settings.lanes != 0 ? settings.lanes : path_lanes(cl.info);
+  work_group_chosen_ = settings.work_group > 0;
   std::string options = settings.build_options;
   if (fault_.perturb) options += " -DPC_DEBUG_PERTURB";
   TechniqueBuild build{&cl.info, lanes_, settings.max_depth, settings.splat_pairs};
@@ -87,7 +88,6 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     p.item_pixels = lanes_ > 1 ? lanes_ * PC_LANE_PIXELS : 1;  // kernels/integrator.cl, PC_ITEM_PIXELS
     p.items = tp.items;
     p.work_group = kernel_work_group(cl, p.kernel->k, settings.work_group, lanes_, tp.name);
-    p.work_group_chosen = settings.work_group > 0;
     cl_ulong private_bytes = 0;
     CL_CHECK(clGetKernelWorkGroupInfo(p.kernel->k, cl.info.device, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof private_bytes,
                                       &private_bytes, nullptr));
@@ -110,7 +110,6 @@ void DeviceWorker::prepare(const DeviceScene& scene, const SceneHeader& header, 
     aov.first_unit_arg = arg;
     aov.item_pixels = aov_lanes;
     aov.work_group = kernel_work_group(cl, aov.kernel->k, settings.work_group, aov_lanes, "aov");
-    aov.work_group_chosen = settings.work_group > 0;
     phases_.push_back(std::move(aov));
   }
   first_launches();
@@ -184,7 +183,7 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
       const size_t items =
           p.items ? p.items(pixel_count, layout_.pixels, p.item_pixels) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
       double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items,
-                                         launch_work_group(cl_->info, p.work_group, p.work_group_chosen, items))
+                                         launch_work_group(cl_->info, p.work_group, work_group_chosen_, items))
                             : 0.0;
       if (out) {
         out->kernel_ms += ms;

@@ -34,7 +34,6 @@ class DeviceWorker : public UnitWorker {
     std::unique_ptr<ClKernel> kernel;
     cl_uint first_unit_arg = 0;
     size_t work_group = 0;
-    bool work_group_chosen = false;  // --work-group: every launch takes it (else launch_work_group adapts it)
     uint32_t item_pixels = 1;
     std::function<size_t(uint32_t count, uint32_t pixels, uint32_t item_pixels)> items;  // TechniquePhase::items
     bool strided = true;  // takes pixel_stride (pixel units and the AOV pass; light paths are not strided)
@@ -62,6 +61,7 @@ class DeviceWorker : public UnitWorker {
   ClBuffer film_, stats_, light_header_, emission_cdf_, aov_header_, prim_shapes_, instance_shapes_;
   std::deque<ClBuffer> technique_buffers_;  // Technique::buffers, in order (a deque: bound by address)
   uint32_t lanes_ = 1;
+  bool work_group_chosen_ = false;  // --work-group: every launch takes it (else launch_work_group adapts it)
   uint64_t private_bytes_ = 0;
   double first_launch_ms_ = 0;  // first_launches(): PoCL's code generation, part of the kernel build
   uint32_t unit_items_ = 0;  // the largest unit it takes (technique_unit_items)

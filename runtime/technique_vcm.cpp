@@ -15,8 +15,8 @@ namespace {
 
 // A grid entry of kernels/vcm.cl: a float4.
 constexpr size_t kGridEntryBytes = 4 * sizeof(float);
-// Merging's factor in vcm's MIS weights where the scene does not set merge_mis.
-constexpr double kDefaultMergeMis = 0.25;
+// Merging's factor in vcm's MIS weights: the scene's merge_mis, else 0.25 (see setup_light).
+double merge_mis(const RenderOptions& o) { return o.merge_mis > 0 ? o.merge_mis : 0.25; }
 
 // kernels/vcm.cl's grid_table: buckets for a unit of `paths` light paths.
 size_t grid_table(uint32_t paths) {
@@ -61,7 +61,7 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
   // A unit traces every camera path of its iteration: whole iterations where the time allows.
   t.cpu_unit_seconds = 2.0;
   t.key_settings = [](const RenderOptions& o) {
-    return std::vector<double>{o.radius, o.alpha, o.merge ? 1.0 : 0.0, o.merge_mis > 0 ? o.merge_mis : kDefaultMergeMis};
+    return std::vector<double>{o.radius, o.alpha, o.merge ? 1.0 : 0.0, merge_mis(o)};
   };
   t.setup_light = [mode](LightTransportSetup& setup, const DeviceScene& scene, const RenderOptions& o) {
     LightTransportHeader& lt = setup.header;
@@ -78,7 +78,7 @@ Technique merging_technique(const char* name, uint32_t id, uint32_t mode, const 
     // paths connections sample mostly to them (vcm's relMSE on the Cornell box and on glass-metal under a
     // spot light 1.3 to 1.4 times lower at 4 to 256 spp; docs/light-transport.md).
     // bpm and sppm weigh nothing against their merges: 1, which changes nothing.
-    lt.merge_mis = mode & PC_VCM_CONNECT ? float(o.merge_mis > 0 ? o.merge_mis : kDefaultMergeMis) : 1.0f;
+    lt.merge_mis = mode & PC_VCM_CONNECT ? float(merge_mis(o)) : 1.0f;
   };
   t.options = {lanes_option("light and camera paths"),
                number_option("radius", "a radius > 0 (scene units)", [](double v) { return v > 0 && std::isfinite(v); },
