@@ -174,22 +174,29 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
                           uint32_t sample_count, UnitOutput* out) {
   const UnitStats zero{};
   CL_CHECK(clEnqueueWriteBuffer(cl_->queue, stats_.mem, CL_FALSE, 0, sizeof zero, &zero, 0, nullptr, nullptr));
-  // Per-sample techniques run their phases once per sample, in order (Technique::per_sample).
+  // Per-sample techniques run their phases once per sample, in order (Technique::per_sample). The launches
+  // go to the in-order queue one after another, and the host waits for the last one only.
   const bool per_sample = technique_->per_sample;
+  std::vector<std::pair<size_t, cl_event>> launched;  // (phase, event)
   for (uint32_t s = sample_begin; s < sample_begin + sample_count; s += per_sample ? 1 : sample_count) {
     for (size_t i = 0; i < phases_.size(); ++i) {
       Phase& p = phases_[i];
       set_unit_args(p, pixel_begin, pixel_count, pixel_stride, s, per_sample ? 1 : sample_count);
       const size_t items =
           p.items ? p.items(pixel_count, layout_.pixels, p.item_pixels) : (pixel_count + p.item_pixels - 1) / p.item_pixels;
-      double ms = items > 0 ? run_kernel(*cl_, p.kernel->k, items,
-                                         launch_work_group(cl_->info, p.work_group, work_group_chosen_, items))
-                            : 0.0;
-      if (out) {
-        out->kernel_ms += ms;
-        if (out->phases.size() <= i) out->phases.push_back({p.name, 0.0});
-        out->phases[i].ms += ms;
-      }
+      if (items > 0)
+        launched.emplace_back(
+            i, enqueue_kernel(*cl_, p.kernel->k, items, launch_work_group(cl_->info, p.work_group, work_group_chosen_, items)));
+    }
+  }
+  if (!launched.empty()) CL_CHECK(clWaitForEvents(1, &launched.back().second));
+  if (out && sample_count > 0)
+    while (out->phases.size() < phases_.size()) out->phases.push_back({phases_[out->phases.size()].name, 0.0});
+  for (const auto& [i, event] : launched) {
+    const double ms = kernel_event_ms(event);
+    if (out) {
+      out->kernel_ms += ms;
+      out->phases[i].ms += ms;
     }
   }
 }
