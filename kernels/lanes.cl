@@ -114,8 +114,9 @@ typedef float LaneF;
 typedef int LaneI;
 typedef uint LaneU;
 typedef lane3f Lane3;
-/* The lanes from PC_LANES consecutive values; a LaneF's bits as a LaneU. */
+/* The lanes from PC_LANES consecutive values and into them; a LaneF's (or LaneI's) bits as a LaneU. */
 #define lane_load(p) (*(p))
+#define lane_store(v, p) (*(p) = (v))
 #define lane_as_u(x) as_uint(x)
 #elif PC_LANES == 8
 typedef float8 LaneF;
@@ -123,6 +124,7 @@ typedef int8 LaneI;
 typedef uint8 LaneU;
 typedef lane3f8 Lane3;
 #define lane_load(p) vload8(0, p)
+#define lane_store(v, p) vstore8(v, 0, p)
 #define lane_as_u(x) as_uint8(x)
 #elif PC_LANES == 16
 typedef float16 LaneF;
@@ -130,6 +132,7 @@ typedef int16 LaneI;
 typedef uint16 LaneU;
 typedef lane3f16 Lane3;
 #define lane_load(p) vload16(0, p)
+#define lane_store(v, p) vstore16(v, 0, p)
 #define lane_as_u(x) as_uint16(x)
 #else
 #error "PC_LANES: 1, 8 or 16 paths per work item"

@@ -90,15 +90,15 @@ static inline MisFactors iteration_factors(__constant const LightTransportHeader
  * its queries, which must agree). */
 static inline float grid_inv_cell(float radius2) { return 0.5f / sqrt(radius2); }
 
-static inline int grid_coordinate(float q) { return (int)clamp(q, -1.0e9f, 1.0e9f); }
-
-static inline uint grid_bucket(int x, int y, int z, uint table) {
-  return (((uint)x * 73856093u) ^ ((uint)y * 19349663u) ^ ((uint)z * 83492791u)) & (table - 1u);
-}
+/* A cell's coordinate from its floor (a float or the lanes'), and its bucket: one expression for the grid's
+ * build (one vertex at a time) and its queries (the lanes' at once). */
+#define PC_GRID_COORDINATE(q) pc_to_int_(clamp((q), -1.0e9f, 1.0e9f))
+#define PC_GRID_BUCKET(as_u, x, y, z, table) \
+  (((as_u(x) * 73856093u) ^ (as_u(y) * 19349663u) ^ (as_u(z) * 83492791u)) & ((table) - 1u))
 
 static inline uint grid_bucket_of(float3 p, float3 origin, float inv_cell, uint table) {
   float3 q = floor((p - origin) * inv_cell);
-  return grid_bucket(grid_coordinate(q.x), grid_coordinate(q.y), grid_coordinate(q.z), table);
+  return PC_GRID_BUCKET(as_uint, PC_GRID_COORDINATE(q.x), PC_GRID_COORDINATE(q.y), PC_GRID_COORDINATE(q.z), table);
 }
 
 /* Adds merge c to the sums (NaN, infinite or negative ones counted and dropped, as splats are). */
@@ -122,21 +122,24 @@ static inline void merge_add(MergeSums* m, float3 c, __constant const LightTrans
   }
 }
 
-/* The entries [begin, end) of the grid buckets a ball of radius r about p can reach: the 2 x 2 x 2 cells about
- * it (cells are 2 r wide), each bucket once (two cells hashed into one bucket: its entries once); empty
- * ranges for the others. */
-static inline void merge_buckets(const MergeGrid* g, float3 p, uint* begin, uint* end) {
-  float3 q = (p - g->origin) * g->inv_cell, fl = floor(q);
-  int x = grid_coordinate(fl.x), y = grid_coordinate(fl.y), z = grid_coordinate(fl.z);
-  int dx = q.x - fl.x < 0.5f ? -1 : 1, dy = q.y - fl.y < 0.5f ? -1 : 1, dz = q.z - fl.z < 0.5f ? -1 : 1;
-  uint seen[8];
+/* The entries [begin[c][j], end[c][j]) of the grid buckets a ball of radius r about lane j's p can reach:
+ * the 2 x 2 x 2 cells c about it (cells are 2 r wide), each bucket once (two cells hashed into one bucket:
+ * its entries once); empty ranges for the others. The lanes' buckets at once, their ranges by gathers. */
+static inline void merge_buckets(const MergeGrid* g, Lane3 p, uint begin[8][PC_LANES], uint end[8][PC_LANES]) {
+  LaneF qx = (p.x - g->origin.x) * g->inv_cell, qy = (p.y - g->origin.y) * g->inv_cell, qz = (p.z - g->origin.z) * g->inv_cell;
+  LaneF fx = floor(qx), fy = floor(qy), fz = floor(qz);
+  LaneI x = PC_GRID_COORDINATE(fx), y = PC_GRID_COORDINATE(fy), z = PC_GRID_COORDINATE(fz);
+  LaneI dx = select((LaneI)(1), (LaneI)(-1), qx - fx < 0.5f), dy = select((LaneI)(1), (LaneI)(-1), qy - fy < 0.5f),
+        dz = select((LaneI)(1), (LaneI)(-1), qz - fz < 0.5f);
+  LaneU seen[8];
   for (uint corner = 0; corner < 8u; ++corner) {
-    uint b = grid_bucket(x + ((corner & 1u) ? dx : 0), y + ((corner & 2u) ? dy : 0), z + ((corner & 4u) ? dz : 0), g->table);
+    LaneU b = PC_GRID_BUCKET(lane_as_u, (corner & 1u) ? x + dx : x, (corner & 2u) ? y + dy : y, (corner & 4u) ? z + dz : z,
+                             g->table);
     seen[corner] = b;
-    bool again = false;
-    for (uint j = 0; j < corner; ++j) again |= seen[j] == b;
-    begin[corner] = again ? 0u : g->cells[b];
-    end[corner] = again ? 0u : g->cells[b + 1u];
+    LaneI again = (LaneI)(0);
+    for (uint k = 0; k < corner; ++k) again |= seen[k] == b;
+    lane_store(select(lane_gather_uint(g->cells, 1u, b), (LaneU)(0u), again), begin[corner]);
+    lane_store(select(lane_gather_uint(g->cells + 1, 1u, b), (LaneU)(0u), again), end[corner]);
   }
 }
 
@@ -158,16 +161,14 @@ static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surfa
                             MergeSums* out, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
   const uint stride = (uint)(sizeof(LightVertex) / sizeof(float4));
-  uint begin_of[PC_LANES][8], end_of[PC_LANES][8], corner_of[PC_LANES], e_of[PC_LANES], found[PC_MERGE_BATCH][PC_LANES],
+  uint begin_of[8][PC_LANES], end_of[8][PC_LANES], corner_of[PC_LANES], e_of[PC_LANES], found[PC_MERGE_BATCH][PC_LANES],
       count_of[PC_LANES];
   for (uint j = 0u; j < PC_LANES; ++j) {
     corner_of[j] = e_of[j] = 0u;
     for (uint k = 0; k < PC_MERGE_BATCH; ++k) found[k][j] = 0u;
   }
-  PC_EACH_LANE(j, pc_lane_bits(m)) {
-    merge_buckets(g, lane3_at(s->p, j), begin_of[j], end_of[j]);
-    e_of[j] = begin_of[j][0];
-  }
+  merge_buckets(g, s->p, begin_of, end_of);
+  for (uint j = 0u; j < PC_LANES; ++j) e_of[j] = begin_of[0][j];
   __global const LightVertex* lv = g->vertices;
   for (uint left = pc_lane_bits(m); left != 0u;) { /* the lanes with entries to walk */
     uint most = 0u;
@@ -176,8 +177,8 @@ static inline void merge_at(const SceneData* sc, const MergeGrid* g, const Surfa
       float3 p = lane3_at(s->p, j);
       uint c = corner_of[j], e = e_of[j], k = 0u;
       while (c < 8u && k < PC_MERGE_BATCH) {
-        if (e >= end_of[j][c]) {
-          if (++c < 8u) e = begin_of[j][c];
+        if (e >= end_of[c][j]) {
+          if (++c < 8u) e = begin_of[c][j];
           continue;
         }
         float4 entry = g->entries[e++];
