@@ -29,7 +29,7 @@
  * Returns each lane's radiance estimate. The lanes go bounce by bounce together, each doing the one-lane
  * operations, its connections lane by lane in order. VCM (vcm.cl): in the lanes outside `own`, the unit
  * holds another unit's light subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each
- * non-delta vertex, with the grid's light vertices, lane j's into merged[j]); without connections (bpm, sppm) an
+ * non-delta vertex but vcm's first (below), with the grid's light vertices, lane j's into merged[j]); without connections (bpm, sppm) an
  * emitter counts only where the path to it is specular (merging makes the others), and SPPM stops at its
  * first non-delta vertex, after next-event estimation and merging there, unweighted. */
 static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const LightTransportHeader* lt,
@@ -120,6 +120,12 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
     key_sample4_lanes(h, key, pixel, PC_DIM_LIGHT(depth), &ul0, &ul1, &ul2, &ul3);
     key_sample4_lanes(h, key, pixel, PC_DIM_BSDF(depth), &ub0, &ub1, &ub2, &ub3);
     LaneI nondelta = live & !bsdf_is_delta_lanes(mat.type);
+    /* vcm (merging and connections) takes no merges at the camera's first vertex: light tracing (t = 1) makes
+     * the same paths there, and a merge within half a pixel's footprint is light tracing through a blurred
+     * pixel, which cost a third of the merges' time. That strategy is left out of every weight: vm_here and
+     * merge_here (vcm_scatter_lanes) are 0 at depth 0, and light_path.cl's t = 1 weight has no merge. */
+    const bool merges_here = depth > 0u || !(mis->vc > 0.0f);
+    const float vm_here = merges_here ? mis->vm : 0.0f;
 
     /* s = 1: next-event estimation, as the path integrator takes it, weighted against every strategy
      * (SPPM: its direct light, unweighted). */
@@ -142,7 +148,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
           LaneF bsdf_dir = select(bsdf_pdf_lanes(&mat, wo_local, direct.wi_local, nee), (LaneF)(0.0f), ls->delta);
           LaneF bsdf_rev = bsdf_pdf_lanes(&mat, direct.wi_local, wo_local, nee);
           LaneF others = bsdf_dir / direct_pdf + emit * fabs(pc_dot(ls->wi, s.ng)) / (direct_pdf * cos_at_light) *
-                                                     (mis->vm + dvcm + dvc * bsdf_rev);
+                                                     (vm_here + dvcm + dvc * bsdf_rev);
           w = strategy_weight(lt, mis, (LaneU)(1u), (LaneU)(t_count), others);
         }
 #ifdef PC_HAS_CUTOUTS
@@ -176,7 +182,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       LaneU slot = lane_load(slot_of), length = lane_load(length_of);
       LaneF others, y_err;
       Lane3 y_p, y_ng;
-      Lane3 c = connect_vertices(sc, &s, &mat, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, lv, slot, connecting, &others, &y_p,
+      Lane3 c = connect_vertices(sc, &s, &mat, &frame, wo_local, wo_ng, dvcm, dvc, mis->vm, vm_here, lv, slot, connecting, &others, &y_p,
                                  &y_err, &y_ng);
       LaneI shoot = connecting & lane3_any_positive(c);
       if (!pc_any_(shoot)) continue;
@@ -195,7 +201,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
       radiance = lane3_select(radiance, lane3_add(radiance, lane3_scale(lane3_mul(throughput, c), w)), reach);
     }
 #ifdef PC_VCM
-    if (pc_any_(nondelta) && vcm_merges(lt)) {
+    if (pc_any_(nondelta) && vcm_merges(lt) && merges_here) {
       merge_at(sc, grid, &s, &mat, &frame, wo_local, wo_ng, depth, throughput, dvcm, dvm, mis->vc, sppm, nondelta, lt, merged,
                counts);
       if (sppm) { /* SPPM's visible points */
@@ -212,7 +218,7 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
     Lane3 wi;
     live = scatter_lanes(&mat, &frame, s.ng, wo_local, wo_ng, ub0, ub1, ub2, live, &bs, &wi);
     if (!pc_any_(live)) break;
-    vcm_scatter_lanes(&mat, &bs, wo_local, wi, s.ng, live, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
+    vcm_scatter_lanes(&mat, &bs, wo_local, wi, s.ng, live, vm_here, mis->vc, merges_here ? 1.0f : 0.0f, &dvcm, &dvc, &dvm);
     specular &= bs.delta;
     throughput = lane3_select(throughput, lane3_mul(throughput, bs.weight), live);
     eta_scale = select(eta_scale, eta_scale * bs.eta2, live);

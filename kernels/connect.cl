@@ -8,11 +8,12 @@
 #define PC_BDPT_CUTOUT_BASE 0x60000000u
 
 /* The contribution of connecting camera vertex s of the lanes in m (material mat, shading frame f, wo_local
- * towards the previous camera vertex; dvcm, dvc its partial sums) to light vertex lv[slot] of each lane,
+ * towards the previous camera vertex; dvcm, dvc its partial sums; vm_light and vm_camera the merging factor at
+ * the light vertex and at the camera vertex, light_path.cl's MisFactors.vm or 0) to light vertex lv[slot] of each lane,
  * unweighted, and the sums of the densities of the other strategies in *others (0 where nothing connects);
  * the light vertex's point, its error bound and geometric normal in *y_p, *y_err, *y_ng (the shadow ray's). */
 static inline Lane3 connect_vertices(const SceneData* sc, const SurfaceLanes* s, const MaterialLanes* mat, const FrameLanes* f,
-                                     Lane3 wo_local, LaneF wo_ng, LaneF dvcm, LaneF dvc, float vm,
+                                     Lane3 wo_local, LaneF wo_ng, LaneF dvcm, LaneF dvc, float vm_light, float vm_camera,
                                      __global const LightVertex* lv, LaneU slot, LaneI m, LaneF* others, Lane3* y_p,
                                      LaneF* y_err, Lane3* y_ng) {
   const uint stride = (uint)(sizeof(LightVertex) / sizeof(float4));
@@ -49,7 +50,7 @@ static inline Lane3 connect_vertices(const SceneData* sc, const SurfaceLanes* s,
   LaneF camera_rev = bsdf_pdf_lanes(mat, wi_local, wo_local, m);
   LaneF light_dir_a = bsdf_pdf_lanes(&my, wl_local, wc_local, m) * fabs(pc_dot(d, s->ng)) / dist2;
   LaneF light_rev = bsdf_pdf_lanes(&my, wc_local, wl_local, m);
-  *others = camera_dir_a * (vm + y_dvcm + y_dvc * light_rev) + light_dir_a * (vm + dvcm + dvc * camera_rev);
+  *others = camera_dir_a * (vm_light + y_dvcm + y_dvc * light_rev) + light_dir_a * (vm_camera + dvcm + dvc * camera_rev);
   /* The camera end's cosine (shading normal), the light end's adjoint factor (light_path.cl). */
   LaneF g = fabs(wi_local.z) * fabs(pc_dot(wl, y_ns)) * fabs(pc_dot(d, *y_ng)) / (fabs(pc_dot(wl, *y_ng)) * dist2);
   return lane3_select(lane3_splat((float3)(0.0f)), lane3_scale(lane3_mul(lane3_mul(f_camera, f_light), beta), g), m);

@@ -197,7 +197,7 @@ PC_KERNEL_BODY void ir_gather_item(const SceneData* scene, __constant const Ligh
         float others;
         float3 y_p, y_ng;
         float y_err;
-        float3 c = connect_vertices(&sc, &g.s, &m, &g.frame, g.wo_local, g.wo_ng, 0.0f, 0.0f, 0.0f, light_vertices,
+        float3 c = connect_vertices(&sc, &g.s, &m, &g.frame, g.wo_local, g.wo_ng, 0.0f, 0.0f, 0.0f, 0.0f, light_vertices,
                                     j * slots + k, 1, &others, &y_p, &y_err, &y_ng);
         if (!(c.x > 0.0f || c.y > 0.0f || c.z > 0.0f)) continue;
         if (lt->clamp > 0.0f) {

@@ -424,11 +424,12 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
 #ifdef PC_BDPT
         /* Against the camera subpath reaching this vertex (t >= 2): its density per area here, with the
          * image position uniform over the image, over the light subpath's (times the light paths per
-         * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). */
+         * sample, which is the pixel count: camera_direction_pdf is per whole image, so they cancel). No
+         * merge here: vcm takes none at the camera's first vertex (bdpt.cl). */
         LaneF cam_pdf_a = camera_direction_pdf(h, lane3_neg(cs_wi)) * fabs(pc_dot(cs_wi, s.ng)) / (cs_dist * cs_dist);
         LaneF rev = bsdf_pdf_lanes(&mat, wc_local, wl_local, connect);
         per_path *= strategy_weight(lt, mis, (LaneU)(v + 2u), (LaneU)(1u),
-                                    cam_pdf_a * (mis->vm + dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
+                                    cam_pdf_a * (dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
 #endif
         LaneI shoot = connect & (per_path != 0.0f); /* a NaN goes on, to be counted */
         if (pc_any_(shoot)) {
@@ -481,7 +482,7 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
     live = scatter_lanes(&mat, &frame, s.ng, wl_local, wl_ng, ub0, ub1, ub2, live, &bs, &wi);
     if (!pc_any_(live)) break;
 #ifdef PC_BDPT
-    vcm_scatter_lanes(&mat, &bs, wl_local, wi, s.ng, live, mis->vm, mis->vc, &dvcm, &dvc, &dvm);
+    vcm_scatter_lanes(&mat, &bs, wl_local, wi, s.ng, live, mis->vm, mis->vc, 1.0f, &dvcm, &dvc, &dvm);
 #endif
     /* Importance is not scaled by refraction: undo the radiance scaling (bs.eta2) the sample applied. */
     beta = lane3_select(beta, lane3_mul(beta, lane3_scale(bs.weight, bs.eta2 * shading_normal_factor(w_light, wi, s.ns, s.ng))),

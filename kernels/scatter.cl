@@ -60,15 +60,16 @@ PC_LANE_INLINE LaneI roulette_lanes(LaneF weight, LaneF u, LaneI roulette, LaneI
 /* The partial MIS sums dVCM, dVC and dVM of BDPT and VCM (bdpt.cl, vcm.cl, light_path.cl) after the
  * scattering *bs of the lanes in m, from wo_local to wi (Georgiev's eq. 34-36, SmallVCM's; the cosine is
  * the geometric normal ng's), with the merging factors vm and vc (0 for BDPT, whose dVC is then the same
- * bits): a delta lobe keeps dVC and dVM (its reverse density equals the forward one) and leaves no
- * strategy connecting or merging there (dVCM = 0). */
+ * bits) and merge 1 where the vertex merges, else 0 (with vm 0: vcm's first camera vertex, bdpt.cl): a delta
+ * lobe keeps dVC and dVM (its reverse density equals the forward one) and leaves no strategy connecting or
+ * merging there (dVCM = 0). */
 PC_LANE_INLINE void vcm_scatter_lanes(const MaterialLanes* mat, const BsdfSampleLanes* bs, Lane3 wo_local, Lane3 wi, Lane3 ng,
-                              LaneI m, LaneF vm, LaneF vc, LaneF* dvcm, LaneF* dvc, LaneF* dvm) {
+                              LaneI m, LaneF vm, LaneF vc, float merge, LaneF* dvcm, LaneF* dvc, LaneF* dvm) {
   LaneF cos_out = fabs(pc_dot(wi, ng));
   LaneI rough = m & !bs->delta;
   LaneF reverse = bsdf_pdf_lanes(mat, bs->wi, wo_local, rough);
   *dvc = select(*dvc * cos_out, cos_out / bs->pdf * (*dvc * reverse + *dvcm + vm), rough);
-  *dvm = select(*dvm * cos_out, cos_out / bs->pdf * (*dvm * reverse + *dvcm * vc + 1.0f), rough);
+  *dvm = select(*dvm * cos_out, cos_out / bs->pdf * (*dvm * reverse + *dvcm * vc + merge), rough);
   *dvcm = select((LaneF)(0.0f), 1.0f / bs->pdf, rough);
 }
 
