@@ -29,9 +29,9 @@
  * Returns each lane's radiance estimate. The lanes go bounce by bounce together, each doing the one-lane
  * operations, its connections lane by lane in order. VCM (vcm.cl): in the lanes outside `own`, the unit
  * holds another unit's light subpath of this key and the path takes only its merges (PC_VCM_MERGE: at each
- * non-delta vertex but vcm's first (below), with the grid's light vertices, lane j's into merged[j]); without connections (bpm, sppm) an
- * emitter counts only where the path to it is specular (merging makes the others), and SPPM stops at its
- * first non-delta vertex, after next-event estimation and merging there, unweighted. */
+ * non-delta vertex but vcm's first (below), with the grid's light vertices, lane j's into merged[j]); without
+ * connections (bpm, sppm) an emitter counts only where the path to it is specular (merging makes the others),
+ * and SPPM stops at its first non-delta vertex, after next-event estimation and merging there, unweighted. */
 static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const LightTransportHeader* lt,
                                           __global const float* emission_cdf, SampleKey key, LaneU pixel, LaneU px,
                                           LaneU py, LaneI m, const MisFactors* mis, LaneI own,
