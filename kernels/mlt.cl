@@ -18,9 +18,10 @@
  * point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth 2 .. D (B =
  * lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a prefix sum of
  * fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
- * takes a candidate in proportion to its importance (by its own number). Each step proposes a state: a large
+ * takes a candidate in proportion to its importance (systematic resampling: chain i at (i + u) / chains of the
+ * sum, u one number for the render). Each step proposes a state: a large
  * step (probability lt->large_step) takes fresh numbers and a uniform depth, a small step keeps the depth and
- * moves each number by Kelemen's exponential mutation of size up to lt->mutation_size. It is accepted with
+ * moves each number by Kelemen's mutation (sampler.cl's mlt_mutate) of size up to lt->mutation_size. It is accepted with
  * probability a = min(1, I' / I). Numbers are mutated lazily, when the evaluation reads them (sampler.cl's
  * MltSampler). Splats (Kelemen et al.'s combination of the two techniques, Metropolis samples of density
  * I / b and large steps of density 1 / (D - 1) over (depth, numbers), taken p = lt->large_step times a step,
@@ -285,12 +286,16 @@ PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const Lig
   uint b_samples = 0u;
   float b_sum = 0.0f, b_error = 0.0f;
   if (sample_begin == 0u) {
-    /* A bootstrap candidate in proportion to its importance: the first whose running sum exceeds u total. */
+    /* A bootstrap candidate in proportion to its importance: the first whose running sum exceeds
+     * (chain + u) / chains of the total, u one number for the render (systematic resampling: a candidate of
+     * importance I is the start of I / total of the chains, rounded up or down, where independent draws
+     * left some of the candidates that should start a chain with none, and others with several). */
     uint candidates = mlt_candidates(lt, h);
     float total = bootstrap[candidates];
     state[1] = as_uint(total);
     if (candidates > 0u && total > 0.0f) {
-      float target = uint_to_unit(hash4(chain, h->seed, 0x5354u, 0x41525431u)) * total;
+      float u = uint_to_unit(hash4(0u, h->seed, 0x5354u, 0x41525431u));
+      float target = ((float)chain + u) / (float)(h->width * h->height) * total;
       uint lo = 0u, hi = candidates - 1u;
       while (lo < hi) {
         uint mid = (lo + hi) / 2u;

@@ -68,7 +68,7 @@ struct RenderOptions {
   // largest move of a small one.
   uint32_t bootstrap = 32768;
   double large_step = 0.3;
-  double mutation_size = 1.0 / 64;
+  double mutation_size = 1.0 / 32;  // docs/benchmarks-notes.md: against 1/64 and 1/16
 
   // Several devices.
   bool allow_mixed_devices = false;  // also use devices whose probe differs from the first device's
