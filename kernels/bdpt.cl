@@ -47,8 +47,8 @@ static inline Lane3 trace_camera_subpaths(const SceneData* sc, __constant const 
   Lane3 throughput = lane3_splat((float3)(1.0f)), radiance = lane3_splat((float3)(0.0f));
   LaneF eta_scale = (LaneF)(1.0f);
   /* Partial sums (light_path.cl): the first vertex's reverse strategy is the light path's camera
-   * connection (t = 1), counted as PC_BDPT_LIGHT_TRACING_COUNT of its paths. */
-  LaneF dvcm = PC_BDPT_LIGHT_TRACING_COUNT / camera_direction_pdf(h, ray.d), dvc = (LaneF)(0.0f), dvm = (LaneF)(0.0f);
+   * connection (t = 1), counted as light_tracing_count of its paths (0: not a strategy). */
+  LaneF dvcm = light_tracing_count(mis) / camera_direction_pdf(h, ray.d), dvc = (LaneF)(0.0f), dvm = (LaneF)(0.0f);
   LaneI specular = m; /* every scattering so far by a delta lobe */
   const bool sppm = (lt->vcm_mode & PC_VCM_SPPM) != 0u;
   Lane3 prev_p = ray.o;

@@ -119,13 +119,15 @@ static inline void splat_filtered(__global uint* film, __constant const SceneHea
  * by the balance heuristic against the others; or (only_s PC_INVALID) every strategy of the depths (scattering
  * events) depth_lo .. depth_hi, weighted. Its subpaths stop where those strategies need no more vertices
  * (mlt_light_stop, mlt_camera_stop), and its light tracing connections (t = 1) are kept in *splat instead of
- * splatted. */
+ * splatted. light_tracing: the count of light tracing's paths in the weights (PC_BDPT_LIGHT_TRACING_COUNT,
+ * or 0 for a sample without light tracing: light_tracing_count). */
 typedef struct {
   float vm, vc;
   bool connect;
   uint first_length;
 #ifdef PC_MLT
   uint only_s, only_t, depth_lo, depth_hi;
+  float light_tracing;
 #endif
 } MisFactors;
 
@@ -137,12 +139,11 @@ static inline uint mlt_camera_stop(const MisFactors* m) { return m->only_s == PC
 #endif
 
 #ifdef PC_MLT
-/* A Metropolis sample's light tracing contribution: its raster position and value (mlt.cl); with several
- * strategies taken (only_s PC_INVALID) the last one, and the luminance of them all. */
+/* A Metropolis sample's light tracing contribution (one strategy, t = 1): its raster position and value
+ * (mlt.cl). */
 typedef struct {
   float2 raster;
   float3 value;
-  float luminance;
 } MltSplat;
 #endif
 
@@ -194,6 +195,13 @@ static inline LaneF nee_pdf_w(const SceneData* sc, LaneU index, Lane3 x, Lane3 y
  * (25 % below 1), as good as 1 on glass-metal and the lamp turned up, better on the terrain. Caustics from
  * delta lights keep weight 1: no other strategy makes them. */
 #define PC_BDPT_LIGHT_TRACING_COUNT 0.25f
+
+/* Light tracing's count in the weights of *mis's samples (a Metropolis sample's own: mlt.cl). */
+#ifdef PC_MLT
+static inline float light_tracing_count(const MisFactors* mis) { return mis->light_tracing; }
+#else
+static inline float light_tracing_count(const MisFactors* mis) { return PC_BDPT_LIGHT_TRACING_COUNT; }
+#endif
 
 /* The balance heuristic's weight of strategy (s light vertices, t camera vertices) from the sum of the
  * other strategies' densities relative to its own; with lt->only_strategy (tests) that strategy alone,
@@ -429,7 +437,7 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
         LaneF cam_pdf_a = camera_direction_pdf(h, lane3_neg(cs_wi)) * fabs(pc_dot(cs_wi, s.ng)) / (cs_dist * cs_dist);
         LaneF rev = bsdf_pdf_lanes(&mat, wc_local, wl_local, connect);
         per_path *= strategy_weight(lt, mis, (LaneU)(v + 2u), (LaneU)(1u),
-                                    cam_pdf_a * (dvcm + dvc * rev) / PC_BDPT_LIGHT_TRACING_COUNT);
+                                    cam_pdf_a * (dvcm + dvc * rev) / light_tracing_count(mis));
 #endif
         LaneI shoot = connect & (per_path != 0.0f); /* a NaN goes on, to be counted */
         if (pc_any_(shoot)) {
@@ -441,7 +449,6 @@ static inline void trace_light_paths_lanes(const SceneData* sc, __constant const
 #ifdef PC_MLT
             splat->raster = (float2)(raster_x, raster_y);
             splat->value = value;
-            if (splat_is_valid(splat->value, n)) splat->luminance += luminance(splat->value);
 #else
             splat_filtered(film, h, lt, (float2)(pc_lane(raster_x, j), pc_lane(raster_y, j)), parity, lane3_at(value, j), n);
 #endif

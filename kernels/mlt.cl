@@ -8,9 +8,10 @@
  * tracing connection's (t = 1) is splatted through the filter where it lands. Its importance I is the
  * luminance of that value.
  *
- * Paths of depths 0 and 1 (emitters seen directly, direct light) are left to each pixel's own BDPT sample,
- * one a step (stratified over the image: a lamp in view would otherwise hold a large share of the chains on
- * a flat region, and direct light is what next-event estimation does best); the chains take the rest.
+ * Paths of depths 0 and 1 (emitters seen directly, direct light) are left to each pixel's own BDPT sample
+ * without light tracing, one a step (stratified over the image: a lamp in view would otherwise hold a large
+ * share of the chains on a flat region, and direct light is what next-event estimation does best); the
+ * chains take the rest.
  *
  * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
  * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
@@ -129,9 +130,8 @@ static inline void mlt_fresh(MltSampler* m, MltSlots* slots, __constant const Sc
 
 /* The contribution of the state sampler m reads at depth `depth` (key: chain and step, for cut-out seeds),
  * and its importance (0 where it is nowhere or not a finite non-negative value). With `all`, instead every
- * strategy of the depths depth .. depth_hi at pixel `pixel` (BDPT's sample, its camera subpath's value there,
- * its light tracing connection, if one, in *splat), its importance the luminance of the camera subpath's
- * value and of every light tracing connection. */
+ * strategy of the depths depth .. depth_hi but light tracing (below) at pixel `pixel` (BDPT's sample, its
+ * camera subpath's value there), its importance that value's luminance. */
 static inline float mlt_evaluate(const SceneData* sc, __constant const LightTransportHeader* lt, __global const float* emission_cdf,
                                  __global LightVertex* vertices, MltSampler* m, uint depth, bool all, uint depth_hi, uint pixel,
                                  uint sample, SplatCounts* n, MltContribution* out, MltSplat* splat) {
@@ -144,13 +144,16 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
   uint strategies = depth + 2u;
   uint s = all ? PC_INVALID : min((uint)(sample4(h, key, PC_MLT_STRATEGY_GROUP(h)).x * (float)strategies), strategies - 1u);
   uint t = all ? PC_INVALID : depth + 2u - s;
-  MisFactors mis = {0.0f, 0.0f, true, 1u, s, t, depth, depth_hi};
+  /* The pixels' own samples (all, depths 0 and 1) leave light tracing (t = 1) out, and with it the light
+   * subpath, a fifth of a step's time: no light path connects its emitter's own vertex (light_path.cl), so
+   * at these depths it connects a non-delta vertex after one scattering event, whose path next-event
+   * estimation from that vertex makes too, for every kind of light and camera. */
+  MisFactors mis = {0.0f, 0.0f, true, 1u, s, t, depth, depth_hi, all ? 0.0f : PC_BDPT_LIGHT_TRACING_COUNT};
   out->kind = PC_MLT_NONE;
   out->value = (float3)(0.0f);
   uint count = 0u;
   splat->value = (float3)(0.0f);
-  splat->luminance = 0.0f;
-  if (all ? depth_hi >= 1u : s >= 2u)
+  if (!all && s >= 2u)
     trace_light_paths_lanes(sc, lt, emission_cdf, (__global uint*)0, key, key.pixel, 1, n, &mis, vertices, &count, splat);
   if (t == 1u) {
     out->kind = PC_MLT_SPLAT;
@@ -171,7 +174,7 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
                  (all ? 1.0f : (float)strategies);
   }
   if (!splat_is_valid(out->value, n)) out->value = (float3)(0.0f);
-  float importance = luminance(out->value) + (all ? splat->luminance : 0.0f);
+  float importance = luminance(out->value);
   if (!(importance > 0.0f) || !(importance < INFINITY)) {
     out->kind = PC_MLT_NONE;
     return 0.0f;
@@ -242,9 +245,9 @@ static inline void mlt_splat(__global uint* splats, __constant const SceneHeader
     splat_filtered(splats, h, lt, c->raster, parity, v, n);
 }
 
-/* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (fresh numbers): emitters seen directly and
- * direct light, which the chains leave out, into the independent samples' layer at weight 1 (its camera
- * subpath's value to the pixel, its light tracing connection through the filter). */
+/* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (fresh numbers; without light tracing,
+ * mlt_evaluate): emitters seen directly and direct light, which the chains leave out, into the independent
+ * samples' layer at weight 1. */
 static inline void mlt_near_sample(const SceneData* sc, __constant const LightTransportHeader* lt,
                                    __global const float* emission_cdf, __global LightVertex* vertices, MltSlots* slots,
                                    __global uint* independent, uint chain, uint step, SplatCounts* n) {
@@ -256,7 +259,6 @@ static inline void mlt_near_sample(const SceneData* sc, __constant const LightTr
   mlt_evaluate(sc, lt, emission_cdf, vertices, &m, 0u, true, min(h->max_depth, PC_MLT_FIRST_DEPTH - 1u), chain,
                PC_MLT_NEAR_SAMPLE | step, n, &camera, &splat);
   mlt_splat(independent, h, lt, &camera, 1.0f, step & 1u, n);
-  if (splat.luminance > 0.0f) splat_filtered(independent, h, lt, splat.raster, step & 1u, splat.value, n);
 }
 
 /* Each chain of the unit: started at step 0, then its steps of the unit. */
