@@ -16,13 +16,13 @@
  * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
  * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
  * checkpoints and resumes carry it), the splats in the commutative layers "splats" and "independent" (fixed
- * point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth 2 .. D (B =
- * lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a prefix sum of
- * fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
- * takes a candidate in proportion to its importance (systematic resampling: chain i at (i + u) / chains of the
- * sum, u one number for the render). Each step proposes a state: a large
- * step (probability lt->large_step) takes fresh numbers and a uniform depth, a small step keeps the depth and
- * moves each number by Kelemen's mutation (sampler.cl's mlt_mutate) of size up to lt->mutation_size. It is accepted with
+ * point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth
+ * 2 .. D (B = lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a
+ * prefix sum of fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
+ * takes a candidate in proportion to its importance (systematic resampling: chain i at (i + u) / chains of
+ * the sum, u one number for the render). Each step proposes a state: a large step (probability
+ * lt->large_step) takes fresh numbers and a uniform depth, a small step keeps the depth and moves each number
+ * by Kelemen's mutation (sampler.cl's mlt_mutate) of size up to lt->mutation_size. It is accepted with
  * probability a = min(1, I' / I). Numbers are mutated lazily, when the evaluation reads them (sampler.cl's
  * MltSampler). Splats (Kelemen et al.'s combination of the two techniques, Metropolis samples of density
  * I / b and large steps of density 1 / (D - 1) over (depth, numbers), taken p = lt->large_step times a step,
