@@ -10,8 +10,8 @@
 /* The contribution of connecting camera vertex s of the lanes in m (material mat, shading frame f, wo_local
  * towards the previous camera vertex; dvcm, dvc its partial sums; vm_light and vm_camera the merging factor
  * at the light vertex and at the camera vertex, light_path.cl's MisFactors.vm or 0) to light vertex lv[slot]
- * of each lane, unweighted, and the sums of the densities of the other strategies in *others (0 where nothing connects);
- * the light vertex's point, its error bound and geometric normal in *y_p, *y_err, *y_ng (the shadow ray's). */
+ * of each lane, unweighted, and the sums of the densities of the other strategies in *others (0 where nothing
+ * connects); the light vertex's point, its error bound and geometric normal in *y_p, *y_err, *y_ng (the shadow ray's). */
 static inline Lane3 connect_vertices(const SceneData* sc, const SurfaceLanes* s, const MaterialLanes* mat, const FrameLanes* f,
                                      Lane3 wo_local, LaneF wo_ng, LaneF dvcm, LaneF dvc, float vm_light, float vm_camera,
                                      __global const LightVertex* lv, LaneU slot, LaneI m, LaneF* others, Lane3* y_p,

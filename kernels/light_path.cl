@@ -117,17 +117,15 @@ static inline void splat_filtered(__global uint* film, __constant const SceneHea
  * after one scattering event at least: direct light is next-event estimation's).
  * Metropolis (mlt.cl, PC_MLT): a sample takes one strategy, only_s light and only_t camera vertices, weighted
  * by the balance heuristic against the others; or (only_s PC_INVALID) every strategy of the depths (scattering
- * events) depth_lo .. depth_hi, weighted. Its subpaths stop where those strategies need no more vertices
- * (mlt_light_stop, mlt_camera_stop), and its light tracing connections (t = 1) are kept in *splat instead of
- * splatted. light_tracing: the count of light tracing's paths in the weights (PC_BDPT_LIGHT_TRACING_COUNT,
- * or 0 for a sample without light tracing: light_tracing_count). */
+ * events) depth_lo .. depth_hi but light tracing (t = 1; light_tracing_count), weighted. Its subpaths stop
+ * where those strategies need no more vertices (mlt_light_stop, mlt_camera_stop), and its light tracing
+ * connection is kept in *splat instead of splatted. */
 typedef struct {
   float vm, vc;
   bool connect;
   uint first_length;
 #ifdef PC_MLT
   uint only_s, only_t, depth_lo, depth_hi;
-  float light_tracing;
 #endif
 } MisFactors;
 
@@ -196,9 +194,12 @@ static inline LaneF nee_pdf_w(const SceneData* sc, LaneU index, Lane3 x, Lane3 y
  * delta lights keep weight 1: no other strategy makes them. */
 #define PC_BDPT_LIGHT_TRACING_COUNT 0.25f
 
-/* Light tracing's count in the weights of *mis's samples (a Metropolis sample's own: mlt.cl). */
+/* Light tracing's count in the weights of *mis's samples: 0 where it is not a strategy, in a Metropolis
+ * sample of every strategy (mlt.cl's pixels' own samples of depths 0 and 1). */
 #ifdef PC_MLT
-static inline float light_tracing_count(const MisFactors* mis) { return mis->light_tracing; }
+static inline float light_tracing_count(const MisFactors* mis) {
+  return mis->only_s == PC_INVALID ? 0.0f : PC_BDPT_LIGHT_TRACING_COUNT;
+}
 #else
 static inline float light_tracing_count(const MisFactors* mis) { return PC_BDPT_LIGHT_TRACING_COUNT; }
 #endif

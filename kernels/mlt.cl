@@ -144,11 +144,11 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
   uint strategies = depth + 2u;
   uint s = all ? PC_INVALID : min((uint)(sample4(h, key, PC_MLT_STRATEGY_GROUP(h)).x * (float)strategies), strategies - 1u);
   uint t = all ? PC_INVALID : depth + 2u - s;
-  /* The pixels' own samples (all, depths 0 and 1) leave light tracing (t = 1) out, and with it the light
-   * subpath, a fifth of a step's time: no light path connects its emitter's own vertex (light_path.cl), so
-   * at these depths it connects a non-delta vertex after one scattering event, whose path next-event
-   * estimation from that vertex makes too, for every kind of light and camera. */
-  MisFactors mis = {0.0f, 0.0f, true, 1u, s, t, depth, depth_hi, all ? 0.0f : PC_BDPT_LIGHT_TRACING_COUNT};
+  /* The pixels' own samples (all, depths 0 and 1) leave light tracing (t = 1) out (light_tracing_count), and
+   * with it the light subpath, a fifth of a step's time: no light path connects its emitter's own vertex
+   * (light_path.cl), so at these depths it connects a non-delta vertex after one scattering event, whose
+   * path next-event estimation from that vertex makes too, for every kind of light and camera. */
+  MisFactors mis = {0.0f, 0.0f, true, 1u, s, t, depth, depth_hi};
   out->kind = PC_MLT_NONE;
   out->value = (float3)(0.0f);
   uint count = 0u;
