@@ -246,7 +246,11 @@ size_t launch_work_group(const DeviceInfo& device, size_t work_group, bool chose
   return work_group;
 }
 
-cl_event enqueue_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
+ClEvent::~ClEvent() {
+  if (event) clReleaseEvent(event);
+}
+
+ClEvent enqueue_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
   if (work_group == 0 && items > 0)
     for (work_group = 64; items % work_group != 0;) work_group /= 2;
   size_t global = items;
@@ -254,20 +258,19 @@ cl_event enqueue_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t wo
   cl_event event = nullptr;
   CL_CHECK(clEnqueueNDRangeKernel(cl.queue, kernel, 1, offset > 0 ? &offset : nullptr, &global,
                                   work_group > 0 ? &work_group : nullptr, 0, nullptr, &event));
-  return event;
+  return ClEvent(event);
 }
 
-double kernel_event_ms(cl_event event) {
+double kernel_event_ms(const ClEvent& event) {
   cl_ulong start = 0, end = 0;
-  CL_CHECK(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr));
-  CL_CHECK(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr));
-  clReleaseEvent(event);
+  CL_CHECK(clGetEventProfilingInfo(event.event, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr));
+  CL_CHECK(clGetEventProfilingInfo(event.event, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr));
   return double(end - start) * 1e-6;
 }
 
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group, size_t offset) {
-  cl_event event = enqueue_kernel(cl, kernel, items, work_group, offset);
-  CL_CHECK(clWaitForEvents(1, &event));
+  ClEvent event = enqueue_kernel(cl, kernel, items, work_group, offset);
+  CL_CHECK(clWaitForEvents(1, &event.event));
   return kernel_event_ms(event);
 }
 

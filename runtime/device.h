@@ -125,9 +125,19 @@ size_t launch_work_group(const DeviceInfo& device, size_t work_group, bool chose
 // list_devices sets) compiles one per local size and chooses it from the global size's factors, so a kernel
 // launched over many sizes was compiled many times (light_pdf_bins 23 times in a suite run).
 double run_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);
+// A launch's profiling event, released with its owner (also when a later launch or the wait throws).
+struct ClEvent {
+  cl_event event = nullptr;
+  ClEvent() = default;
+  explicit ClEvent(cl_event e) : event(e) {}
+  ~ClEvent();
+  ClEvent(ClEvent&& o) noexcept : event(o.event) { o.event = nullptr; }
+  ClEvent& operator=(ClEvent&&) = delete;
+  ClEvent(const ClEvent&) = delete;
+};
 // The launch of run_kernel without the wait: its event, for kernel_event_ms once it has completed. Launches
 // one after another on the in-order queue run in order; waiting only for the last spares the device's threads
 // an idle round trip to the host between them.
-cl_event enqueue_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);
-// A completed launch's time on the device in milliseconds (its profiling event, which it releases).
-double kernel_event_ms(cl_event event);
+ClEvent enqueue_kernel(ClContext& cl, cl_kernel kernel, size_t items, size_t work_group = 0, size_t offset = 0);
+// A completed launch's time on the device in milliseconds, from its profiling event.
+double kernel_event_ms(const ClEvent& event);

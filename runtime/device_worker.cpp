@@ -177,7 +177,7 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
   // Per-sample techniques run their phases once per sample, in order (Technique::per_sample). The launches
   // go to the in-order queue one after another, and the host waits for the last one only.
   const bool per_sample = technique_->per_sample;
-  std::vector<std::pair<size_t, cl_event>> launched;  // (phase, event)
+  std::vector<std::pair<size_t, ClEvent>> launched;  // (phase, event)
   for (uint32_t s = sample_begin; s < sample_begin + sample_count; s += per_sample ? 1 : sample_count) {
     for (size_t i = 0; i < phases_.size(); ++i) {
       Phase& p = phases_[i];
@@ -189,7 +189,7 @@ void DeviceWorker::launch(uint32_t pixel_begin, uint32_t pixel_count, uint32_t p
             i, enqueue_kernel(*cl_, p.kernel->k, items, launch_work_group(cl_->info, p.work_group, work_group_chosen_, items)));
     }
   }
-  if (!launched.empty()) CL_CHECK(clWaitForEvents(1, &launched.back().second));
+  if (!launched.empty()) CL_CHECK(clWaitForEvents(1, &launched.back().second.event));
   if (out && sample_count > 0)
     while (out->phases.size() < phases_.size()) out->phases.push_back({phases_[out->phases.size()].name, 0.0});
   for (const auto& [i, event] : launched) {
