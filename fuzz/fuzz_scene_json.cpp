@@ -2,6 +2,7 @@
 // build_device_scene (flattening, light distribution, BVH). Bad input must end in SceneError; any
 // other exception, crash, sanitizer report or broken invariant below is a bug.
 // The scene lies next to a valid unit cube, so shapes may use "file": "m.obj". Run by scripts/fuzz.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -32,11 +33,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       fuzz::invariant_failed("smooth normals are not 3 per primitive");
     uint32_t tree_lights = device.header.tree_light_count;
     if (device.light_cdf.size() != device.lights.size() - tree_lights + 1) fuzz::invariant_failed("light CDF size");
-    if (device.light_bvh.size() != (tree_lights ? 2 * tree_lights - 1 : 0)) fuzz::invariant_failed("light BVH size");
+    uint32_t leaves = 0;
+    for (const LightBvhNode& n : device.light_bvh) leaves += n.second == PC_INVALID;
+    if (device.light_bvh.size() != (tree_lights ? 2 * leaves - 1 : 0)) fuzz::invariant_failed("light BVH size");
     for (uint32_t i = 0; i < tree_lights; ++i) {
       uint32_t leaf = device.lights[i].tree_leaf;
-      if (leaf >= device.light_bvh.size() || device.light_bvh[leaf].light != i)
+      if (leaf >= device.light_bvh.size() || device.light_bvh[leaf].light > i ||
+          i - device.light_bvh[leaf].light >= device.light_bvh[leaf].light_count)
         fuzz::invariant_failed("a light's leaf is not its own");
+    }
+    for (const LightBvhNode& n : device.light_bvh) {
+      if (n.second != PC_INVALID) continue;
+      double shares = 0;
+      for (uint32_t i = n.light; i < n.light + n.light_count && i < tree_lights; ++i) shares += device.lights[i].group_share;
+      if (!(std::abs(shares - 1) <= 1e-5)) fuzz::invariant_failed("a leaf's lights' group shares do not sum to 1");
     }
     for (const LightBvhNode& n : device.light_bvh)
       if (!(n.lo.w >= 0 && n.lo.w <= 3.4e38f)) fuzz::invariant_failed("light BVH intensity negative or not finite");

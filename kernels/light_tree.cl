@@ -147,9 +147,31 @@ static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU targe
       p_tree = select(p_tree, p_tree * select(1.0f - p_first, p_first, first), walking);
       node = select(node, select(second, node + 1u, first), walking);
     }
-    p = select(p, p_tree, tree);
     LaneI chose = tree & sampling;
+#ifdef PC_HAS_LIGHT_GROUPS
+    /* Among the leaf's lights (an emitter group, or one light: scene/light_bvh_build.h), one in proportion to
+     * its group_share, by the rest of u: the first whose running sum of shares exceeds u, or the last. */
+    if (pc_any_(following))
+      p_tree = select(p_tree, p_tree * lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(target, following)),
+                      following);
+    if (pc_any_(chose)) {
+      LaneGroups at;
+      lane_groups(node, chose, &at);
+      LaneU index = lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light), &at);
+      LaneU last = index + lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light_count), &at) - 1u;
+      LaneF share = lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(index, chose)), sum = share;
+      for (LaneI going = chose & (index < last) & (u >= sum); pc_any_(going); going &= (index < last) & (u >= sum)) {
+        index = select(index, index + 1u, going);
+        share = select(share, lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(index, going)), going);
+        sum = select(sum, sum + share, going);
+      }
+      p_tree = select(p_tree, p_tree * share, chose);
+      *chosen = select(*chosen, index, chose);
+    }
+#else
     if (pc_any_(chose)) *chosen = select(*chosen, light_node_field_lanes(sc->light_bvh, node, chose, true), chose);
+#endif
+    p = select(p, p_tree, tree);
   }
   return p;
 }

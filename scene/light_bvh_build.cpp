@@ -63,38 +63,39 @@ LightBvhNode device_node(const NodeBounds& b) {
 }
 
 struct Builder {
-  const std::vector<LightBounds>& lights;
+  std::vector<NodeBounds> leaves;  // each leaf's bounds: its lights' merged
+  std::vector<uint32_t> first, count;  // each leaf's lights
   LightBvh out;
 
-  // Builds the subtree over order[first, last) at the end of out.nodes; returns its bounds.
-  NodeBounds build(std::vector<uint32_t>& order, size_t first, size_t last) {
+  // Builds the subtree over the leaves order[first, last) at the end of out.nodes; returns its bounds.
+  NodeBounds build(std::vector<uint32_t>& order, size_t begin, size_t end) {
     uint32_t index = uint32_t(out.nodes.size());
     out.nodes.emplace_back();
-    if (last - first == 1) {
-      uint32_t light = order[first];
-      NodeBounds b = bounds_of(lights[light]);
-      out.nodes[index] = device_node(b);
-      out.nodes[index].light = light;
-      out.leaf_of[light] = index;
-      return b;
+    if (end - begin == 1) {
+      uint32_t leaf = order[begin];
+      out.nodes[index] = device_node(leaves[leaf]);
+      out.nodes[index].light = first[leaf];
+      out.nodes[index].light_count = count[leaf];
+      for (uint32_t i = 0; i < count[leaf]; ++i) out.leaf_of[first[leaf] + i] = index;
+      return leaves[leaf];
     }
     glm::dvec3 clo(INFINITY), chi(-INFINITY);
-    for (size_t i = first; i < last; ++i) {
-      glm::dvec3 c = 0.5 * (glm::dvec3(lights[order[i]].lo) + glm::dvec3(lights[order[i]].hi));
+    for (size_t i = begin; i < end; ++i) {
+      glm::dvec3 c = 0.5 * (glm::dvec3(leaves[order[i]].lo) + glm::dvec3(leaves[order[i]].hi));
       clo = glm::min(clo, c);
       chi = glm::max(chi, c);
     }
     glm::dvec3 extent = chi - clo;
     int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    size_t mid = first + (last - first) / 2;
-    // Ties broken by light index, so that the tree does not depend on the sort's implementation.
-    std::nth_element(order.begin() + first, order.begin() + mid, order.begin() + last, [&](uint32_t a, uint32_t b) {
-      float ca = lights[a].lo[axis] + lights[a].hi[axis], cb = lights[b].lo[axis] + lights[b].hi[axis];
+    size_t mid = begin + (end - begin) / 2;
+    // Ties broken by leaf index, so that the tree does not depend on the sort's implementation.
+    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](uint32_t a, uint32_t b) {
+      float ca = leaves[a].lo[axis] + leaves[a].hi[axis], cb = leaves[b].lo[axis] + leaves[b].hi[axis];
       return ca < cb || (ca == cb && a < b);
     });
-    NodeBounds left = build(order, first, mid);
+    NodeBounds left = build(order, begin, mid);
     uint32_t second = uint32_t(out.nodes.size());
-    NodeBounds right = build(order, mid, last);
+    NodeBounds right = build(order, mid, end);
     NodeBounds b = merge(left, right);
     out.nodes[index] = device_node(b);
     out.nodes[index].second = second;
@@ -123,12 +124,21 @@ DirectionCone cone_union(const DirectionCone& a, const DirectionCone& b) {
 }
 
 LightBvh build_light_bvh(const std::vector<LightBounds>& lights) {
-  Builder b{lights, {}};
+  Builder b;
   if (lights.empty()) return b.out;
+  for (uint32_t i = 0; i < lights.size(); ++i) {
+    if (i == 0 || !lights[i].with_previous) {
+      b.first.push_back(i);
+      b.count.push_back(0);
+      b.leaves.emplace_back();
+    }
+    b.count.back()++;
+    b.leaves.back() = merge(b.leaves.back(), bounds_of(lights[i]));
+  }
   b.out.leaf_of.assign(lights.size(), PC_INVALID);
-  b.out.nodes.reserve(2 * lights.size() - 1);
-  std::vector<uint32_t> order(lights.size());
+  b.out.nodes.reserve(2 * b.leaves.size() - 1);
+  std::vector<uint32_t> order(b.leaves.size());
   std::iota(order.begin(), order.end(), 0u);
-  b.build(order, 0, lights.size());
+  b.build(order, 0, order.size());
   return b.out;
 }

@@ -19,6 +19,10 @@ struct LightBounds {
   double theta_o = 0;   // every emission axis is within theta_o of axis
   double theta_e = 0;   // and the light emits within theta_e of its axis
   bool two_sided = false;
+  // In the leaf of the light before it: an emitter group, lights that the tree does not tell apart (one
+  // shape's few coplanar triangles of one emission, scene/device_scene_build.cpp). The kernel chooses among
+  // a leaf's lights in proportion to Light::group_share, so a quad lamp costs a scene no walk of the tree.
+  bool with_previous = false;
 };
 
 // A cone of directions: every direction within theta of axis (theta = pi: all of them).
@@ -34,6 +38,7 @@ struct LightBvh {
   std::vector<uint32_t> leaf_of;    // lights[i]'s leaf node
 };
 
-// lights[i] becomes the leaf whose LightBvhNode::light is i. Nodes are split at the median centroid along
-// the centroids' longest axis: a balanced tree of depth ceil(log2 n).
+// Each light, or each emitter group (a light and those after it with_previous), becomes a leaf whose
+// LightBvhNode::light is its first light. Nodes are split at the median centroid along the centroids'
+// longest axis: a balanced tree of depth ceil(log2 n) over n leaves.
 LightBvh build_light_bvh(const std::vector<LightBounds>& lights);

@@ -2,6 +2,7 @@
 // the kernel reports for every light against the counts of its choices (chi-square), and the renders the
 // light BVH is for: a point and a spot light beside an environment over a floor of any size, and a
 // thousand small emitters.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -46,6 +47,27 @@ std::string mixed_lights_scene() {
     for (int k = 0; k < 9; ++k) v[k] = c[k % 3] + s * (2 * u(rng) - 1);
     shapes += (i ? ", " : "") + triangle(v, emission(0.5 + 10 * u(rng)) + (i % 3 == 0 ? R"(, "two_sided": true)" : ""));
   }
+  // Open fans of n triangles around a centre, of unequal areas: in one tilted plane (emitter groups of 2, 5 and
+  // 8 triangles, one two-sided), of 9 (one more than a group holds) and bent out of the plane (each its own
+  // leaf).
+  const int fans[][2] = {{2, 0}, {5, 0}, {8, 0}, {9, 0}, {4, 1}};
+  for (int f = 0; f < 5; ++f) {
+    const int n = fans[f][0];
+    const bool bent = fans[f][1];
+    double c[3] = {8 * u(rng) - 4, 8 * u(rng) - 4, 8 * u(rng) - 4};
+    std::string positions = "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + "]";
+    std::string indices;
+    for (int k = 0; k <= n; ++k) {
+      double angle = 2 * M_PI * k / (n + 1), r = 0.2 + 0.6 * u(rng), x = r * std::cos(angle), y = r * std::sin(angle);
+      double lift = bent && k % 2 ? 0.3 : 0;  // tilted plane (x, y, 0.5 x + 0.25 y), lifted off it where bent
+      char v[160];
+      std::snprintf(v, sizeof v, ", [%.9g, %.9g, %.9g]", c[0] + x, c[1] + y, c[2] + 0.5 * x + 0.25 * y + lift);
+      positions += v;
+      if (k < n) indices += (k ? ", [0, " : "[0, ") + std::to_string(k + 1) + ", " + std::to_string(k + 2) + "]";
+    }
+    shapes += R"(, {"type": "triangles", "positions": [)" + positions + R"(], "indices": [)" + indices +
+              R"(], "material": "m", )" + emission(1 + 4 * u(rng)) + (f == 1 ? R"(, "two_sided": true)" : "") + "}";
+  }
   for (int i = 0; i < 5; ++i) {
     char buf[200];
     std::snprintf(buf, sizeof buf, R"(, {"type": "sphere", "center": [%.6g, %.6g, %.6g], "radius": %.6g, "material": "m", %s})",
@@ -78,8 +100,16 @@ std::string mixed_lights_scene() {
 TEST(LightTree, ChoiceProbabilitiesAreThePdfsTheKernelReports) {
   DeviceScene scene = load_device_scene(write_temp_file("mixed-lights.json", mixed_lights_scene()), DeviceOrigin::world);
   const uint32_t lights = scene.header.light_count;
-  ASSERT_EQ(lights, 40u + 5u + 10u + 2u);
+  ASSERT_EQ(lights, 40u + (2u + 5u + 8u + 9u + 4u) + 5u + 10u + 2u);
   ASSERT_EQ(scene.header.tree_light_count, lights - 2);
+  // The three planar fans of at most 8 are emitter groups, one leaf each; every other light is a leaf alone.
+  ASSERT_TRUE(scene.features & kFeatureLightGroups);
+  std::vector<uint32_t> group_sizes;
+  for (const LightBvhNode& n : scene.light_bvh)
+    if (n.second == PC_INVALID && n.light_count > 1) group_sizes.push_back(n.light_count);
+  std::sort(group_sizes.begin(), group_sizes.end());
+  EXPECT_EQ(group_sizes, (std::vector<uint32_t>{2, 5, 8}));
+  EXPECT_EQ(scene.light_bvh.size(), 2 * (scene.header.tree_light_count - (1 + 4 + 7)) - 1);
   SceneBuffers sb = test_scene_buffers(scene);
   ClContext& cl = test_device();
   const size_t n = 1000000;

@@ -211,7 +211,8 @@ typedef struct {
  * the light BVH from the shading point; the rest (directional, environment) are the lights at infinity
  * (kernels/light_tree.cl).
  * emission (16) + position (16) + direction (16) + type (4) + prim (4) + slot (4) + area (4)
- * + infinite_share (4) + cos_inner (4) + cos_outer (4) + texture (4) + tree_leaf (4) + pad (12) = 96 bytes. */
+ * + infinite_share (4) + cos_inner (4) + cos_outer (4) + texture (4) + tree_leaf (4) + group_share (4) + pad (8)
+ * = 96 bytes. */
 typedef struct {
   pc_float4 emission;
   pc_float4 position;  /* point, spot */
@@ -226,22 +227,24 @@ typedef struct {
   float cos_outer;     /* spot: none outside this cone */
   pc_uint texture;     /* environment: lat-long map in textures, or PC_INVALID for a constant */
   pc_uint tree_leaf;   /* lights in the light BVH: the index of its leaf in light_bvh; others PC_INVALID */
-  pc_uint pad[3];
+  float group_share;   /* lights in the light BVH: the probability of choosing it among its leaf's lights (its
+                        * area over theirs: scene/light_bvh_build.h's emitter groups); 1 alone; others 0 */
+  pc_uint pad[2];
 } Light;
 
 /* A node of the light BVH (scene/light_bvh_build.h), flattened depth-first: an interior node's first child
  * follows it, its second is at `second`, so a leaf's index tells at every node which way leads to it.
  * The bounds are those of pbrt-v4's LightBounds: a box, the peak radiant intensity, and a cone of emission
  * axes (half-angle theta_o) that every light of the node emits within theta_e of.
- * lo (16) + hi (16) + axis (16) + second (4) + light (4) + two_sided (4) + pad (4) = 64 bytes. */
+ * lo (16) + hi (16) + axis (16) + second (4) + light (4) + two_sided (4) + light_count (4) = 64 bytes. */
 typedef struct {
   pc_float4 lo;      /* xyz: the box's lower corner; w: summed peak radiant intensity (luminance, W/sr) */
   pc_float4 hi;      /* xyz: the box's upper corner; w: cos theta_o */
   pc_float4 axis;    /* xyz: the cone's axis (unit length); w: cos theta_e */
   pc_uint second;    /* interior: index of the second child; leaf: PC_INVALID */
-  pc_uint light;     /* leaf: index into lights; interior: PC_INVALID */
-  pc_uint two_sided; /* 1: the lights emit on both sides of their axes too */
-  pc_uint pad;
+  pc_uint light;       /* leaf: index into lights of its first light; interior: PC_INVALID */
+  pc_uint two_sided;   /* 1: the lights emit on both sides of their axes too */
+  pc_uint light_count; /* leaf: its lights are [light, light + light_count) (1, or an emitter group); interior: 0 */
 } LightBvhNode;
 
 /* How a texture's texels are stored in the texel words (Texture.format), at the precision of the file:
@@ -353,8 +356,8 @@ typedef struct {
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior) X(Material, opacity) X(Material, opacity_texture)  \
   X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
-  X(Light, area) X(Light, infinite_share) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture) X(Light, tree_leaf) \
-  X(LightBvhNode, lo) X(LightBvhNode, hi) X(LightBvhNode, axis) X(LightBvhNode, second) X(LightBvhNode, light) X(LightBvhNode, two_sided)           \
+  X(Light, area) X(Light, infinite_share) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture) X(Light, tree_leaf) X(Light, group_share) \
+  X(LightBvhNode, lo) X(LightBvhNode, hi) X(LightBvhNode, axis) X(LightBvhNode, second) X(LightBvhNode, light) X(LightBvhNode, two_sided) X(LightBvhNode, light_count)           \
   X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(Texture, format) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
   X(SceneHeader, prim_count) X(SceneHeader, light_count) X(SceneHeader, max_depth) X(SceneHeader, seed)    \
