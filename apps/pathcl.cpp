@@ -577,10 +577,10 @@ int run_info(const std::string& path, const std::vector<std::string>& defines, c
   size_t groups = 0, grouped = 0;  // leaves of the light BVH with several lights (scene/light_bvh_build.h)
   for (const LightBvhNode& n : v.light_bvh)
     if (n.second == PC_INVALID && n.light_count > 1) groups++, grouped += n.light_count;
-  std::printf("lights: %zu area (%u zero-area emitters skipped; %zu in %zu emitter groups), %zu point, %zu spot, "
-              "%zu directional, %zu environment\n",
-              by_type[PC_LIGHT_AREA], v.skipped_zero_area_emitters, grouped, groups, by_type[PC_LIGHT_POINT],
-              by_type[PC_LIGHT_SPOT], by_type[PC_LIGHT_DIRECTIONAL], by_type[PC_LIGHT_ENVIRONMENT]);
+  std::printf("lights: %zu area (%u zero-area emitters skipped), %zu point, %zu spot, %zu directional, %zu environment; "
+              "emitter groups: %zu (%zu lights)\n",
+              by_type[PC_LIGHT_AREA], v.skipped_zero_area_emitters, by_type[PC_LIGHT_POINT], by_type[PC_LIGHT_SPOT],
+              by_type[PC_LIGHT_DIRECTIONAL], by_type[PC_LIGHT_ENVIRONMENT], groups, grouped);
   std::printf("kernel options: %s\n", kernel_options(v.features).c_str());
   std::printf("bvh: %u nodes, %u leaves (at most %u primitives), depth %u, SAH cost %.2f, built in %.1f ms\n",
               v.bvh.node_count, v.bvh.leaf_count, v.bvh.max_leaf_size, v.bvh.depth, v.bvh.sah_cost, v.bvh.build_ms);

@@ -45,8 +45,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (const LightBvhNode& n : device.light_bvh) {
       if (n.second != PC_INVALID) continue;
       double shares = 0;
-      for (uint32_t i = n.light; i < n.light + n.light_count && i < tree_lights; ++i) shares += device.lights[i].group_share;
+      float cdf = 0;
+      for (uint32_t i = n.light; i < n.light + n.light_count && i < tree_lights; ++i) {
+        shares += device.lights[i].group_share;
+        if (!(device.lights[i].group_cdf >= cdf)) fuzz::invariant_failed("a leaf's group CDF decreases");
+        cdf = device.lights[i].group_cdf;
+      }
       if (!(std::abs(shares - 1) <= 1e-5)) fuzz::invariant_failed("a leaf's lights' group shares do not sum to 1");
+      if (cdf != 1.0f) fuzz::invariant_failed("a leaf's group CDF does not end at 1");
     }
     for (const LightBvhNode& n : device.light_bvh)
       if (!(n.lo.w >= 0 && n.lo.w <= 3.4e38f)) fuzz::invariant_failed("light BVH intensity negative or not finite");

@@ -150,23 +150,24 @@ static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU targe
     LaneI chose = tree & sampling;
 #ifdef PC_HAS_LIGHT_GROUPS
     /* Among the leaf's lights (an emitter group, or one light: scene/light_bvh_build.h), one in proportion to
-     * its group_share, by the rest of u: the first whose running sum of shares exceeds u, or the last. */
+     * its group_share, by the rest of u: the first whose group_cdf exceeds u (binary search; the last's is 1). */
     if (pc_any_(following))
       p_tree = select(p_tree, p_tree * lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(target, following)),
                       following);
     if (pc_any_(chose)) {
       LaneGroups at;
       lane_groups(node, chose, &at);
-      LaneU index = lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light), &at);
-      LaneU last = index + lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light_count), &at) - 1u;
-      LaneF share = lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(index, chose)), sum = share;
-      for (LaneI going = chose & (index < last) & (u >= sum); pc_any_(going); going &= (index < last) & (u >= sum)) {
-        index = select(index, index + 1u, going);
-        share = select(share, lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(index, going)), going);
-        sum = select(sum, sum + share, going);
+      LaneU lo = lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light), &at);
+      LaneU hi = lo + lane_group_gather_uint(PC_FIELD_U(sc->light_bvh, light_count), &at) - 1u;
+      for (LaneI searching = chose & (lo < hi); pc_any_(searching); searching &= lo < hi) {
+        LaneU mid = (lo + hi) / 2u;
+        LaneI above = searching & (u >= lane_gather_float(PC_FIELD_F(sc->lights, group_cdf), lane_safe_index(mid, searching)));
+        lo = select(lo, mid + 1u, above);
+        hi = select(hi, mid, searching & !above);
       }
+      LaneF share = lane_gather_float(PC_FIELD_F(sc->lights, group_share), lane_safe_index(lo, chose));
       p_tree = select(p_tree, p_tree * share, chose);
-      *chosen = select(*chosen, index, chose);
+      *chosen = select(*chosen, lo, chose);
     }
 #else
     if (pc_any_(chose)) *chosen = select(*chosen, light_node_field_lanes(sc->light_bvh, node, chose, true), chose);

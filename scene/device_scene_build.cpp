@@ -187,32 +187,37 @@ Aabb placed_box(const Aabb& box, const glm::dmat4& m) {
   return {glm::vec3(lo - margin), glm::vec3(hi + margin)};
 }
 
-// Emitter groups (scene/light_bvh_build.h): a shape whose emitting triangles are at most kMaxEmitterGroup, in
-// one plane, of one emission and sidedness (a quad lamp, a small polygon) is one leaf of the light BVH, its
-// triangles chosen among in proportion to their areas. The tree's importance would tell them apart by little
-// over so small a planar piece, and a quad lamp no longer costs a walk of the tree at every choice (the Cornell
-// box's samples 1.14x faster, docs/benchmarks-notes.md). Grouping only changes which light is chosen with what
-// probability, never the estimate's mean. lights[0, area_lights) are the area lights, bounds theirs: marks
-// bounds[i].with_previous and sets each one's group_share (1 alone). Returns whether any group was made.
+// Emitter groups (scene/light_bvh_build.h): the emitting triangles of a shape, when they are in one plane and of
+// one emission and sidedness, and either at most kMaxEmitterGroup (a quad lamp, a small polygon) or within a
+// box of at most a quarter of the scene's diagonal (a disk lamp, which the Mitsuba and pbrt importers make of 256
+// or more triangles), are one leaf of the light BVH, their triangles chosen in proportion to their areas. The
+// tree's importance would tell them apart by little over so small a planar piece, and such a lamp no longer
+// costs a walk of the tree at every choice (the Cornell box's samples 1.14x faster, docs/benchmarks-notes.md);
+// a large panel of many triangles keeps the tree, which samples its near part more. Grouping only changes which
+// light is chosen with what probability, never the estimate's mean. lights[0, area_lights) are the area
+// lights, bounds theirs, scene the box of every primitive: marks bounds[i].with_previous and sets each one's
+// group_share and group_cdf (1 alone). Returns whether any group was made.
 constexpr size_t kMaxEmitterGroup = 8;
 bool group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimShading>& shading,
-                    const std::vector<uint32_t>& prim_shapes, size_t area_lights, std::vector<Light>& lights,
-                    std::vector<LightBounds>& bounds) {
+                    const std::vector<uint32_t>& prim_shapes, const Aabb& scene, size_t area_lights,
+                    std::vector<Light>& lights, std::vector<LightBounds>& bounds) {
   auto vertex = [&](uint32_t prim, int k) {
     const pc_float4& v = k == 0 ? prims[prim].a : k == 1 ? prims[prim].b : prims[prim].c;
     return glm::dvec3(v.x, v.y, v.z);
   };
+  const double scene_diagonal = glm::length(glm::dvec3(scene.hi) - glm::dvec3(scene.lo));
   bool any = false;
   for (size_t begin = 0, end = 0; begin < area_lights; begin = end) {
     const uint32_t shape = prim_shapes[lights[begin].prim];
     for (end = begin + 1; end < area_lights && prim_shapes[lights[end].prim] == shape;) ++end;
-    bool group = shape != PC_INVALID && end - begin >= 2 && end - begin <= kMaxEmitterGroup;
     Aabb box;
     for (size_t i = begin; i < end; ++i)
       for (int k = 0; k < 3; ++k) box.grow(glm::vec3(vertex(lights[i].prim, k)));
+    const double diagonal = glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
+    bool group = shape != PC_INVALID && end - begin >= 2 &&
+                 (end - begin <= kMaxEmitterGroup || diagonal <= 0.25 * scene_diagonal);
     const glm::dvec3 normal(bounds[begin].axis);
-    const double offset = glm::dot(normal, vertex(lights[begin].prim, 0)),
-                 tolerance = 1e-5 * glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
+    const double offset = glm::dot(normal, vertex(lights[begin].prim, 0)), tolerance = 1e-5 * diagonal;
     double area = 0;
     for (size_t i = begin; i < end && group; ++i) {
       const Light &l = lights[i], &first = lights[begin];
@@ -223,9 +228,12 @@ bool group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimS
       for (int k = 0; k < 3; ++k) group = group && std::abs(glm::dot(normal, vertex(l.prim, k)) - offset) <= tolerance;
       area += l.area;
     }
+    double running = 0;
     for (size_t i = begin; i < end; ++i) {
       bounds[i].with_previous = group && i > begin;
+      running += lights[i].area;
       lights[i].group_share = group ? float(lights[i].area / area) : 1.0f;
+      lights[i].group_cdf = group && i + 1 < end ? float(running / area) : 1.0f;
     }
     any = any || group;
   }
@@ -562,9 +570,11 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       else
         bounds.push_back(b);
     }
-  if (group_emitters(prims, out.shading, out.prim_shapes, emitters.size(), out.lights, bounds))
+  Aabb scene_box;
+  for (const Aabb& b : boxes) scene_box.grow(b);
+  if (group_emitters(prims, out.shading, out.prim_shapes, scene_box, emitters.size(), out.lights, bounds))
     out.features |= kFeatureLightGroups;
-  for (size_t i = emitters.size(); i < bounds.size(); ++i) out.lights[i].group_share = 1.0f;  // point and spot
+  for (size_t i = emitters.size(); i < bounds.size(); ++i) out.lights[i].group_share = out.lights[i].group_cdf = 1.0f;
   out.header.tree_light_count = uint32_t(bounds.size());
   LightBvh tree = build_light_bvh(bounds);
   out.light_bvh = std::move(tree.nodes);

@@ -19,9 +19,9 @@ struct LightBounds {
   double theta_o = 0;   // every emission axis is within theta_o of axis
   double theta_e = 0;   // and the light emits within theta_e of its axis
   bool two_sided = false;
-  // In the leaf of the light before it: an emitter group, lights that the tree does not tell apart (one
-  // shape's few coplanar triangles of one emission, scene/device_scene_build.cpp). The kernel chooses among
-  // a leaf's lights in proportion to Light::group_share, so a quad lamp costs a scene no walk of the tree.
+  // In the leaf of the light before it: an emitter group, lights that the tree does not tell apart (a small
+  // planar lamp's triangles of one emission, scene/device_scene_build.cpp). The kernel chooses among a leaf's
+  // lights in proportion to Light::group_share, so a quad or disk lamp costs a scene no walk of the tree.
   bool with_previous = false;
 };
 

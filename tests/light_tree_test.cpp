@@ -47,18 +47,19 @@ std::string mixed_lights_scene() {
     for (int k = 0; k < 9; ++k) v[k] = c[k % 3] + s * (2 * u(rng) - 1);
     shapes += (i ? ", " : "") + triangle(v, emission(0.5 + 10 * u(rng)) + (i % 3 == 0 ? R"(, "two_sided": true)" : ""));
   }
-  // Open fans of n triangles around a centre, of unequal areas: in one tilted plane (emitter groups of 2, 5 and
-  // 8 triangles, one two-sided), of 9 (one more than a group holds) and bent out of the plane (each its own
-  // leaf).
-  const int fans[][2] = {{2, 0}, {5, 0}, {8, 0}, {9, 0}, {4, 1}};
-  for (int f = 0; f < 5; ++f) {
-    const int n = fans[f][0];
-    const bool bent = fans[f][1];
+  // Open fans of n triangles around a centre, of unequal areas, in a tilted plane: emitter groups of 2, 5 (two-
+  // sided), 8 and 16 triangles (more than 8, but small beside the scene); left apart, 12 triangles spanning
+  // more than a quarter of the scene's diagonal and 4 bent out of their plane (each triangle its own leaf).
+  struct Fan { int n; bool bent; double size; };
+  const Fan fans[] = {{2, false, 1}, {5, false, 1}, {8, false, 1}, {16, false, 1}, {12, false, 6}, {4, true, 1}};
+  for (int f = 0; f < 6; ++f) {
+    const int n = fans[f].n;
+    const bool bent = fans[f].bent;
     double c[3] = {8 * u(rng) - 4, 8 * u(rng) - 4, 8 * u(rng) - 4};
     std::string positions = "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + "]";
     std::string indices;
     for (int k = 0; k <= n; ++k) {
-      double angle = 2 * M_PI * k / (n + 1), r = 0.2 + 0.6 * u(rng), x = r * std::cos(angle), y = r * std::sin(angle);
+      double angle = 2 * M_PI * k / (n + 1), r = fans[f].size * (0.2 + 0.6 * u(rng)), x = r * std::cos(angle), y = r * std::sin(angle);
       double lift = bent && k % 2 ? 0.3 : 0;  // tilted plane (x, y, 0.5 x + 0.25 y), lifted off it where bent
       char v[160];
       std::snprintf(v, sizeof v, ", [%.9g, %.9g, %.9g]", c[0] + x, c[1] + y, c[2] + 0.5 * x + 0.25 * y + lift);
@@ -100,16 +101,16 @@ std::string mixed_lights_scene() {
 TEST(LightTree, ChoiceProbabilitiesAreThePdfsTheKernelReports) {
   DeviceScene scene = load_device_scene(write_temp_file("mixed-lights.json", mixed_lights_scene()), DeviceOrigin::world);
   const uint32_t lights = scene.header.light_count;
-  ASSERT_EQ(lights, 40u + (2u + 5u + 8u + 9u + 4u) + 5u + 10u + 2u);
+  ASSERT_EQ(lights, 40u + (2u + 5u + 8u + 16u + 12u + 4u) + 5u + 10u + 2u);
   ASSERT_EQ(scene.header.tree_light_count, lights - 2);
-  // The three planar fans of at most 8 are emitter groups, one leaf each; every other light is a leaf alone.
+  // The four small planar fans are emitter groups, one leaf each; every other light is a leaf alone.
   ASSERT_TRUE(scene.features & kFeatureLightGroups);
   std::vector<uint32_t> group_sizes;
   for (const LightBvhNode& n : scene.light_bvh)
     if (n.second == PC_INVALID && n.light_count > 1) group_sizes.push_back(n.light_count);
   std::sort(group_sizes.begin(), group_sizes.end());
-  EXPECT_EQ(group_sizes, (std::vector<uint32_t>{2, 5, 8}));
-  EXPECT_EQ(scene.light_bvh.size(), 2 * (scene.header.tree_light_count - (1 + 4 + 7)) - 1);
+  EXPECT_EQ(group_sizes, (std::vector<uint32_t>{2, 5, 8, 16}));
+  EXPECT_EQ(scene.light_bvh.size(), 2 * (scene.header.tree_light_count - (1 + 4 + 7 + 15)) - 1);
   SceneBuffers sb = test_scene_buffers(scene);
   ClContext& cl = test_device();
   const size_t n = 1000000;

@@ -211,8 +211,8 @@ typedef struct {
  * the light BVH from the shading point; the rest (directional, environment) are the lights at infinity
  * (kernels/light_tree.cl).
  * emission (16) + position (16) + direction (16) + type (4) + prim (4) + slot (4) + area (4)
- * + infinite_share (4) + cos_inner (4) + cos_outer (4) + texture (4) + tree_leaf (4) + group_share (4) + pad (8)
- * = 96 bytes. */
+ * + infinite_share (4) + cos_inner (4) + cos_outer (4) + texture (4) + tree_leaf (4) + group_share (4)
+ * + group_cdf (4) + pad (4) = 96 bytes. */
 typedef struct {
   pc_float4 emission;
   pc_float4 position;  /* point, spot */
@@ -229,7 +229,8 @@ typedef struct {
   pc_uint tree_leaf;   /* lights in the light BVH: the index of its leaf in light_bvh; others PC_INVALID */
   float group_share;   /* lights in the light BVH: the probability of choosing it among its leaf's lights (its
                         * area over theirs: scene/light_bvh_build.h's emitter groups); 1 alone; others 0 */
-  pc_uint pad[2];
+  float group_cdf;     /* the shares of its leaf's lights up to it and with it (the last: exactly 1); others 0 */
+  pc_uint pad;
 } Light;
 
 /* A node of the light BVH (scene/light_bvh_build.h), flattened depth-first: an interior node's first child
@@ -356,7 +357,7 @@ typedef struct {
   X(PrimShading, kind) X(Material, color) X(Material, specular) X(Material, k) X(Material, type)             \
   X(Material, color_texture) X(Material, alpha) X(Material, sigma) X(Material, exponent) X(Material, ior) X(Material, opacity) X(Material, opacity_texture)  \
   X(Light, emission) X(Light, position) X(Light, direction) X(Light, type) X(Light, prim) X(Light, slot)    \
-  X(Light, area) X(Light, infinite_share) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture) X(Light, tree_leaf) X(Light, group_share) \
+  X(Light, area) X(Light, infinite_share) X(Light, cos_inner) X(Light, cos_outer) X(Light, texture) X(Light, tree_leaf) X(Light, group_share) X(Light, group_cdf) \
   X(LightBvhNode, lo) X(LightBvhNode, hi) X(LightBvhNode, axis) X(LightBvhNode, second) X(LightBvhNode, light) X(LightBvhNode, two_sided) X(LightBvhNode, light_count)           \
   X(Texture, width) X(Texture, height) X(Texture, offset) X(Texture, wrap) X(Texture, format) X(SceneHeader, cam_position) X(SceneHeader, cam_right)               \
   X(SceneHeader, cam_up) X(SceneHeader, cam_forward) X(SceneHeader, width) X(SceneHeader, height)          \
