@@ -91,11 +91,11 @@ PC_OUT_OF_LINE LaneF light_bounds_importance_lanes(__global const LightBvhNode* 
   return select(importance, (LaneF)(0.0f), (cos_p < cos_e) | !(cos_p > 0.0f));
 }
 
-/* node[index].second, or .light, for the lanes in m (the others: the first such lane's). */
-PC_LANE_INLINE LaneU light_node_field_lanes(__global const LightBvhNode* nodes, LaneU index, LaneI m, bool light) {
+/* node[index].second for the lanes in m (the others: the first such lane's). */
+PC_LANE_INLINE LaneU light_node_second_lanes(__global const LightBvhNode* nodes, LaneU index, LaneI m) {
   LaneGroups at;
   lane_groups(index, m, &at);
-  return light ? lane_group_gather_uint(PC_FIELD_U(nodes, light), &at) : lane_group_gather_uint(PC_FIELD_U(nodes, second), &at);
+  return lane_group_gather_uint(PC_FIELD_U(nodes, second), &at);
 }
 
 /* For the lanes in m: where target is PC_INVALID, chooses a light with u and stores its index in *chosen;
@@ -135,7 +135,7 @@ static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU targe
     LaneF p_tree = 1.0f - p_infinite;
     LaneU node = (LaneU)(0u);
     for (LaneI walking = tree;;) {
-      LaneU second = light_node_field_lanes(sc->light_bvh, node, walking, false);
+      LaneU second = light_node_second_lanes(sc->light_bvh, node, walking);
       walking &= second != PC_INVALID;
       if (!pc_any_(walking)) break;
       LaneF p_first = share_of_lanes(light_bounds_importance_lanes(sc->light_bvh, node + 1u, x, walking),
@@ -148,7 +148,6 @@ static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU targe
       node = select(node, select(second, node + 1u, first), walking);
     }
     LaneI chose = tree & sampling;
-#ifdef PC_HAS_LIGHT_GROUPS
     /* Among the leaf's lights (an emitter group, or one light: scene/light_bvh_build.h), one in proportion to
      * its group_share, by the rest of u: the first whose group_cdf exceeds u (binary search; the last's is 1). */
     if (pc_any_(following))
@@ -169,9 +168,6 @@ static inline LaneF light_choice_lanes(const SceneData* sc, Lane3 x, LaneU targe
       p_tree = select(p_tree, p_tree * share, chose);
       *chosen = select(*chosen, lo, chose);
     }
-#else
-    if (pc_any_(chose)) *chosen = select(*chosen, light_node_field_lanes(sc->light_bvh, node, chose, true), chose);
-#endif
     p = select(p, p_tree, tree);
   }
   return p;

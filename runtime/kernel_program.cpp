@@ -204,9 +204,9 @@ const char* const kFeatureFlags[] = {
     "PC_HAS_DIFFUSE",    "PC_HAS_OREN_NAYAR",      "PC_HAS_PHONG",          "PC_HAS_MIRROR",
     "PC_HAS_DIELECTRIC", "PC_HAS_ROUGH_CONDUCTOR", "PC_HAS_PLASTIC",        "PC_HAS_TEXTURES",
     "PC_HAS_POINT_LIGHTS", "PC_HAS_DIRECTIONAL_LIGHTS", "PC_HAS_ENVIRONMENT", "PC_HAS_ENVIRONMENT_MAP",
-    "PC_HAS_CUTOUTS", "PC_HAS_INSTANCES", "PC_HAS_VERTEX_COLORS", "PC_HAS_LIGHT_GROUPS"};
+    "PC_HAS_CUTOUTS", "PC_HAS_INSTANCES", "PC_HAS_VERTEX_COLORS"};
 constexpr uint32_t kFeatureCount = sizeof kFeatureFlags / sizeof kFeatureFlags[0];
-static_assert(kFeatureCount == 20 && kFeatureAll == (1u << kFeatureCount) - 1, "one flag per feature bit");
+static_assert(kFeatureCount == 19 && kFeatureAll == (1u << kFeatureCount) - 1, "one flag per feature bit");
 }  // namespace
 
 std::string kernel_options(uint32_t features) {

@@ -31,8 +31,7 @@ enum : uint32_t {
   kFeatureCutouts = 1u << 16,  // a material with opacity below 1 or an opacity texture
   kFeatureInstances = 1u << 17,  // a mesh placed more than once, stored once (two-level BVH)
   kFeatureVertexColors = 1u << 18,  // a mesh with vertex colours
-  kFeatureLightGroups = 1u << 19,   // a leaf of the light BVH with several lights (scene/light_bvh_build.h)
-  kFeatureAll = (1u << 20) - 1,
+  kFeatureAll = (1u << 19) - 1,
 };
 
 // Whether meshes that several shapes place stay instances (stored once, with a BVH of their own under the

@@ -196,9 +196,9 @@ Aabb placed_box(const Aabb& box, const glm::dmat4& m) {
 // a large panel of many triangles keeps the tree, which samples its near part more. Grouping only changes which
 // light is chosen with what probability, never the estimate's mean. lights[0, area_lights) are the area
 // lights, bounds theirs, scene the box of every primitive: marks bounds[i].with_previous and sets each one's
-// group_share and group_cdf (1 alone). Returns whether any group was made.
+// group_share and group_cdf (1 alone).
 constexpr size_t kMaxEmitterGroup = 8;
-bool group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimShading>& shading,
+void group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimShading>& shading,
                     const std::vector<uint32_t>& prim_shapes, const Aabb& scene, size_t area_lights,
                     std::vector<Light>& lights, std::vector<LightBounds>& bounds) {
   auto vertex = [&](uint32_t prim, int k) {
@@ -206,7 +206,6 @@ bool group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimS
     return glm::dvec3(v.x, v.y, v.z);
   };
   const double scene_diagonal = glm::length(glm::dvec3(scene.hi) - glm::dvec3(scene.lo));
-  bool any = false;
   for (size_t begin = 0, end = 0; begin < area_lights; begin = end) {
     const uint32_t shape = prim_shapes[lights[begin].prim];
     for (end = begin + 1; end < area_lights && prim_shapes[lights[end].prim] == shape;) ++end;
@@ -235,9 +234,7 @@ bool group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimS
       lights[i].group_share = group ? float(lights[i].area / area) : 1.0f;
       lights[i].group_cdf = group && i + 1 < end ? float(running / area) : 1.0f;
     }
-    any = any || group;
   }
-  return any;
 }
 
 }  // namespace
@@ -572,8 +569,7 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
     }
   Aabb scene_box;
   for (const Aabb& b : boxes) scene_box.grow(b);
-  if (group_emitters(prims, out.shading, out.prim_shapes, scene_box, emitters.size(), out.lights, bounds))
-    out.features |= kFeatureLightGroups;
+  group_emitters(prims, out.shading, out.prim_shapes, scene_box, emitters.size(), out.lights, bounds);
   for (size_t i = emitters.size(); i < bounds.size(); ++i) out.lights[i].group_share = out.lights[i].group_cdf = 1.0f;
   out.header.tree_light_count = uint32_t(bounds.size());
   LightBvh tree = build_light_bvh(bounds);

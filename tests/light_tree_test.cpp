@@ -104,7 +104,6 @@ TEST(LightTree, ChoiceProbabilitiesAreThePdfsTheKernelReports) {
   ASSERT_EQ(lights, 40u + (2u + 5u + 8u + 16u + 12u + 4u) + 5u + 10u + 2u);
   ASSERT_EQ(scene.header.tree_light_count, lights - 2);
   // The four small planar fans are emitter groups, one leaf each; every other light is a leaf alone.
-  ASSERT_TRUE(scene.features & kFeatureLightGroups);
   std::vector<uint32_t> group_sizes;
   for (const LightBvhNode& n : scene.light_bvh)
     if (n.second == PC_INVALID && n.light_count > 1) group_sizes.push_back(n.light_count);

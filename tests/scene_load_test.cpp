@@ -570,9 +570,7 @@ TEST(SceneLoad, NumericFieldsAcceptTheEdgesOfTheirRanges) {
 // (samples, depth, seed, camera) leaves the build options, and so the cached binary, unchanged.
 TEST(SceneLoad, KernelFeaturesFollowTheSceneNotTheSettings) {
   DeviceScene diffuse = load_device_scene(std::string(PATHCL_TEST_SCENES) + "/../../scenes/cornell-box.json");
-  // Its lamp, a quad, is an emitter group (scene/light_bvh_build.h).
-  EXPECT_EQ(kernel_options(diffuse.features),
-            "-cl-std=CL1.2 -DPC_HAS_TRIANGLES -DPC_HAS_AREA_LIGHTS -DPC_HAS_DIFFUSE -DPC_HAS_LIGHT_GROUPS");
+  EXPECT_EQ(kernel_options(diffuse.features), "-cl-std=CL1.2 -DPC_HAS_TRIANGLES -DPC_HAS_AREA_LIGHTS -DPC_HAS_DIFFUSE");
   DeviceScene all = load_device_scene(std::string(PATHCL_TEST_SCENES) + "/../../scenes/materials.json");
   for (uint32_t f : {kFeatureTriangles, kFeatureSpheres, kFeatureAreaLights, kFeatureDiffuse, kFeatureOrenNayar,
                      kFeaturePhong, kFeatureMirror, kFeatureDielectric, kFeatureRoughConductor, kFeaturePlastic,
