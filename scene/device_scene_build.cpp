@@ -195,8 +195,8 @@ Aabb placed_box(const Aabb& box, const glm::dmat4& m) {
 // costs a walk of the tree at every choice (the Cornell box's samples 1.14x faster, docs/benchmarks-notes.md);
 // a large panel of many triangles keeps the tree, which samples its near part more. Grouping only changes which
 // light is chosen with what probability, never the estimate's mean. lights[0, area_lights) are the area
-// lights, bounds theirs, scene the box of every primitive: marks bounds[i].with_previous and sets each one's
-// group_share and group_cdf (1 alone).
+// lights, bounds theirs (boxes of their primitives), scene the scene's box: marks bounds[i].with_previous and
+// sets each one's group_share and group_cdf (1 alone).
 constexpr size_t kMaxEmitterGroup = 8;
 void group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimShading>& shading,
                     const std::vector<uint32_t>& prim_shapes, const Aabb& scene, size_t area_lights,
@@ -210,8 +210,7 @@ void group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimS
     const uint32_t shape = prim_shapes[lights[begin].prim];
     for (end = begin + 1; end < area_lights && prim_shapes[lights[end].prim] == shape;) ++end;
     Aabb box;
-    for (size_t i = begin; i < end; ++i)
-      for (int k = 0; k < 3; ++k) box.grow(glm::vec3(vertex(lights[i].prim, k)));
+    for (size_t i = begin; i < end; ++i) box.grow(Aabb{bounds[i].lo, bounds[i].hi});
     const double diagonal = glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo));
     bool group = shape != PC_INVALID && end - begin >= 2 &&
                  (end - begin <= kMaxEmitterGroup || diagonal <= 0.25 * scene_diagonal);
@@ -567,8 +566,8 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
       else
         bounds.push_back(b);
     }
-  Aabb scene_box;
-  for (const Aabb& b : boxes) scene_box.grow(b);
+  Aabb scene_box;  // the instance BVH's items: the world's primitives and every placement, in device coordinates
+  for (const Aabb& b : item_boxes) scene_box.grow(b);
   group_emitters(prims, out.shading, out.prim_shapes, scene_box, emitters.size(), out.lights, bounds);
   for (size_t i = emitters.size(); i < bounds.size(); ++i) out.lights[i].group_share = out.lights[i].group_cdf = 1.0f;
   out.header.tree_light_count = uint32_t(bounds.size());
