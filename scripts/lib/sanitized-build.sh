@@ -2,8 +2,8 @@
 # configures build-asan/, the one instrumented build of both. Every source is compiled once with ASan and UBSan
 # (every report fatal), the libraries also with the fuzzer's coverage instrumentation (-DPATHCL_FUZZ=ON; the
 # top-level CMakeLists.txt says which): the tests link them (the coverage hooks are the sanitizer runtime's
-# no-ops there) and so do the fuzzers (fuzz/CMakeLists.txt). -O1 (the command lines' and importers' files at
-# -O0: CMakeLists.txt says which) and NDEBUG as in Release, but CGAL's checks
+# no-ops there) and so do the fuzzers (fuzz/CMakeLists.txt). -O1 (the command lines and a few other cold
+# files at -O0: CMakeLists.txt says which) and NDEBUG as in Release, but CGAL's checks
 # on in the mesh clean-up (CMakeLists.txt), libstdc++'s own checks on (_GLIBCXX_ASSERTIONS), line tables for
 # reports; the tests' own code at -O0 (tests/CMakeLists.txt).
 # clang rather than the Release build's gcc: a second compiler's view of the same code, and 0.6 times gcc's
