@@ -57,14 +57,15 @@ struct LoadedScene {
 };
 
 LoadedScene load(const std::string& path, const std::vector<std::string>& defines = {},
-                 DeviceOrigin origin = DeviceOrigin::camera) {
+                 DeviceOrigin origin = DeviceOrigin::camera, uint32_t bvh_layouts = kBvhLayoutsAll) {
   LoadedScene s;
   auto start = std::chrono::steady_clock::now();
   s.description = load_scene(path, parse_scene_defines(defines));
   s.load_ms = ms_since(start);
   // Ray files are traced as one flat triangle list (and read so by other tracers): instances flattened.
   s.device = build_device_scene_taking_texels(s.description, origin,
-                                              origin == DeviceOrigin::world ? Instancing::flatten : Instancing::keep);
+                                              origin == DeviceOrigin::world ? Instancing::flatten : Instancing::keep,
+                                              bvh_layouts);
   return s;
 }
 
@@ -85,14 +86,16 @@ double positive_option(const std::string& option, double value, bool allow_zero,
   return value;
 }
 
+// The scene's figures; of the wide BVHs only the layouts built for the devices (DeviceScene::bvh_layouts).
 nlohmann::json scene_stats(const LoadedScene& s) {
   const DeviceScene& d = s.device;
-  return {{"triangles", d.triangle_count},     {"spheres", d.sphere_count},        {"lights", d.lights.size()},
-          {"bvh_nodes", d.bvh.node_count},      {"bvh_depth", d.bvh.depth},
-          {"bvh4_nodes", d.nodes.size()},       {"bvh4_depth", d.wide_depth},         {"bvh_leaves", d.bvh.leaf_count},
-          {"bvh8_nodes", d.wide8_nodes},      {"bvh8_depth", d.wide8_depth},
-          {"bvh16_nodes", d.wide16_nodes},    {"bvh16_depth", d.wide16_depth},
-          {"sah_cost", d.bvh.sah_cost},         {"bvh_build_ms", d.bvh.build_ms},   {"scene_load_ms", s.load_ms}};
+  nlohmann::json j = {{"triangles", d.triangle_count}, {"spheres", d.sphere_count},     {"lights", d.lights.size()},
+                      {"bvh_nodes", d.bvh.node_count},  {"bvh_depth", d.bvh.depth},      {"bvh_leaves", d.bvh.leaf_count},
+                      {"sah_cost", d.bvh.sah_cost},     {"bvh_build_ms", d.bvh.build_ms}, {"scene_load_ms", s.load_ms}};
+  if (d.bvh_layouts & kBvhLayout4) j.update({{"bvh4_nodes", d.nodes.size()}, {"bvh4_depth", d.wide_depth}});
+  if (d.bvh_layouts & kBvhLayout8) j.update({{"bvh8_nodes", d.wide8_nodes}, {"bvh8_depth", d.wide8_depth}});
+  if (d.bvh_layouts & kBvhLayout16) j.update({{"bvh16_nodes", d.wide16_nodes}, {"bvh16_depth", d.wide16_depth}});
+  return j;
 }
 
 // A progress bar on stderr: bar, samples per pixel done (on average over the film), samples per second,
@@ -326,7 +329,12 @@ int run_render(const RenderArgs& a, RankJob& job) {
   check_output_files({{"-o", out, true}, {"--png", a.png, true}, {"--stats", a.stats},
                       {"--convergence", a.convergence}, {"--checkpoint", a.checkpoint}});
 
-  LoadedScene s = load(a.scene, a.defines);
+  // The devices before the scene: it gets the BVH layouts they read and no others, or every layout where
+  // other ranks render too (their devices are known only later).
+  std::vector<DeviceInfo> devices;
+  if (!a.coordinator_only) devices = select_devices(a.device);
+  uint32_t layouts = job.size() > 1 || devices.empty() ? kBvhLayoutsAll : bvh_layouts(devices);
+  LoadedScene s = load(a.scene, a.defines, DeviceOrigin::camera, layouts);
   warn_about_clean_up(s);
   // A time or error budget without --spp renders until the budget ends.
   if (!a.spp) opt.spp = budgeted ? kMaxSpp : s.description.render.spp;
@@ -371,7 +379,7 @@ int run_render(const RenderArgs& a, RankJob& job) {
 
   // This process's devices, then in an MPI render every other rank's.
   std::vector<WorkerSource> workers;
-  if (!a.coordinator_only) workers = device_workers(select_devices(a.device));
+  if (!a.coordinator_only) workers = device_workers(devices);
   std::vector<std::string> rank_warnings;
   for (WorkerSource& w : job.remote_workers(a.rank_timeout, &rank_warnings)) workers.push_back(std::move(w));
   for (const std::string& w : rank_warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -604,11 +612,12 @@ struct RaysArgs {
 int run_rays(const RaysArgs& a) {
   count_option("--repeat", a.repeat, 1, 1000000);
   check_output_files({{"--hits", a.hits}, {"--stats", a.stats}});
-  LoadedScene s = load(a.scene, {}, DeviceOrigin::world);  // ray files are in world coordinates
-  std::vector<RayRecord> rays = read_ray_file(a.rays);
   std::vector<DeviceInfo> devices = select_devices(a.device);
   if (devices.size() > 1) throw UsageError("--device " + a.device + ": rays traces on one device, this selects " +
                                            std::to_string(devices.size()));
+  // Ray files are in world coordinates; the scene gets the device's BVH layout only.
+  LoadedScene s = load(a.scene, {}, DeviceOrigin::world, bvh_layouts(devices));
+  std::vector<RayRecord> rays = read_ray_file(a.rays);
   ClContext cl(devices.front());
   TraceTiming timing;
   std::vector<HitRecord> hits = trace_ray_records(cl, s.device, rays, a.repeat, timing, a.work_group, a.lanes, a.any_hit);

@@ -10,6 +10,7 @@
 
 #include "runtime/atomic_file.h"
 #include "runtime/hash.h"
+#include "runtime/scene_buffers.h"
 #include "runtime/technique.h"
 
 namespace {
@@ -40,8 +41,13 @@ const char* technique_name_of(uint32_t id) {
 }  // namespace
 
 uint64_t render_key(const DeviceScene& scene, const RenderOptions& options) {
-  uint64_t h = fnv1a(&scene.header, sizeof scene.header);
-#define PC_HASH_ARRAY(T, name) h = hash_vector(scene.name, h);
+  // The BVH layouts are left out (the header's node count with them): which ones a scene holds depends on
+  // the devices (DeviceScene::bvh_layouts), and all hold the same tree, whose leaf order prims has.
+  SceneHeader header = scene.header;
+  header.node_count = 0;
+  uint64_t h = fnv1a(&header, sizeof header);
+#define PC_HASH_ARRAY(T, name) \
+  if (!is_bvh_layout_array(#name)) h = hash_vector(scene.name, h);
   PC_SCENE_ARRAYS(PC_HASH_ARRAY)
 #undef PC_HASH_ARRAY
   const uint32_t settings[] = {options.spp, options.max_depth, options.seed, options.rr_depth, options.sampler};

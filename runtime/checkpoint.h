@@ -7,9 +7,10 @@
 
 #include "runtime/renderer.h"  // and through it kernels/shared/light_types.h
 
-// A hash of the scene content (the header and every device array: geometry, BVH, materials, lights,
-// textures, camera) and of the settings that change pixels (spp, max_depth, seed, Russian roulette depth,
-// sampler, and the integrator where it is not `path`). The device set is not in it: a checkpoint written on some devices resumes on any others.
+// A hash of the scene content (the header and every device array but the BVH layouts: geometry in the
+// tree's leaf order, materials, lights, textures, camera) and of the settings that change pixels (spp,
+// max_depth, seed, Russian roulette depth, sampler, and the integrator where it is not `path`). The device
+// set is not in it, nor the layouts built for it: a checkpoint written on some devices resumes on any others.
 uint64_t render_key(const DeviceScene& scene, const RenderOptions& options);
 
 // The film's layers (Film::words, with the layout's names) and sample count. RuntimeFailure on I/O errors.

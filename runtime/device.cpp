@@ -4,6 +4,8 @@
 #include <cctype>
 #include <cstdlib>
 
+#include "scene/device_scene.h"
+
 namespace {
 
 std::string platform_string(cl_platform_id p, cl_platform_info what) {
@@ -98,6 +100,14 @@ uint32_t bvh_width(const DeviceInfo& device) {
   }
   if (!device.is_cpu) return 4;
   return device.preferred_float_width >= 16 ? 16 : 8;
+}
+
+uint32_t bvh_layout(uint32_t width) { return width == 16 ? kBvhLayout16 : width == 8 ? kBvhLayout8 : kBvhLayout4; }
+
+uint32_t bvh_layouts(const std::vector<DeviceInfo>& devices) {
+  uint32_t layouts = 0;
+  for (const DeviceInfo& d : devices) layouts |= bvh_layout(bvh_width(d));
+  return layouts;
 }
 
 uint32_t path_lanes(const DeviceInfo& device) {

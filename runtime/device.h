@@ -47,6 +47,10 @@ bool is_pocl(const DeviceInfo& device);
 // PATHCL_BVH_WIDTH=4, 8 or 16 chooses for every device (tests and benchmarks of the layouts); any other
 // value is a UsageError. The hits, and so the images, are the same in all.
 uint32_t bvh_width(const DeviceInfo& device);
+// The device scene's layout bit of a BVH width (scene/device_scene.h: kBvhLayout4, 8, 16), and the layouts
+// that the devices read together.
+uint32_t bvh_layout(uint32_t width);
+uint32_t bvh_layouts(const std::vector<DeviceInfo>& devices);
 
 // Paths per work item of the path integrator on the device (kernels/lanes.cl): 1 on GPUs and Oclgrind,
 // whose work items are the SIMD lanes already; on CPU devices 16 where the preferred float vector is 16

@@ -159,6 +159,7 @@ void visit_scene(Scene& s, Pod&& pod, Vec&& vec) {
   pod(s.instanced_triangle_count);
   pod(s.skipped_zero_area_emitters);
   pod(s.bvh);
+  pod(s.bvh_layouts);
   pod(s.wide_depth);
   pod(s.wide8_depth);
   pod(s.wide8_nodes);

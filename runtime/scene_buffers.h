@@ -8,7 +8,9 @@
 #include "runtime/kernel_program.h"
 #include "scene/device_scene.h"
 
-// Whether a device with this BVH width (runtime/device.h) reads the array: it gets only one of the layouts.
+// Whether the array is one of the BVH layouts (nodes, bvh8, bvh16), and whether a device with this BVH width
+// (runtime/device.h) reads it: it gets only one of the layouts.
+bool is_bvh_layout_array(const char* name);
 bool scene_array_used(const char* name, uint32_t bvh_width);
 // Bytes of device memory the header and the arrays take on a device with this BVH width.
 size_t scene_bytes(const DeviceScene& scene, uint32_t bvh_width);

@@ -40,6 +40,13 @@ enum : uint32_t {
 enum class Instancing { keep, flatten };
 
 
+// Which of the BVH layouts a device scene holds (DeviceScene::bvh_layouts): the arrays nodes (4-wide),
+// bvh8 and bvh16. Each device reads one (runtime/device.h, bvh_width), so a render builds only its devices'
+// layouts; the others stay empty. On the 549k-triangle benchmark terrain the two that an 8-wide CPU device
+// does not read cost 0.12 s of building and 38 MB of peak memory (docs/benchmarks-notes.md).
+constexpr uint32_t kBvhLayout4 = 1, kBvhLayout8 = 2, kBvhLayout16 = 4;
+constexpr uint32_t kBvhLayoutsAll = kBvhLayout4 | kBvhLayout8 | kBvhLayout16;
+
 // Where the device's float coordinates have their origin. Rendering puts it at the camera (the kernel's
 // camera then sits at 0): floats are finest where the image needs them, and a scene 1e6 away from the
 // world origin renders like one at it, because world positions stay in double until the camera position
@@ -60,7 +67,8 @@ struct BvhStats {
 //   bvh8       the 8-wide BVH (collapse_to_bvh8 of the same tree) and its leaves, four primitives a
 //              block, in one array (append_wide_bvh)
 //   bvh16      the 16-wide BVH (collapse_to_bvh16) and its leaves, laid out as bvh8; a device gets one
-//              of nodes, bvh8 and bvh16 (runtime/device.h, bvh_width)
+//              of nodes, bvh8 and bvh16 (runtime/device.h, bvh_width), and only those of bvh_layouts
+//              are built
 //   prims      geometry in BVH leaf order
 //   shading    per primitive in scene order (the primitive index of hits and ray files)
 //   normals    3 per primitive in scene order, only for smooth shapes
@@ -97,6 +105,7 @@ struct DeviceScene {
   uint64_t instanced_triangle_count = 0;  // the triangles they place, counted per placement
   uint32_t skipped_zero_area_emitters = 0;  // triangles and spheres whose float area is 0
   BvhStats bvh;
+  uint32_t bvh_layouts = kBvhLayoutsAll;  // the layouts built (kBvhLayout4, 8, 16); the others' arrays are empty
   uint32_t wide_depth = 0;           // depth of the 4-wide tree
   uint32_t wide8_depth = 0;          // depth of the 8-wide tree
   uint32_t wide8_nodes = 0;          // its nodes (in bvh8, among the leaf blocks)

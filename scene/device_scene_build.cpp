@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -109,14 +111,15 @@ struct TreeRoots {
 
 // Builds the BVH over prims[first, end) (in scene order; boxes alike) and appends it to out: those
 // primitives in its leaf order (out.prims must hold exactly `first` of them before), their leaf slots,
-// its 4-, 8- and 16-wide nodes after out's with references offset, and their leaf blocks.
+// the 4-, 8- and 16-wide nodes of out.bvh_layouts after out's with references offset, and their leaf blocks.
 TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, const std::vector<Aabb>& boxes, uint32_t first,
                       uint32_t end, BvhStats* stats) {
   Bvh bvh = build_bvh(std::vector<Aabb>(boxes.begin() + first, boxes.begin() + end));
   auto collapse_start = std::chrono::steady_clock::now();
-  Bvh4 wide = collapse_to_bvh4(bvh.nodes);
-  Bvh8 wide8 = collapse_to_bvh8(bvh.nodes);
-  Bvh16 wide16 = collapse_to_bvh16(bvh.nodes);
+  const uint32_t layouts = out.bvh_layouts;
+  Bvh4 wide = layouts & kBvhLayout4 ? collapse_to_bvh4(bvh.nodes) : Bvh4{};
+  Bvh8 wide8 = layouts & kBvhLayout8 ? collapse_to_bvh8(bvh.nodes) : Bvh8{};
+  Bvh16 wide16 = layouts & kBvhLayout16 ? collapse_to_bvh16(bvh.nodes) : Bvh16{};
   bvh.build_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - collapse_start).count();
   bvh.node_count = uint32_t(bvh.nodes.size());
   *stats = bvh;
@@ -147,8 +150,8 @@ TreeRoots append_tree(DeviceScene& out, const std::vector<Primitive>& prims, con
   offset_leaves(wide8.nodes);
   offset_leaves(wide16.nodes);
   out.nodes.insert(out.nodes.end(), wide.nodes.begin(), wide.nodes.end());
-  roots.root8 = append_wide_bvh(wide8.nodes, out.prims, out.bvh8);
-  roots.root16 = append_wide_bvh(wide16.nodes, out.prims, out.bvh16);
+  if (layouts & kBvhLayout8) roots.root8 = append_wide_bvh(wide8.nodes, out.prims, out.bvh8);
+  if (layouts & kBvhLayout16) roots.root16 = append_wide_bvh(wide16.nodes, out.prims, out.bvh16);
   out.wide8_nodes += uint32_t(wide8.nodes.size());
   out.wide16_nodes += uint32_t(wide16.nodes.size());
   out.wide_depth = std::max(out.wide_depth, wide.depth);
@@ -240,8 +243,11 @@ void group_emitters(const std::vector<Primitive>& prims, const std::vector<PrimS
 
 // Everything but the texel words (DeviceScene::texels), which the two public functions below copy or move.
 static DeviceScene build_device_scene_without_texels(const SceneDescription& scene, DeviceOrigin origin,
-                                                     Instancing instancing) {
+                                                     Instancing instancing, uint32_t layouts) {
+  if ((layouts & kBvhLayoutsAll) == 0 || (layouts & ~kBvhLayoutsAll) != 0)
+    throw std::logic_error("build_device_scene: layouts " + std::to_string(layouts) + " (expected kBvhLayout4, 8, 16)");
   DeviceScene out;
+  out.bvh_layouts = layouts;
   out.origin = origin == DeviceOrigin::camera ? scene.camera.position : glm::dvec3(0);
   out.header = camera_header(scene.camera, out.origin);
   if (scene.camera.aimed) out.view_distance = glm::length(scene.camera.look_at - scene.camera.position);
@@ -598,14 +604,16 @@ static DeviceScene build_device_scene_without_texels(const SceneDescription& sce
   return out;
 }
 
-DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin, Instancing instancing) {
-  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing);
+DeviceScene build_device_scene(const SceneDescription& scene, DeviceOrigin origin, Instancing instancing,
+                               uint32_t layouts) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing, layouts);
   for (const TextureImage& t : scene.textures) out.texels.insert(out.texels.end(), t.words.begin(), t.words.end());
   return out;
 }
 
-DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin, Instancing instancing) {
-  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing);
+DeviceScene build_device_scene_taking_texels(SceneDescription& scene, DeviceOrigin origin, Instancing instancing,
+                                             uint32_t layouts) {
+  DeviceScene out = build_device_scene_without_texels(scene, origin, instancing, layouts);
   if (scene.textures.size() == 1) {
     out.texels = std::move(scene.textures[0].words);
     scene.textures[0].words.clear();  // a moved-from vector is only valid; now it is empty

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime/checkpoint.h"
 #include "runtime/ray_trace.h"
 #include "scene/bvh_build.h"
 #include "test_support.h"
@@ -318,6 +319,32 @@ TEST(Bvh, WideTreesHaveTheLeastCostOfAllCollapses) {
       EXPECT_LT(nodes, binary.nodes.size() / 4) << width << "-wide, seed " << seed;
     }
   }
+}
+
+// A device scene holds the BVH layouts it was built with and no others (a render builds only its devices'):
+// each the same bytes as in the scene with all three, the rest empty, the checkpoint key the same; a device
+// whose layout it lacks is refused, and so is an empty set of layouts.
+TEST(Bvh, ScenesHoldOnlyTheLayoutsAskedFor) {
+  SceneDescription description = load_scene(write_temp_file("bvh-layouts.json", random_scene_json(300, 5, 3)));
+  DeviceScene all = build_device_scene(description);
+  ASSERT_FALSE(all.nodes.empty() || all.bvh8.empty() || all.bvh16.empty());
+  auto bytes = [](const auto& v) { return std::vector<char>((const char*)v.data(), (const char*)(v.data() + v.size())); };
+  for (uint32_t layouts : {kBvhLayout4, kBvhLayout8, kBvhLayout16, kBvhLayout4 | kBvhLayout16}) {
+    DeviceScene some = build_device_scene(description, DeviceOrigin::camera, Instancing::keep, layouts);
+    EXPECT_EQ(some.bvh_layouts, layouts);
+    EXPECT_EQ(bytes(some.nodes), layouts & kBvhLayout4 ? bytes(all.nodes) : std::vector<char>()) << layouts;
+    EXPECT_EQ(bytes(some.bvh8), layouts & kBvhLayout8 ? bytes(all.bvh8) : std::vector<char>()) << layouts;
+    EXPECT_EQ(bytes(some.bvh16), layouts & kBvhLayout16 ? bytes(all.bvh16) : std::vector<char>()) << layouts;
+    EXPECT_EQ(bytes(some.prims), bytes(all.prims)) << layouts;
+    EXPECT_EQ(render_key(some, RenderOptions{}), render_key(all, RenderOptions{})) << layouts;
+    bool has_own = layouts & bvh_layout(bvh_width(test_device().info));
+    if (has_own) {
+      EXPECT_NO_THROW(test_scene_buffers(some)) << layouts;
+    } else {
+      EXPECT_THROW(test_scene_buffers(some), std::logic_error) << layouts;
+    }
+  }
+  EXPECT_THROW(build_device_scene(description, DeviceOrigin::camera, Instancing::keep, 0), std::logic_error);
 }
 
 TEST(Bvh, SmallSceneIsOneLeafUnderTheRoot) {

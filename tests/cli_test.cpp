@@ -124,6 +124,8 @@ TEST(Cli, RenderWritesExrPngAndStats) {
   EXPECT_EQ(j["seed"], 5);
   EXPECT_EQ(j["max_depth"], 2);
   EXPECT_EQ(j["triangles"], 8);  // 3 quads of the box + the 2-triangle lamp
+  // One device: the scene was built with its BVH layout alone, and the figures name that one.
+  EXPECT_EQ(int(j.contains("bvh4_nodes")) + int(j.contains("bvh8_nodes")) + int(j.contains("bvh16_nodes")), 1) << j.dump();
   EXPECT_EQ(j["nan_samples"], 0);
   EXPECT_GE(j["rays_traced"].get<double>(), 24 * 16 * 3);
 
