@@ -255,10 +255,10 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
                          o + 512u + 16u * lane);
 }
 
-/* make_frame, offset_ray_origin, power_heuristic and the next floats over 16, 8 and one lane (math.cl): lane
+/* make_frame, offset_ray_origin, power_heuristic and its rounding step over 16, 8 and one lane (math.cl): lane
  * j of item i reads 15 floats at in[15 (16 i + j)]: n (3), err (3), p (3), w (3), pdf_a, pdf_b, x, and writes
- * 12 results as bits at out[((3 i + width) 16 + j) 12 + k] (width 0: 16 lanes, 1: 8, 2: one): t, b, the
- * offset origin (3 each), the weight, and the floats after and before x. */
+ * 13 results as bits at out[((3 i + width) 16 + j) 13 + k] (width 0: 16 lanes, 1: 8, 2: one): t, b, the
+ * offset origin (3 each), the weight, and pc_offset_component_ of x with offsets 2^-149, -2^-149 and 0. */
 #define PC_MATH_LANES_TEST(V3, F, N, LOAD, STORE)                                                         \
   static inline void math_lanes_write_##N(float in[15][16], uint first, __global uint* o) {             \
     F v[15];                                                                                              \
@@ -267,9 +267,10 @@ __kernel void camera_lanes_test(__constant const SceneHeader* h, __global const 
     make_frame(lane3(v[0], v[1], v[2]), &t, &b);                                                          \
     V3 po = offset_ray_origin(lane3(v[6], v[7], v[8]), lane3(v[3], v[4], v[5]), lane3(v[0], v[1], v[2]),   \
                               lane3(v[9], v[10], v[11]));                                                 \
-    F r[12] = {t.x, t.y, t.z, b.x, b.y, b.z, po.x, po.y, po.z, power_heuristic(v[12], v[13]),            \
-               pc_next_float_up(v[14]), pc_next_float_down(v[14])};                                      \
-    PC_WRITE_LANE_RESULTS(r, 12u, N, STORE, o);                                                           \
+    F r[13] = {t.x, t.y, t.z, b.x, b.y, b.z, po.x, po.y, po.z, power_heuristic(v[12], v[13]),            \
+               pc_offset_component_(v[14], (F)(0x1p-149f)), pc_offset_component_(v[14], (F)(-0x1p-149f)),   \
+               pc_offset_component_(v[14], (F)(0.0f))};                                                   \
+    PC_WRITE_LANE_RESULTS(r, 13u, N, STORE, o);                                                           \
   }
 #define PC_LOAD_LANES_1(p) (p)[0]
 #define PC_LOAD_LANES_8(p) vload8(0, p)
@@ -361,7 +362,7 @@ PC_FRESNEL_LOBES_LANES_TEST(lane3f16, float16, int16, 16, PC_LOAD_LANES_16, PC_S
     name##_write_8(v, 8u, o + 24u * OUT);                                                                 \
     for (uint j = 0u; j < 16u; ++j) name##_write_1(v, j, o + 32u * OUT + OUT * j);                        \
   }
-PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 15u, 12u)
+PC_FLOAT_LANES_TEST_KERNEL(math_lanes, 15u, 13u)
 PC_FLOAT_LANES_TEST_KERNEL(bsdf_lanes, 17u, 36u)
 PC_FLOAT_LANES_TEST_KERNEL(fresnel_lobes_lanes, 20u, 56u)
 #undef PC_FLOAT_LANES_TEST_KERNEL

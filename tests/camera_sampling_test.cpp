@@ -229,13 +229,13 @@ TEST(CameraLanes, LanesGiveTheOneLaneBits) {
   }
 }
 
-// make_frame, offset_ray_origin, power_heuristic and the next floats (math.cl, written once over lanes) give
-// the one-lane bits at 16 and 8 lanes: normals of both hemispheres, offsets to both sides and zero error
-// bounds, pdfs whose squares overflow or underflow and zero pdfs, side by side in one vector; and the next
-// floats are std::nextafter's towards +-infinity: zeros, denormals, the largest finite floats, infinities,
-// NaN and floats of random bits.
+// make_frame, offset_ray_origin, power_heuristic and the origin's rounding step (math.cl, written once over
+// lanes) give the one-lane bits at 16 and 8 lanes: normals of both hemispheres, offsets to both sides and zero
+// error bounds, pdfs whose squares overflow or underflow and zero pdfs, side by side in one vector; and the
+// step, pc_offset_component_(x, offset), is std::nextafter(x + offset) towards offset's infinity (x + offset
+// for a zero offset): zeros, denormals, the largest finite floats, infinities, NaN and floats of random bits.
 TEST(CameraLanes, FrameOffsetMisWeightAndNextFloatGiveTheOneLaneBits) {
-  const size_t items = 32, lanes = 16 * items, results = 12;
+  const size_t items = 32, lanes = 16 * items, results = 13;
   std::vector<float> in(15 * lanes);
   uint32_t x = 4242;
   auto next = [&] { return x = x * 1664525u + 1013904223u; };
@@ -257,7 +257,8 @@ TEST(CameraLanes, FrameOffsetMisWeightAndNextFloatGiveTheOneLaneBits) {
     uint32_t b = next();
     std::memcpy(&v[14], &b, 4);
     if (j % 3 == 0) v[14] = special[j / 3 % specials];
-    not_finite += !std::isfinite(std::nextafter(v[14], INFINITY)) + !std::isfinite(std::nextafter(v[14], -INFINITY));
+    not_finite += !std::isfinite(std::nextafter(v[14] + 0x1p-149f, INFINITY)) +
+                  !std::isfinite(std::nextafter(v[14] - 0x1p-149f, -INFINITY)) + !std::isfinite(v[14] + 0.0f);
   }
   std::vector<uint32_t> bits = run_float_lanes_test("math_lanes_test", in, items, 16 * results);
   LaneComparison lc = compare_lanes(bits, items, 16 * results, [](float f) { return bool(std::isfinite(f)); });
@@ -266,16 +267,19 @@ TEST(CameraLanes, FrameOffsetMisWeightAndNextFloatGiveTheOneLaneBits) {
   for (size_t j = 0; j < lanes; ++j) {
     const float v = in[15 * j + 14];
     const uint32_t* one = &bits[(3 * (j / 16) + 2) * 16 * results + (j % 16) * results];  // the one-lane results
-    for (int k = 0; k < 2; ++k) {
-      float got, want = std::nextafter(v, k == 0 ? INFINITY : -INFINITY);
+    const float wants[3] = {std::nextafter(v + 0x1p-149f, INFINITY), std::nextafter(v - 0x1p-149f, -INFINITY),
+                            v + 0.0f};
+    for (int k = 0; k < 3; ++k) {
+      float got, want = wants[k];
       std::memcpy(&got, &one[10 + k], 4);
       uint32_t want_bits, v_bits;
       std::memcpy(&want_bits, &want, 4);
       std::memcpy(&v_bits, &v, 4);
       if (std::isnan(want))
-        EXPECT_TRUE(std::isnan(got)) << "the next float of NaN";
+        EXPECT_TRUE(std::isnan(got)) << "the step from NaN";
       else
-        EXPECT_EQ(one[10 + k], want_bits) << (k == 0 ? "up" : "down") << " from bits " << std::hex << v_bits;
+        EXPECT_EQ(one[10 + k], want_bits) << (k == 0 ? "up" : k == 1 ? "down" : "no offset") << " from bits "
+                                          << std::hex << v_bits;
     }
   }
 }
