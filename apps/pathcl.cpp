@@ -368,8 +368,8 @@ int run_render(const RenderArgs& a, RankJob& job) {
   }
 
   opt.checkpoint = a.checkpoint;
-  // The key hashes every scene array: a fifth of a second of one core for the 549k-triangle benchmark
-  // terrain, so only a render that writes or reads a checkpoint pays for it.
+  // The key hashes the scene's arrays byte by byte: a fifth of a second of one core for the 549k-triangle
+  // benchmark terrain, so only a render that writes or reads a checkpoint pays for it.
   if (!a.checkpoint.empty() || !a.resume.empty()) opt.checkpoint_key = render_key(s.device, opt);
   Film resumed;
   if (!a.resume.empty()) {
