@@ -15,43 +15,36 @@
 
 #define PC_HALTON_DIMENSIONS 64
 
-/* Sobol dimensions 1-3: Joe and Kuo's direction numbers for their dimensions 2-4 (primitive polynomials
- * x + 1, x^2 + x + 1, x^3 + x + 1, initial m = {1}, {1, 3}, {1, 3, 1}), four per PC_SOBOL_NIBBLE, which
- * turns them into the XORs of every subset: entry [d][n][v] is the XOR of the direction numbers of bits
- * 4n .. 4n + 3 set in v. A 32-bit index then takes eight lookups instead of 32 conditional XORs (that loop
- * made the sobol sampler 3x slower than independent). Dimension 0 is the bit reversal of the index.
- * tests/sampler_test.cpp checks the tables against the direction numbers computed from the polynomials. */
+/* Sobol dimensions 2 and 3: Joe and Kuo's direction numbers for their dimensions 3 and 4 (primitive
+ * polynomials x^2 + x + 1 and x^3 + x + 1, initial m = {1, 3} and {1, 3, 1}), bit-reversed (the scramble
+ * takes the points' reversed bits), four per PC_SOBOL_NIBBLE, which turns them into the XORs of every
+ * subset: entry [d][n][v] is the XOR of the direction numbers of bits 4n .. 4n + 3 set in v. A 32-bit index
+ * then takes eight lookups instead of 32 conditional XORs (that loop made the sobol sampler 3x slower than
+ * independent). Dimension 0 is the bit reversal of the index, dimension 1 (x + 1) needs no table
+ * (sobol1_reversed). tests/sampler_test.cpp checks all three against the direction numbers computed from
+ * the polynomials. */
 #define PC_SOBOL_NIBBLE(a, b, c, d)                                                                     \
   {0u, a, b, a ^ b, c, a ^ c, b ^ c, a ^ b ^ c, d, a ^ d, b ^ d, a ^ b ^ d, c ^ d, a ^ c ^ d, b ^ c ^ d, \
    a ^ b ^ c ^ d}
-__constant uint kSobolNibbles[3][8][16] = {
+__constant uint kSobolNibbles[2][8][16] = {
   {
-    PC_SOBOL_NIBBLE(0x80000000u, 0xc0000000u, 0xa0000000u, 0xf0000000u),
-    PC_SOBOL_NIBBLE(0x88000000u, 0xcc000000u, 0xaa000000u, 0xff000000u),
-    PC_SOBOL_NIBBLE(0x80800000u, 0xc0c00000u, 0xa0a00000u, 0xf0f00000u),
-    PC_SOBOL_NIBBLE(0x88880000u, 0xcccc0000u, 0xaaaa0000u, 0xffff0000u),
-    PC_SOBOL_NIBBLE(0x80008000u, 0xc000c000u, 0xa000a000u, 0xf000f000u),
-    PC_SOBOL_NIBBLE(0x88008800u, 0xcc00cc00u, 0xaa00aa00u, 0xff00ff00u),
-    PC_SOBOL_NIBBLE(0x80808080u, 0xc0c0c0c0u, 0xa0a0a0a0u, 0xf0f0f0f0u),
-    PC_SOBOL_NIBBLE(0x88888888u, 0xccccccccu, 0xaaaaaaaau, 0xffffffffu)},
+    PC_SOBOL_NIBBLE(0x00000001u, 0x00000003u, 0x00000006u, 0x00000009u),
+    PC_SOBOL_NIBBLE(0x00000017u, 0x0000003au, 0x00000071u, 0x000000a3u),
+    PC_SOBOL_NIBBLE(0x00000116u, 0x00000339u, 0x00000677u, 0x000009aau),
+    PC_SOBOL_NIBBLE(0x00001601u, 0x00003903u, 0x00007706u, 0x0000aa09u),
+    PC_SOBOL_NIBBLE(0x00010117u, 0x0003033au, 0x00060671u, 0x000909a3u),
+    PC_SOBOL_NIBBLE(0x00171616u, 0x003a3939u, 0x00717777u, 0x00a3aaaau),
+    PC_SOBOL_NIBBLE(0x01170001u, 0x033a0003u, 0x06710006u, 0x09a30009u),
+    PC_SOBOL_NIBBLE(0x16160017u, 0x3939003au, 0x77770071u, 0xaaaa00a3u)},
   {
-    PC_SOBOL_NIBBLE(0x80000000u, 0xc0000000u, 0x60000000u, 0x90000000u),
-    PC_SOBOL_NIBBLE(0xe8000000u, 0x5c000000u, 0x8e000000u, 0xc5000000u),
-    PC_SOBOL_NIBBLE(0x68800000u, 0x9cc00000u, 0xee600000u, 0x55900000u),
-    PC_SOBOL_NIBBLE(0x80680000u, 0xc09c0000u, 0x60ee0000u, 0x90550000u),
-    PC_SOBOL_NIBBLE(0xe8808000u, 0x5cc0c000u, 0x8e606000u, 0xc5909000u),
-    PC_SOBOL_NIBBLE(0x6868e800u, 0x9c9c5c00u, 0xeeee8e00u, 0x5555c500u),
-    PC_SOBOL_NIBBLE(0x8000e880u, 0xc0005cc0u, 0x60008e60u, 0x9000c590u),
-    PC_SOBOL_NIBBLE(0xe8006868u, 0x5c009c9cu, 0x8e00eeeeu, 0xc5005555u)},
-  {
-    PC_SOBOL_NIBBLE(0x80000000u, 0xc0000000u, 0x20000000u, 0x50000000u),
-    PC_SOBOL_NIBBLE(0xf8000000u, 0x74000000u, 0xa2000000u, 0x93000000u),
-    PC_SOBOL_NIBBLE(0xd8800000u, 0x25400000u, 0x59e00000u, 0xe6d00000u),
-    PC_SOBOL_NIBBLE(0x78080000u, 0xb40c0000u, 0x82020000u, 0xc3050000u),
-    PC_SOBOL_NIBBLE(0x208f8000u, 0x51474000u, 0xfbea2000u, 0x75d93000u),
-    PC_SOBOL_NIBBLE(0xa0858800u, 0x914e5400u, 0xdbe79e00u, 0x25db6d00u),
-    PC_SOBOL_NIBBLE(0x58800080u, 0xe54000c0u, 0x79e00020u, 0xb6d00050u),
-    PC_SOBOL_NIBBLE(0x800800f8u, 0xc00c0074u, 0x200200a2u, 0x50050093u)}};
+    PC_SOBOL_NIBBLE(0x00000001u, 0x00000003u, 0x00000004u, 0x0000000au),
+    PC_SOBOL_NIBBLE(0x0000001fu, 0x0000002eu, 0x00000045u, 0x000000c9u),
+    PC_SOBOL_NIBBLE(0x0000011bu, 0x000002a4u, 0x0000079au, 0x00000b67u),
+    PC_SOBOL_NIBBLE(0x0000101eu, 0x0000302du, 0x00004041u, 0x0000a0c3u),
+    PC_SOBOL_NIBBLE(0x0001f104u, 0x0002e28au, 0x000457dfu, 0x000c9baeu),
+    PC_SOBOL_NIBBLE(0x0011a105u, 0x002a7289u, 0x0079e7dbu, 0x00b6dba4u),
+    PC_SOBOL_NIBBLE(0x0100011au, 0x030002a7u, 0x0400079eu, 0x0a000b6du),
+    PC_SOBOL_NIBBLE(0x1f001001u, 0x2e003003u, 0x45004004u, 0xc900a00au)}};
 #undef PC_SOBOL_NIBBLE
 
 __constant uint kPrimes[PC_HALTON_DIMENSIONS] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73, 79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199, 211, 223, 227, 229, 233, 239, 241, 251, 257, 263, 269, 271, 277, 281, 283, 293, 307, 311};
@@ -72,19 +65,6 @@ static inline PC_OVL uint16 pc_gather_(__constant const uint* a, uint16 i) {
   return (uint16)(a[i.s0], a[i.s1], a[i.s2], a[i.s3], a[i.s4], a[i.s5], a[i.s6], a[i.s7],
     a[i.s8], a[i.s9], a[i.sa], a[i.sb], a[i.sc], a[i.sd], a[i.se], a[i.sf]);
 }
-
-/* The XOR of the direction numbers of the four bits of index & 15 (a row of kSobolNibbles): one table
- * load for one lane; for 8 or 16 lanes four selects of the row's single-bit entries, since a gather of 8
- * or 16 loads costs more than the arithmetic. */
-static inline PC_OVL uint pc_sobol_nibble_(__constant const uint* row, uint index) { return row[index & 15u]; }
-#define PC_SOBOL_NIBBLE_LANES(U)                                                                          \
-  static inline PC_OVL U pc_sobol_nibble_(__constant const uint* row, U index) {                         \
-    return select((U)(0u), (U)(row[1]), (index & 1u) != 0u) ^ select((U)(0u), (U)(row[2]), (index & 2u) != 0u) ^ \
-           select((U)(0u), (U)(row[4]), (index & 4u) != 0u) ^ select((U)(0u), (U)(row[8]), (index & 8u) != 0u); \
-  }
-PC_SOBOL_NIBBLE_LANES(uint8)
-PC_SOBOL_NIBBLE_LANES(uint16)
-#undef PC_SOBOL_NIBBLE_LANES
 
 #define PC_LANE_W 1
 #include "templates/sampler.cl"

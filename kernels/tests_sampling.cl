@@ -196,10 +196,27 @@ __kernel void sampler_points_test(__constant const SceneHeader* h, uint pixel, u
   out[i] = sample4(h, key, group);
 }
 
-/* The unscrambled Sobol bits of index[i] in dimensions 1, 2 and 3. */
-__kernel void sobol_bits_test(__global const uint* index, __global uint* out) {
-  uint i = get_global_id(0);
-  for (uint d = 1u; d <= 3u; ++d) out[3u * i + d - 1u] = sobol_bits(index[i], d);
+/* The unscrambled Sobol points of index[i] in dimensions 1, 2 and 3, bit-reversed, at one, 8 and 16 lanes:
+ * out[9 i + 3 w + d - 1] for width w (0: one lane, 1: 8, 2: 16). At 8 and 16 lanes index[i] is lane i % N
+ * of a vector whose other lanes hold its neighbours' indices (n of them in all). */
+#define PC_SOBOL_BITS_TEST(U, N, LOAD, STORE)                                                              \
+  static inline void sobol_bits_test_##N(__global const uint* index, uint n, uint i, __global uint* out) { \
+    uint in[N], x[3][N];                                                                                   \
+    for (uint j = 0u; j < N; ++j) in[j] = index[(i - i % N + j) % n];                                      \
+    U v = LOAD(0, in), x2, x3;                                                                             \
+    sobol23_reversed(v, &x2, &x3);                                                                         \
+    STORE(sobol1_reversed(v), 0, x[0]), STORE(x2, 0, x[1]), STORE(x3, 0, x[2]);                            \
+    for (uint d = 0u; d < 3u; ++d) out[d] = x[d][i % N];                                                   \
+  }
+PC_SOBOL_BITS_TEST(uint8, 8, vload8, vstore8)
+PC_SOBOL_BITS_TEST(uint16, 16, vload16, vstore16)
+#undef PC_SOBOL_BITS_TEST
+__kernel void sobol_bits_test(__global const uint* index, uint n, __global uint* out) {
+  uint i = get_global_id(0), x2, x3;
+  sobol23_reversed(index[i], &x2, &x3);
+  out[9u * i] = sobol1_reversed(index[i]), out[9u * i + 1u] = x2, out[9u * i + 2u] = x3;
+  sobol_bits_test_8(index, n, i, out + 9u * i + 3u);
+  sobol_bits_test_16(index, n, i, out + 9u * i + 6u);
 }
 
 /* Camera rays and warps over 16 and 8 lanes against one lane (camera.cl, sampling.cl): item i takes the 16

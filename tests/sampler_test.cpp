@@ -110,19 +110,29 @@ TEST(Sampler, SobolTablesMatchTheDirectionNumbersOfTheirPolynomials) {
   std::vector<uint32_t> index;
   for (int k = 0; k < 32; ++k) index.push_back(1u << k);
   for (uint32_t i = 0; i < 4096; ++i) index.push_back(i * 0x9e3779b9u ^ (i << 7));  // every nibble value, mixed
+  index.push_back(0u);
+  index.push_back(0xffffffffu);
   ClContext& cl = test_device();
-  ClBuffer in = upload(cl, index), out(cl, CL_MEM_WRITE_ONLY, 3 * index.size() * sizeof(uint32_t));
+  ClBuffer in = upload(cl, index), out(cl, CL_MEM_WRITE_ONLY, 9 * index.size() * sizeof(uint32_t));
   ClKernel k(sampling_test_program().kernel("sobol_bits_test"));
   k.arg(0, in.mem);
-  k.arg(1, out.mem);
+  k.arg(1, cl_uint(index.size()));
+  k.arg(2, out.mem);
   run_kernel(cl, k.k, index.size());
-  std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, 3 * index.size());
+  std::vector<uint32_t> bits = read_buffer<uint32_t>(cl, out, 9 * index.size());
+  auto reversed = [](uint32_t x) {
+    uint32_t r = 0;
+    for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+    return r;
+  };
   for (size_t i = 0; i < index.size(); ++i)
     for (int d = 0; d < 3; ++d) {
       uint32_t expected = 0;
       for (int b = 0; b < 32; ++b)
         if ((index[i] >> b) & 1u) expected ^= dirs[d][b];
-      ASSERT_EQ(bits[3 * i + d], expected) << "dimension " << d + 1 << " index " << index[i];
+      for (int w = 0; w < 3; ++w)
+        ASSERT_EQ(bits[9 * i + 3 * w + d], reversed(expected))
+            << "dimension " << d + 1 << " index " << index[i] << " at " << (w == 0 ? 1 : 8 * w) << " lanes";
     }
 }
 

@@ -31,21 +31,49 @@ static inline PC_OVL U reverse_bits(U x) {
   x = ((x >> 8u) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8u);
   return (x >> 16u) | (x << 16u);
 }
-/* Laine-Karras style permutation with Burley's constants: an Owen scramble of the reversed bits. */
-static inline PC_OVL U nested_uniform_scramble(U x, U seed) {
-  x = reverse_bits(x);
+/* Laine-Karras style permutation with Burley's constants, of bits already reversed: nested uniform
+ * (Owen) scrambling of x is reverse_bits(laine_karras_permutation(reverse_bits(x), seed)). */
+static inline PC_OVL U laine_karras_permutation(U x, U seed) {
   x += seed;
   x ^= x * 0x6c50b47cu;
   x ^= x * 0xb82f1e52u;
   x ^= x * 0xc7afe638u;
   x ^= x * 0x8d22f6e6u;
-  return reverse_bits(x);
-}
-/* Sobol dimension dim in 1..3 of a 32-bit index, as bits. */
-static inline PC_OVL U sobol_bits(U index, uint dim) {
-  U x = (U)(0u);
-  for (uint n = 0u; n < 8u; ++n) x ^= pc_sobol_nibble_(&kSobolNibbles[dim - 1u][n][0], index >> (4u * n));
   return x;
+}
+/* Sobol dimension 1 of a 32-bit index, bit-reversed. Its generator matrix is Pascal's triangle mod 2
+ * (polynomial x + 1): direction number k has bit 31 - j set where C(k, j) is odd, that is (Lucas) where
+ * j's bits are a subset of k's. So bit j of the reversed point is the XOR of the index's bits k whose bits
+ * are a superset of j's: that transform takes one step per bit of j, not one per bit of the index. */
+static inline PC_OVL U sobol1_reversed(U x) {
+  x ^= (x >> 1u) & 0x55555555u;
+  x ^= (x >> 2u) & 0x33333333u;
+  x ^= (x >> 4u) & 0x0f0f0f0fu;
+  x ^= (x >> 8u) & 0x00ff00ffu;
+  x ^= x >> 16u;
+  return x;
+}
+/* Sobol dimensions 2 and 3 of a 32-bit index, bit-reversed: eight table lookups each for one lane; for 8
+ * or 16 lanes (a gather of 8 or 16 loads costs more than the arithmetic) the direction numbers of the
+ * index's set bits, each bit's lane mask made once for both dimensions. */
+static inline PC_OVL void sobol23_reversed(U index, U* x2, U* x3) {
+  U a = (U)(0u), b = (U)(0u);
+#if PC_LANE_W == 1
+  for (uint n = 0u; n < 8u; ++n) {
+    uint v = (index >> (4u * n)) & 15u;
+    a ^= kSobolNibbles[0][n][v];
+    b ^= kSobolNibbles[1][n][v];
+  }
+#else
+#pragma unroll
+  for (uint k = 0u; k < 32u; ++k) {
+    U m = as_U(as_I(index << (31u - k)) >> 31); /* all ones where bit k is set */
+    a ^= m & kSobolNibbles[0][k / 4u][1u << (k % 4u)];
+    b ^= m & kSobolNibbles[1][k / 4u][1u << (k % 4u)];
+  }
+#endif
+  *x2 = a;
+  *x3 = b;
 }
 /* A random permutation of [0, n): Kensler's hashed bijection of the next power of two, cycle-walked
  * into [0, n), then rotated. The rotation uses a second hash: Kensler's original rotation by p itself
@@ -104,11 +132,15 @@ static inline PC_OVL void sample4_lanes(__constant const SceneHeader* h, U pixel
   }
   if (h->sampler == PC_SAMPLER_SOBOL) {
     U lane_seed = hash4(pixel, group, (U)(seed), (U)(0x68e31da4u));
-    U index = nested_uniform_scramble(sample, lane_seed);
-    *u0 = uint_to_unit(nested_uniform_scramble(reverse_bits(index), hash_uint(lane_seed ^ 0x1u)));
-    *u1 = uint_to_unit(nested_uniform_scramble(sobol_bits(index, 1u), hash_uint(lane_seed ^ 0x2u)));
-    *u2 = uint_to_unit(nested_uniform_scramble(sobol_bits(index, 2u), hash_uint(lane_seed ^ 0x3u)));
-    *u3 = uint_to_unit(nested_uniform_scramble(sobol_bits(index, 3u), hash_uint(lane_seed ^ 0x4u)));
+    /* The pixel's shuffled index: the sample's, nested-uniform scrambled. Each dimension's point is then
+     * scrambled in turn; the scramble reads and writes reversed bits, which sobol1_reversed and
+     * sobol23_reversed give directly, and dimension 0's point is the reversed index itself. */
+    U index = reverse_bits(laine_karras_permutation(reverse_bits(sample), lane_seed)), x2, x3;
+    sobol23_reversed(index, &x2, &x3);
+    *u0 = uint_to_unit(reverse_bits(laine_karras_permutation(index, hash_uint(lane_seed ^ 0x1u))));
+    *u1 = uint_to_unit(reverse_bits(laine_karras_permutation(sobol1_reversed(index), hash_uint(lane_seed ^ 0x2u))));
+    *u2 = uint_to_unit(reverse_bits(laine_karras_permutation(x2, hash_uint(lane_seed ^ 0x3u))));
+    *u3 = uint_to_unit(reverse_bits(laine_karras_permutation(x3, hash_uint(lane_seed ^ 0x4u))));
     return;
   }
   /* Halton for the first 64 dimensions; beyond them, and for the independent sampler, hashed numbers. */
