@@ -54,24 +54,38 @@ typedef struct {
   LaneI prev_delta;  /* the camera ray counts as a delta: what it sees directly is not MIS-weighted */
 } PathLanes;
 
-/* New paths: the camera rays of sample `sample` of each lane's pixel, taken where m is set. */
-static inline void path_begin_lanes(const SceneData* sc, LaneU pixel, LaneU sample, LaneI m, PathLanes* st) {
+/* The camera rays of sample `sample` of each lane's pixel (with cut-outs, their seeds). */
+typedef struct {
+  Lane3 o, d;
+  LaneU cutout_seed;
+} CameraRayLanes;
+static inline void camera_rays_lanes(const SceneData* sc, LaneU pixel, LaneU sample, CameraRayLanes* c) {
   __constant const SceneHeader* h = sc->h;
   LaneF u0, u1, u2, u3;
   sample4_lanes(h, pixel, sample, h->seed, (LaneU)(PC_DIM_CAMERA), &u0, &u1, &u2, &u3);
-  PathLanes n;
-  camera_ray_lanes(h, pixel % h->width, pixel / h->width, u0, u1, u2, u3, &n.ray.o, &n.ray.d);
+  camera_ray_lanes(h, pixel % h->width, pixel / h->width, u0, u1, u2, u3, &c->o, &c->d);
 #ifdef PC_DEBUG_PERTURB
   /* Test builds only (DeviceFault::perturb): one operation rounded the other way, as a device of another
    * arithmetic class would, so that the start-up probe must tell the device apart. */
-  n.ray.d.x = nextafter(n.ray.d.x, (LaneF)(INFINITY));
+  c->d.x = nextafter(c->d.x, (LaneF)(INFINITY));
 #endif
+  c->cutout_seed = (LaneU)(0u);
+#ifdef PC_HAS_CUTOUTS
+  c->cutout_seed = cutout_seed_lanes(h, pixel, sample, (LaneU)(PC_RAY_CAMERA));
+#endif
+}
+
+/* New paths where m is set: lane j on the camera ray of lane src[j] of c. */
+static inline void path_begin_lanes(const CameraRayLanes* c, LaneU src, LaneI m, PathLanes* st) {
+  PathLanes n;
+  n.ray.o = lane3_permute(c->o, src);
+  n.ray.d = lane3_permute(c->d, src);
   n.ray.tmin = (LaneF)(0.0f);
   n.ray.tmax = (LaneF)(INFINITY);
   n.ray.skip_prim = n.ray.skip_instance = (LaneU)(PC_INVALID);
   n.ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  n.ray.cutout_seed = cutout_seed_lanes(h, pixel, sample, (LaneU)(PC_RAY_CAMERA));
+  n.ray.cutout_seed = lane_permute(c->cutout_seed, src);
 #endif
   Lane3 zero = lane3_splat((float3)(0.0f));
   n.throughput = lane3_splat((float3)(1.0f));
@@ -210,6 +224,20 @@ static inline void add_unit_stats(__global UnitStats* stats, uint rays, uint nan
  * The film holds three float4 per pixel: the sums of the even-numbered and of the odd-numbered samples
  * (w counts them) and the sum of squares. The two half sums give a noise estimate from the image itself.
  * stats (UnitStats): rays (64 bits) and hazard counts, added with integer atomics. */
+/* The camera rays of tasks batch .. batch + PC_LANES - 1 of render_pass_item's work item, task batch + j in
+ * lane j (task t: sample sample_begin + t % sample_count of pixel item first + t / sample_count; those
+ * past the item's last task are made too, and not taken). */
+static inline void task_camera_rays(const SceneData* sc, uint batch, uint first, uint pixel_begin, uint pixel_stride,
+                                    uint sample_begin, uint sample_count, CameraRayLanes* c) {
+  uint pixel_of[PC_LANES], sample_of[PC_LANES], item = first + batch / sample_count, s = batch % sample_count;
+  for (uint j = 0u; j < PC_LANES; ++j) {
+    pixel_of[j] = pixel_begin + item * pixel_stride;
+    sample_of[j] = sample_begin + s;
+    if (++s == sample_count) s = 0u, ++item;
+  }
+  camera_rays_lanes(sc, lane_load(pixel_of), lane_load(sample_of), c);
+}
+
 #if PC_LANES > 1
 #define PC_RESULTS (4u * PC_LANES) /* at most 64: a bit each in `ready` */
 #else
@@ -234,8 +262,14 @@ PC_KERNEL_BODY void render_pass_item(const SceneData* scene, __global float4* fi
   for (uint j = 0u; j < PC_LANES; ++j) task_of[j] = pixel_of[j] = sample_of[j] = 0u;
   LaneU pixel = lane_load(pixel_of), sample = lane_load(sample_of);
   LaneI active = (LaneI)(0);
+  /* The camera rays of tasks batch .. batch + PC_LANES - 1, made together and handed to the lanes as they
+   * take those tasks: a lane taking its task alone paid for a camera ray in every lane (the Cornell box's
+   * lanes end their paths a few at a time). */
+  uint batch = 0u;
+  CameraRayLanes cam;
+  task_camera_rays(&sc, batch, first, pixel_begin, pixel_stride, sample_begin, sample_count, &cam);
   PathLanes st;
-  path_begin_lanes(&sc, pixel, sample, (LaneI)(-1), &st); /* every lane's state defined */
+  path_begin_lanes(&cam, lane_indices(), (LaneI)(-1), &st); /* every lane's state defined */
   for (uint idle = (1u << (PC_LANES - 1u) << 1u) - 1u;;) {
     /* Idle lanes take the next tasks while the ring has room for their results. */
     uint taken = 0u;
@@ -251,7 +285,15 @@ PC_KERNEL_BODY void render_pass_item(const SceneData* scene, __global float4* fi
       LaneI take = pc_lanes_of_bits(taken, active);
       pixel = lane_load(pixel_of);
       sample = lane_load(sample_of);
-      path_begin_lanes(&sc, pixel, sample, take, &st);
+      /* The tasks taken lie in this batch and the next: they are at most PC_LANES from the first untaken. */
+      LaneU src = lane_load(task_of) - batch;
+      LaneI in_batch = take & (src < PC_LANES);
+      if (pc_any_(in_batch)) path_begin_lanes(&cam, src & (PC_LANES - 1u), in_batch, &st);
+      if (pc_any_(take & !in_batch)) {
+        batch += PC_LANES;
+        task_camera_rays(&sc, batch, first, pixel_begin, pixel_stride, sample_begin, sample_count, &cam);
+        path_begin_lanes(&cam, (src - PC_LANES) & (PC_LANES - 1u), take & !in_batch, &st);
+      }
       active |= take;
     }
     if (!pc_any_(active)) break;

@@ -160,6 +160,42 @@ static inline LaneU lane_indices(void) {
   return lane_load(j_of);
 }
 
+/* Lane src[j] of x in each lane j (src < PC_LANES): one vpermps or vpermd where clang targets AVX2 (8 lanes)
+ * or AVX-512 (16), else through memory. */
+#if PC_LANES == 1
+static inline PC_OVL float lane_permute(float x, uint src) { return x; }
+static inline PC_OVL uint lane_permute(uint x, uint src) { return x; }
+#elif (PC_LANES == 8 && defined(__clang__) && defined(__AVX2__)) || \
+    (PC_LANES == 16 && defined(__clang__) && defined(__AVX512F__))
+#if PC_LANES == 8
+static inline PC_OVL LaneF lane_permute(LaneF x, LaneU src) { return __builtin_ia32_permvarsf256(x, as_int8(src)); }
+static inline PC_OVL LaneU lane_permute(LaneU x, LaneU src) {
+  return as_uint8(__builtin_ia32_permvarsi256(as_int8(x), as_int8(src)));
+}
+#else
+static inline PC_OVL LaneF lane_permute(LaneF x, LaneU src) { return __builtin_ia32_permvarsf512(x, as_int16(src)); }
+static inline PC_OVL LaneU lane_permute(LaneU x, LaneU src) {
+  return as_uint16(__builtin_ia32_permvarsi512(as_int16(x), as_int16(src)));
+}
+#endif
+#else
+#define PC_PERMUTE_BY_MEMORY(L, S)                                                                        \
+  static inline PC_OVL L lane_permute(L x, LaneU src) {                                                   \
+    S a[PC_LANES], r[PC_LANES];                                                                           \
+    uint from[PC_LANES];                                                                                  \
+    lane_store(x, a);                                                                                     \
+    lane_store(src, from);                                                                                \
+    for (uint j = 0u; j < PC_LANES; ++j) r[j] = a[from[j]];                                               \
+    return lane_load(r);                                                                                  \
+  }
+PC_PERMUTE_BY_MEMORY(LaneF, float)
+PC_PERMUTE_BY_MEMORY(LaneU, uint)
+#undef PC_PERMUTE_BY_MEMORY
+#endif
+static inline Lane3 lane3_permute(Lane3 v, LaneU src) {
+  return lane3(lane_permute(v.x, src), lane_permute(v.y, src), lane_permute(v.z, src));
+}
+
 /* The first lane set in m (m must have one). */
 static inline uint lane_first(LaneI m) {
   return pc_lowest_bit(pc_lane_bits(m));
