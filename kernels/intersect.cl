@@ -414,6 +414,14 @@ static __attribute__((always_inline)) inline bool trace_bvh4_axis(const SceneDat
   }
 }
 
+/* A LeafBlock's spheres (bit i: primitive i is one): none in a program for a scene without spheres, so
+ * that its triangle loops test no bits. */
+#ifdef PC_HAS_SPHERES
+#define pc_block_spheres(b) ((b)->sphere_mask)
+#else
+#define pc_block_spheres(b) 0u
+#endif
+
 /* A LeafBlock's vertex coordinate by vertex (0 a, 1 b, 2 c) and axis, for literal indices. */
 static inline float4 block_coord(__global const LeafBlock* b, uint vertex, uint axis) {
   if (vertex == 0u) return axis == 0u ? b->ax : axis == 1u ? b->ay : b->az;
@@ -441,7 +449,7 @@ static __attribute__((always_inline)) inline bool intersect_block(const SceneDat
   uint4 prim = vload4(0, b->prim);
   int4 crossed = ~outside & (det != 0.0f) & ((int4)(0, 1, 2, 3) < (int4)((int)b->count)) &
                  (prim != (uint4)(ray->skip_prim));
-  bool any_sphere = b->sphere_mask != 0u;
+  bool any_sphere = pc_block_spheres(b) != 0u;
   /* Most blocks: the ray crosses none of the triangles, and needs no distance (nor its division). */
   if (!pc_any_(crossed) && !any_sphere) return false;
   float4 Az = rp->sz * Akz, Bz = rp->sz * Bkz, Cz = rp->sz * Ckz;
@@ -461,7 +469,7 @@ static __attribute__((always_inline)) inline bool intersect_block(const SceneDat
   vstore4(prim, 0, ps);
   bool found = false;
   for (uint i = 0; i < b->count; ++i) {
-    if (b->sphere_mask & (1u << i)) {
+    if (pc_block_spheres(b) & (1u << i)) {
       found |= intersect_prim(cut, prims, b->first_slot + i, ray, rp, kz, hit->t, hit);
       continue;
     }

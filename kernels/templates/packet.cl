@@ -142,7 +142,7 @@ static inline PC_OVL I packet_leaf(const SceneData* cut, __global const LeafBloc
   for (__global const LeafBlock* b = wide_leaf(blocks, ref);; ++b) {
     __global const float* c = (__global const float*)b; /* ax ay az bx by bz cx cy cz, 4 lanes each */
     for (uint i = 0u; i < b->count; ++i) {
-      if (b->sphere_mask & (1u << i)) {
+      if (pc_block_spheres(b) & (1u << i)) {
         uint bits = pc_lane_bits(active), hit_bits = 0u;
         for (uint j = 0u; j < N; ++j)
           if (((bits >> j) & 1u) && packet_prim_lane(cut, prims, b->first_slot + i, r, j, h))
