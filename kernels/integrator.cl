@@ -85,7 +85,7 @@ static inline void path_begin_lanes(const CameraRayLanes* c, LaneU src, LaneI m,
   n.ray.skip_prim = n.ray.skip_instance = (LaneU)(PC_INVALID);
   n.ray.cutout_seed = (LaneU)(0u);
 #ifdef PC_HAS_CUTOUTS
-  n.ray.cutout_seed = lane_permute(c->cutout_seed, src);
+  n.ray.cutout_seed = pc_permute(c->cutout_seed, src);
 #endif
   Lane3 zero = lane3_splat((float3)(0.0f));
   n.throughput = lane3_splat((float3)(1.0f));

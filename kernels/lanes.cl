@@ -21,6 +21,8 @@ static inline PC_OVL uint pc_lane_bits(int m) { return m != 0 ? 1u : 0u; }
 static inline PC_OVL int pc_lanes_of_bits(uint bits, int like) { return (int)(bits & 1u); }
 static inline PC_OVL float pc_lane(float x, uint j) { return x; }
 static inline PC_OVL uint pc_lane(uint x, uint j) { return x; }
+static inline PC_OVL float pc_permute(float x, uint src) { return x; }
+static inline PC_OVL uint pc_permute(uint x, uint src) { return x; }
 static inline PC_OVL float pc_with_lane(float x, uint j, float value) { return value; }
 static inline PC_OVL uint pc_with_lane(uint x, uint j, uint value) { return value; }
 
@@ -59,9 +61,11 @@ PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
                    (uint16)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u, 256u, 512u, 1024u, 2048u, 4096u, 8192u, 16384u, 32768u))
 #undef PC_LANE_REDUCTIONS
 
-/* A lane of a vector by runtime index, and a vector with one lane replaced. Where clang targets AVX2 (8
- * lanes) or AVX-512 (16), the lane is read with one vpermps: through memory, the load waits for the vector's
- * store to forward (on the BVH nodes' critical path: the 8-wide tree's bounce rays 5 % faster on AVX2 code). */
+/* A lane of a vector by runtime index, lanes rearranged, and a vector with one lane replaced. Where clang
+ * targets AVX2 (8 lanes) or AVX-512 (16), pc_permute (lane src[j] of x in each lane j, src < the width) is
+ * one vpermps or vpermd, and pc_lane reads a float lane with it: through memory, the load waits for the
+ * vector's store to forward (on the BVH nodes' critical path: the 8-wide tree's bounce rays 5 % faster on
+ * AVX2 code). */
 #define PC_LANE_WRITE(T, S, N)                                                                            \
   static inline PC_OVL T pc_with_lane(T x, uint j, S value) {                                             \
     S a[N];                                                                                               \
@@ -75,21 +79,34 @@ PC_LANE_REDUCTIONS(float16, int16, uint16, 16,
     vstore##N(x, 0, a);                                                                                   \
     return a[j];                                                                                          \
   }
-/* F: the float vector, I its int index vector, PERMUTE clang's vpermps builtin. */
-#define PC_LANE_READ_BY_PERMUTE(F, I, PERMUTE)                                                            \
-  static inline PC_OVL float pc_lane(F x, uint j) {                                                       \
-    F r = PERMUTE(x, (I)((int)j));                                                                        \
-    return r.s0;                                                                                          \
+#define PC_PERMUTE_BY_MEMORY(T, S, U, N)                                                                  \
+  static inline PC_OVL T pc_permute(T x, U src) {                                                         \
+    S a[N], r[N];                                                                                         \
+    uint from[N];                                                                                         \
+    vstore##N(x, 0, a);                                                                                   \
+    vstore##N(src, 0, from);                                                                              \
+    for (uint j = 0u; j < N; ++j) r[j] = a[from[j]];                                                      \
+    return vload##N(0, r);                                                                                \
   }
+/* F, U: the float and uint vectors of N lanes, I the int one, PERMUTE_F and PERMUTE_I clang's vpermps and
+ * vpermd builtins. */
+#define PC_LANES_BY_PERMUTE(F, U, I, N, PERMUTE_F, PERMUTE_I)                                             \
+  static inline PC_OVL F pc_permute(F x, U src) { return PERMUTE_F(x, as_##I(src)); }                    \
+  static inline PC_OVL U pc_permute(U x, U src) { return as_##U(PERMUTE_I(as_##I(x), as_##I(src))); }     \
+  static inline PC_OVL float pc_lane(F x, uint j) { return pc_permute(x, (U)(j)).s0; }
+#define PC_LANES_BY_MEMORY(F, U, N)                                                                       \
+  PC_PERMUTE_BY_MEMORY(F, float, U, N)                                                                    \
+  PC_PERMUTE_BY_MEMORY(U, uint, U, N)                                                                     \
+  PC_LANE_READ_BY_MEMORY(F, float, N)
 #if defined(__clang__) && defined(__AVX2__)
-PC_LANE_READ_BY_PERMUTE(float8, int8, __builtin_ia32_permvarsf256)
+PC_LANES_BY_PERMUTE(float8, uint8, int8, 8, __builtin_ia32_permvarsf256, __builtin_ia32_permvarsi256)
 #else
-PC_LANE_READ_BY_MEMORY(float8, float, 8)
+PC_LANES_BY_MEMORY(float8, uint8, 8)
 #endif
 #if defined(__clang__) && defined(__AVX512F__)
-PC_LANE_READ_BY_PERMUTE(float16, int16, __builtin_ia32_permvarsf512)
+PC_LANES_BY_PERMUTE(float16, uint16, int16, 16, __builtin_ia32_permvarsf512, __builtin_ia32_permvarsi512)
 #else
-PC_LANE_READ_BY_MEMORY(float16, float, 16)
+PC_LANES_BY_MEMORY(float16, uint16, 16)
 #endif
 PC_LANE_READ_BY_MEMORY(uint8, uint, 8)
 PC_LANE_READ_BY_MEMORY(uint16, uint, 16)
@@ -98,7 +115,9 @@ PC_LANE_WRITE(uint8, uint, 8)
 PC_LANE_WRITE(float16, float, 16)
 PC_LANE_WRITE(uint16, uint, 16)
 #undef PC_LANE_READ_BY_MEMORY
-#undef PC_LANE_READ_BY_PERMUTE
+#undef PC_PERMUTE_BY_MEMORY
+#undef PC_LANES_BY_PERMUTE
+#undef PC_LANES_BY_MEMORY
 #undef PC_LANE_WRITE
 
 /* Functions of the lane code that PoCL would otherwise call rather than inline: a call passes their
@@ -160,40 +179,9 @@ static inline LaneU lane_indices(void) {
   return lane_load(j_of);
 }
 
-/* Lane src[j] of x in each lane j (src < PC_LANES): one vpermps or vpermd where clang targets AVX2 (8 lanes)
- * or AVX-512 (16), else through memory. */
-#if PC_LANES == 1
-static inline PC_OVL float lane_permute(float x, uint src) { return x; }
-static inline PC_OVL uint lane_permute(uint x, uint src) { return x; }
-#elif (PC_LANES == 8 && defined(__clang__) && defined(__AVX2__)) || \
-    (PC_LANES == 16 && defined(__clang__) && defined(__AVX512F__))
-#if PC_LANES == 8
-static inline PC_OVL LaneF lane_permute(LaneF x, LaneU src) { return __builtin_ia32_permvarsf256(x, as_int8(src)); }
-static inline PC_OVL LaneU lane_permute(LaneU x, LaneU src) {
-  return as_uint8(__builtin_ia32_permvarsi256(as_int8(x), as_int8(src)));
-}
-#else
-static inline PC_OVL LaneF lane_permute(LaneF x, LaneU src) { return __builtin_ia32_permvarsf512(x, as_int16(src)); }
-static inline PC_OVL LaneU lane_permute(LaneU x, LaneU src) {
-  return as_uint16(__builtin_ia32_permvarsi512(as_int16(x), as_int16(src)));
-}
-#endif
-#else
-#define PC_PERMUTE_BY_MEMORY(L, S)                                                                        \
-  static inline PC_OVL L lane_permute(L x, LaneU src) {                                                   \
-    S a[PC_LANES], r[PC_LANES];                                                                           \
-    uint from[PC_LANES];                                                                                  \
-    lane_store(x, a);                                                                                     \
-    lane_store(src, from);                                                                                \
-    for (uint j = 0u; j < PC_LANES; ++j) r[j] = a[from[j]];                                               \
-    return lane_load(r);                                                                                  \
-  }
-PC_PERMUTE_BY_MEMORY(LaneF, float)
-PC_PERMUTE_BY_MEMORY(LaneU, uint)
-#undef PC_PERMUTE_BY_MEMORY
-#endif
+/* Lane src[j] of v in each lane j (pc_permute by component). */
 static inline Lane3 lane3_permute(Lane3 v, LaneU src) {
-  return lane3(lane_permute(v.x, src), lane_permute(v.y, src), lane_permute(v.z, src));
+  return lane3(pc_permute(v.x, src), pc_permute(v.y, src), pc_permute(v.z, src));
 }
 
 /* The first lane set in m (m must have one). */
