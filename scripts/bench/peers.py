@@ -11,6 +11,8 @@ Run through scripts/bench/peers (it installs the peers). For each scene:
    at --series spp) and one render per time budget (the renderer's own time limit).
 4. Each renderer's mean image (its final series images averaged over runs) against the reference.
 5. Traversal: `pathcl rays` against build/embree_rays (1 and 2 threads) on camera and diffuse-bounce rays.
+--avx2: pathcl, Mitsuba's LLVM variants and Embree run AVX2 code on an AVX-512 machine (scripts/bench/avx2.py;
+the other peers run their own choice); write such a run to bench/results/supplementary/ with --no-docs.
 relMSE everywhere: mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), as `pathcl compare`.
 Writes bench/results/<date>T<hhmm>-<machine>.json and regenerates docs/benchmarks.md (report.py) from every
 results file there, each scene from the newest run that has it.
@@ -35,6 +37,7 @@ import export_cycles  # noqa: E402
 import export_luxcore  # noqa: E402
 import export_mitsuba  # noqa: E402
 import scene_model  # noqa: E402
+from avx2 import AVX2_ENV  # noqa: E402
 
 BUILD = os.path.join(ROOT, os.environ.get("PATHCL_BUILD", "build"))
 PATHCL = os.path.join(BUILD, "pathcl")
@@ -45,6 +48,7 @@ MITSUBA_TIMEOUT = ("not measured: Mitsuba's integrator timeout stops rendering b
                    " not reached stay black (relMSE 0.23 at both 5 s and 30 s in the 2026-11-23 run); it is no"
                    " progressive time budget. Use the series-based columns.")
 NO_ICD = os.path.join(ROOT, "build", "no-opencl-icd")
+AVX2 = False  # --avx2 (main sets it)
 
 
 def log(*a):
@@ -226,6 +230,8 @@ class PeerProcess(Renderer):
 
     def _run(self, args, timeout):
         cmd = [sys.executable, os.path.join(HERE, "peer_runners.py"), self.peer, self.variant, self.target] + args
+        if AVX2 and self.peer == "mitsuba":
+            cmd.append("--avx2")
         r, wall = run(cmd, env=self.env, timeout=timeout)
         lines = bench_lines(r.stdout)
         if r.returncode or not lines:
@@ -448,7 +454,8 @@ def rays_benchmark(scene, work, runs):
             res["pathcl"].append(dict(rays_per_second=s["rays_per_second_kernel"],
                                       rays_per_second_wall=s["rays_per_second_wall"], rays=s["rays"], hits=s["hits"]))
             for threads in (1, 2):
-                r, _ = run([EMBREE_RAYS, scene.dump, rays, "--threads", str(threads), "--repeat", "5", "--compare", hits])
+                r, _ = run([EMBREE_RAYS, scene.dump, rays, "--threads", str(threads), "--repeat", "5", "--compare", hits]
+                           + (["--isa", "avx2"] if AVX2 else []))
                 if r.returncode:
                     raise RuntimeError(error_tail(r))
                 res["embree-%d" % threads].append(json.loads(r.stdout))
@@ -499,6 +506,8 @@ def main():
     ap.add_argument("--results", help="JSON to write (default bench/results/<date>T<hhmm>-<machine>.json; a run of"
                     " some renderers only belongs in bench/results/supplementary/)")
     ap.add_argument("--no-docs", action="store_true", help="do not regenerate docs/benchmarks.md")
+    ap.add_argument("--avx2", action="store_true", help="AVX2 code for pathcl, Mitsuba's LLVM variants and Embree"
+                    " (scripts/bench/avx2.py)")
     ap.add_argument("--rescore", metavar="RESULTS", help="only recompute RESULTS' figures against the true image"
                     " (the reference noise from the references in --work) and regenerate the docs")
     args = ap.parse_args()
@@ -510,6 +519,10 @@ def main():
         return
 
     os.environ.setdefault("PATHCL_KERNEL_CACHE", os.path.join(ROOT, "build", "kernel-cache"))
+    global AVX2
+    AVX2 = args.avx2
+    if AVX2:
+        os.environ.update(AVX2_ENV)
     renderers = [r for r in args.renderers.split(",") if r]
     budgets = [float(b) for b in args.budgets.split(",") if b]
     spps = [int(s) for s in args.series.split(",")]
