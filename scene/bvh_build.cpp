@@ -408,6 +408,18 @@ struct Collapser {
         kids.push_back(binary[k].left_first);
       }
     }
+    // Leaf children in order of increasing box area, interior ones kept in their places: a packet of rays
+    // going different ways tests a node's leaves in slot order (kernels/templates/packet.cl), and the small
+    // ones (the objects in a room before its walls) give the nearer hits that the larger boxes after them
+    // are then tested against. The Cornell box about +1.5 % on AVX2 code (docs/benchmarks-notes.md).
+    std::vector<uint32_t> leaves;
+    for (uint32_t k : kids)
+      if (is_leaf(k)) leaves.push_back(k);
+    std::stable_sort(leaves.begin(), leaves.end(), [&](uint32_t x, uint32_t y) {
+      return node_half_area(binary[x]) < node_half_area(binary[y]);
+    });
+    for (size_t i = 0, l = 0; i < kids.size(); ++i)
+      if (is_leaf(kids[i])) kids[i] = leaves[l++];
     Node node{};
     for (int lane = 0; lane < Width; ++lane) {
       bool used = lane < int(kids.size());
