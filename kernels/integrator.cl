@@ -181,6 +181,11 @@ static inline LaneI path_shade_lanes(const SceneData* sc, LaneU pixel, LaneU sam
   st->prev_bsdf_pdf = select(st->prev_bsdf_pdf, bs.pdf, live);
   st->prev_delta = select(st->prev_delta, bs.delta, live);
   st->prev_p = lane3_select(st->prev_p, s.p, live);
+  /* A path whose throughput is zero (it met a black surface, such as the Cornell box's lamp) can add
+   * nothing more: it ends here, as Mitsuba's do, instead of bouncing on until the roulette. The same
+   * image; NaN goes on, so that the film counts it. */
+  Lane3 t = st->throughput;
+  live &= (t.x != 0.0f) | (t.y != 0.0f) | (t.z != 0.0f);
   /* Russian roulette on the throughput without the radiance scaling of refraction (pbrt-v4's etaScale):
    * inside glass it is (n_i / n_t)^2 = 0.44 times lower only until the path leaves again, and killing paths
    * for it there made glass scenes noisier (peer benchmark, glass-metal). */
