@@ -39,20 +39,26 @@ typedef struct {
   LaneF area, cos_inner, cos_outer;
 } LightLanes;
 
-/* lights[index] for the lanes in m (the others get the first such lane's). Out of line (math.cl): fifteen
+/* lights[index] for the lanes in m (the others get the first such lane's). Out of line (math.cl): up to fifteen
  * gathers, and three callers in the path program. */
 PC_OUT_OF_LINE void gather_lights(__global const Light* lights, LaneU index, LaneI m, LightLanes* out) {
   LaneGroups at;
   lane_groups(index, m, &at);
   out->emission = lane_group_gather3(PC_FIELD_F(lights, emission), &at);
-  out->position = lane_group_gather3(PC_FIELD_F(lights, position), &at);
-  out->direction = lane_group_gather3(PC_FIELD_F(lights, direction), &at);
   out->type = lane_group_gather_uint(PC_FIELD_U(lights, type), &at);
   out->prim = lane_group_gather_uint(PC_FIELD_U(lights, prim), &at);
   out->slot = lane_group_gather_uint(PC_FIELD_U(lights, slot), &at);
   out->area = lane_group_gather_float(PC_FIELD_F(lights, area), &at);
+  /* The fields of point, spot and directional lights only in programs that have them (sample_light_lanes
+   * reads them under the same conditions). */
+#ifdef PC_HAS_POINT_LIGHTS
+  out->position = lane_group_gather3(PC_FIELD_F(lights, position), &at);
   out->cos_inner = lane_group_gather_float(PC_FIELD_F(lights, cos_inner), &at);
   out->cos_outer = lane_group_gather_float(PC_FIELD_F(lights, cos_outer), &at);
+#endif
+#if defined(PC_HAS_POINT_LIGHTS) || defined(PC_HAS_DIRECTIONAL_LIGHTS)
+  out->direction = lane_group_gather3(PC_FIELD_F(lights, direction), &at);
+#endif
 }
 
 /* The primitives (vertices a, b, c; a sphere's centre a and radius b.x) at the slots of the lanes in m. */

@@ -41,17 +41,33 @@ static inline float2 surface_uv(const SceneData* sc, const Surface* s, const Hit
  * lane's); *at the lanes' groups of materials, for more fields. (Through pointers: surface.cl's
  * spawn_ray_lanes says why.) */
 PC_LANE_INLINE void material_lanes_gather(const SceneData* sc, LaneU material, LaneI m, LaneGroups* at, MaterialLanes* out) {
-  /* Fields a program's material types do not read are dead code here, and their gathers with them. */
   lane_groups(material, m, at); /* a scene has few materials */
   __global const Material* all = sc->materials;
   out->type = lane_group_gather_uint(PC_FIELD_U(all, type), at);
   out->color = lane_group_gather3(PC_FIELD_F(all, color), at);
+  /* Only the fields that the program's material types read (material_at_lanes is out of line, so the
+   * compiler cannot drop the others); the rest are 0. */
+  Lane3 zero3 = lane3_splat((float3)(0.0f));
+  out->specular = out->k = zero3;
+  out->alpha = out->sigma = out->exponent = out->ior = (LaneF)(0.0f);
+#if defined(PC_HAS_PHONG) || defined(PC_HAS_MIRROR) || defined(PC_HAS_ROUGH_CONDUCTOR)
   out->specular = lane_group_gather3(PC_FIELD_F(all, specular), at);
+#endif
+#if defined(PC_HAS_MIRROR) || defined(PC_HAS_ROUGH_CONDUCTOR)
   out->k = lane_group_gather3(PC_FIELD_F(all, k), at);
+#endif
+#if defined(PC_HAS_ROUGH_CONDUCTOR) || defined(PC_HAS_PLASTIC)
   out->alpha = lane_group_gather_float(PC_FIELD_F(all, alpha), at);
+#endif
+#ifdef PC_HAS_OREN_NAYAR
   out->sigma = lane_group_gather_float(PC_FIELD_F(all, sigma), at);
+#endif
+#ifdef PC_HAS_PHONG
   out->exponent = lane_group_gather_float(PC_FIELD_F(all, exponent), at);
+#endif
+#if defined(PC_HAS_DIELECTRIC) || defined(PC_HAS_PLASTIC)
   out->ior = lane_group_gather_float(PC_FIELD_F(all, ior), at);
+#endif
 }
 
 PC_OUT_OF_LINE MaterialLanes material_at_lanes(const SceneData* sc, LaneU material, const SurfaceLanes* s,
