@@ -104,6 +104,18 @@ static inline PC_OVL F pc_reduce_payne_hanek_(F a, F* lo, I* q) {
   *lo = select(*lo, -*lo, neg);
   return select(hi, -hi, neg);
 }
+/* sin and cos of hi + lo, |hi| <= pi/4 + 0.001 (the reduced argument): minimax polynomials (relative
+ * errors 2^-28, 2^-33); lo enters to first order; cos recovers the rounding error of 1 - z/2. */
+static inline PC_OVL F pc_sincos_reduced_(F hi, F lo, F* cosval) {
+  F z = hi * hi;
+  F s = hi + (hi * (z * (-0x1.555546p-3f + z * (0x1.11077ap-7f + z * -0x1.99548cp-13f))) + lo);
+  F hz = 0.5f * z, w = 1.0f - hz;
+  *cosval = w + (((1.0f - w) - hz) + (z * z * (0x1.55554ap-5f + z * (-0x1.6c0c28p-10f + z * 0x1.99e80cp-16f)) - hi * lo));
+  return s;
+}
+/* sin and cos of x for |x| <= pi/4: pc_sincos's polynomials without its reduction (which leaves such x as
+ * it is, up to x = pi/4 itself). */
+static inline PC_OVL F pc_sincos_quarter(F x, F* cosval) { return pc_sincos_reduced_(x, (F)(0.0f), cosval); }
 static inline PC_OVL F pc_sincos(F x, F* cosval) {
   U b = pc_bits_(x), ab = b & 0x7fffffffu;
   F a = pc_float_(select(ab, (U)0u, ab < 0x00800000u)), lo;
@@ -117,12 +129,7 @@ static inline PC_OVL F pc_sincos(F x, F* cosval) {
     lo = select(lo, lo_big, big);
     q = select(q, q_big, big);
   }
-  /* Minimax polynomials on |r| <= pi/4 + 0.001 (relative errors 2^-28, 2^-33); lo enters to first
-   * order; cos recovers the rounding error of 1 - z/2. */
-  F z = hi * hi;
-  F s = hi + (hi * (z * (-0x1.555546p-3f + z * (0x1.11077ap-7f + z * -0x1.99548cp-13f))) + lo);
-  F hz = 0.5f * z, w = 1.0f - hz;
-  F c = w + (((1.0f - w) - hz) + (z * z * (0x1.55554ap-5f + z * (-0x1.6c0c28p-10f + z * 0x1.99e80cp-16f)) - hi * lo));
+  F c, s = pc_sincos_reduced_(hi, lo, &c);
   I odd = (q & 1) != 0, bad = ab >= 0x7f800000u;
   F sv = pc_float_(pc_bits_(select(s, c, odd)) ^ (pc_uint_(q & 2) << 30) ^ (b & 0x80000000u));
   F cv = pc_float_(pc_bits_(select(c, s, odd)) ^ (pc_uint_((q + 1) & 2) << 30));

@@ -7,10 +7,12 @@ static inline PC_OVL void sample_concentric_disk_lanes(F ux, F uy, F* x, F* y) {
   F ox = 2.0f * ux - 1.0f, oy = 2.0f * uy - 1.0f;
   I centre = (ox == 0.0f) & (oy == 0.0f), x_major = fabs(ox) > fabs(oy);
   F r = select(oy, ox, x_major);
-  F phi = select((PC_PI / 2.0f) - (PC_PI / 4.0f) * (ox / oy), (PC_PI / 4.0f) * (oy / ox), x_major);
-  F c, s = pc_sincos(phi, &c);
-  *x = select(r * c, (F)(0.0f), centre);
-  *y = select(r * s, (F)(0.0f), centre);
+  /* The angle is a = pi/4 (oy / ox) where x is the major axis, else pi/2 - a with a = pi/4 (ox / oy), whose
+   * cosine and sine are a's sine and cosine: |a| <= pi/4, so one division and no reduction. */
+  F a = (PC_PI / 4.0f) * (select(ox, oy, x_major) / select(oy, ox, x_major));
+  F c, s = pc_sincos_quarter(a, &c);
+  *x = select(r * select(s, c, x_major), (F)(0.0f), centre);
+  *y = select(r * select(c, s, x_major), (F)(0.0f), centre);
 }
 /* Cosine-weighted direction about +z (Malley's method). */
 static inline PC_OVL void sample_cosine_hemisphere_lanes(F ux, F uy, F* x, F* y, F* z) {
