@@ -199,13 +199,27 @@ typedef struct { float16 x, y, z; } lane3f16;
     v.z = z;                                                                                              \
     return v;                                                                                             \
   }                                                                                                       \
+  /* Whether every component of a and b is 0 or at least 2^-50 in magnitude, in every lane (nearly        \
+     always). Then each product is 0 or at least 2^-100, a multiple of 2^-123, and so is every sum or     \
+     difference of them, rounded or not: nothing below FLT_MIN arises, and the flushes of pc_dot and      \
+     pc_cross, which lengthened their dependency chains, would change no bit. (|x| - 1 as an unsigned     \
+     integer puts 0 at the top.) */                                                                       \
+  static inline PC_OVL U pc_lane_tiny_key_(F x) { return (as_uint##N(x) & 0x7fffffffu) - 1u; }            \
+  static inline PC_OVL bool pc_no_tiny_components_(V3 a, V3 b) {                                          \
+    U k = min(min(min(pc_lane_tiny_key_(a.x), pc_lane_tiny_key_(a.y)), pc_lane_tiny_key_(a.z)),           \
+              min(min(pc_lane_tiny_key_(b.x), pc_lane_tiny_key_(b.y)), pc_lane_tiny_key_(b.z)));          \
+    return all(k >= 0x267fffffu); /* 2^-50: 0x26800000 */                                                 \
+  }                                                                                                       \
   static inline PC_OVL F pc_dot(V3 a, V3 b) {                                                             \
+    if (pc_no_tiny_components_(a, b)) return (a.x * b.x + a.y * b.y) + a.z * b.z;                         \
     F px = pc_flush_product_(pc_flush_(a.x) * pc_flush_(b.x));                                            \
     F py = pc_flush_product_(pc_flush_(a.y) * pc_flush_(b.y));                                            \
     F pz = pc_flush_product_(pc_flush_(a.z) * pc_flush_(b.z));                                            \
     return pc_flush_(pc_flush_(px + py) + pz);                                                            \
   }                                                                                                       \
   static inline PC_OVL V3 pc_cross(V3 a, V3 b) {                                                          \
+    if (pc_no_tiny_components_(a, b))                                                                     \
+      return lane3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);                  \
     F ax = pc_flush_(a.x), ay = pc_flush_(a.y), az = pc_flush_(a.z);                                      \
     F bx = pc_flush_(b.x), by = pc_flush_(b.y), bz = pc_flush_(b.z);                                      \
     return lane3(pc_flush_(pc_flush_product_(ay * bz) - pc_flush_product_(az * by)),                      \

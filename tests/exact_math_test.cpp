@@ -581,7 +581,8 @@ TEST(ExactMath, LengthNormalize) {
 // Lane geometry (exact_math.cl, lane3f / lane3f8 / lane3f16: 3-vectors stored by component, for issue
 // 15's lane-generic kernel) gives, in every lane, the bits of the float3 functions: random vectors and the
 // special ones of LengthNormalize (zeros, denormals, infinities, NaN, extremes), with lanes of different
-// kinds side by side so that every per-lane select is exercised.
+// kinds side by side so that every per-lane select is exercised, and groups of lanes without tiny
+// components, where pc_dot and pc_cross skip their flushes.
 TEST(ExactMath, LaneGeometryGivesTheFloat3Bits) {
   std::vector<float> a = random_vectors(3, 8000, 91), b = random_vectors(3, 8000, 92);
   const float specials[][3] = {{0.0f, -0.0f, 0.0f},        {from_bits(1u), -0.0f, from_bits(0x807fffffu)},
@@ -592,6 +593,25 @@ TEST(ExactMath, LaneGeometryGivesTheFloat3Bits) {
                                {1e30f, 1e-30f, 0.0f},       {from_bits(0x00800001u), from_bits(1u), 0.0f}};
   for (int k = 0; k < 48; ++k)  // every special vector in several lane positions, beside random ones
     for (int c = 0; c < 3; ++c) a[3 * (37 * k + 5) + c] = specials[k % 12][c];
+  // Vectors 4000 .. 4959 (whole groups of 8 and 16 lanes, past the specials): every component 0 or at least
+  // 2^-50 in magnitude, so that the lanes' pc_dot and pc_cross take their path without flushes. A third of
+  // the components lie at that bound (products at 2^-100, sums that cancel to a few units of 2^-123), others
+  // up to 2^127 (products that overflow). From 4480 on, one component of a and b in each vector is near
+  // 2^-63 instead, so that their product is near FLT_MIN, which only the flushing path gets right.
+  std::mt19937_64 rng(93);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (size_t i = 4000; i < 4960; ++i) {
+    int near_min = i < 4480 ? -1 : int(u(rng) * 3);
+    for (std::vector<float>* v : {&a, &b})
+      for (int c = 0; c < 3; ++c) {
+        double pick = u(rng);
+        float x = c == near_min ? float(std::ldexp(u(rng) + 1, -64 + int(u(rng) * 2)))
+                  : pick < 0.1  ? 0.0f
+                  : pick < 0.4  ? float(std::ldexp(1 + std::floor(u(rng) * 4) * 0x1p-23, -50))
+                                : float(std::ldexp(u(rng) + 1, int(u(rng) * 177) - 50));
+        (*v)[3 * i + c] = u(rng) < 0.5 ? -x : x;
+      }
+  }
   const size_t count = a.size() / 3;  // a multiple of 16
   ASSERT_EQ(count % 16, 0u);
   std::vector<float> dot = run_vector("pc_dot_3", a, &b, count, 1), cross = run_vector("pc_cross_3", a, &b, count, 3);
