@@ -15,8 +15,8 @@
  *
  * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
  * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
- * checkpoints and resumes carry it), the splats in the commutative layers "splats" and "independent" (fixed
- * point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth
+ * checkpoints and resumes carry it), the splats in the commutative layers "splats", "large" and "independent"
+ * (fixed point, the same bits in any order). The first step of a chain starts it: B bootstrap candidates per depth
  * 2 .. D (B = lt->bootstrap; independent uniform numbers) are evaluated and their importances summed by a
  * prefix sum of fixed order (mlt_bootstrap, mlt_scan_*; each device once, with the same bits), and the chain
  * takes a candidate in proportion to its importance (systematic resampling: chain i at (i + u) / chains of
@@ -28,7 +28,9 @@
  * I / b and large steps of density 1 / (D - 1) over (depth, numbers), taken p = lt->large_step times a step,
  * by the balance heuristic; q = p / (D - 1)): the current state's value L times (1 - a) / (I / b0 + q) and the
  * proposal's times a / (I' / b0 + q) into the "splats" layer, and a large step's proposal's times
- * 1 / (I' / b0 + q) into "independent"; the image is (independent + splats b / b0) / spp. Where the image is
+ * 1 / (I' / b0 + q) into "large"; the image is (independent + large + splats b / b0) / spp, "independent"
+ * holding the pixels' own samples (below). A chain splats into the film's half of its set of chains (first or
+ * second half, in the order of their starts), the pixels' own samples into their step's parity. Where the image is
  * uniform the large steps carry it, as plain Monte Carlo would; where it is not, the chains.
  * b = (D - 1) E[I] over uniform (depth, numbers) is the image's mean luminance beyond depth 1. b0 is its
  * bootstrap estimate (the candidates' importance sum over B), which the weights take; b the host's
@@ -273,6 +275,13 @@ PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const Lig
   __global uint* state = film + chain * words;
   __global uint* splats = film + h->width * h->height * words;
   __global uint* independent = splats + h->width * h->height * 2u * PC_SPLAT_WORDS;
+  __global uint* large = independent + h->width * h->height * 2u * PC_SPLAT_WORDS;
+  /* The chain's half of the film's two halves (the splat film's parities): the first half of the chains in
+   * the order of their starts, or the second. Two sets of chains are two independent estimates (each with
+   * its own candidates to start from: systematic resampling starts chain i at (i + u) / chains of the
+   * candidates' running sum), so their difference measures a render's error, the chains' correlation
+   * included; a chain's even and odd steps, nearly the same paths, did not (runtime/technique_mlt.cpp). */
+  const uint chain_half = 2u * chain >= h->width * h->height ? 1u : 0u;
   __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
   MltSlots slots, scratch;
@@ -355,12 +364,11 @@ PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const Lig
       b_sum = t;
     }
     float accept = min(1.0f, next_importance / importance);
-    uint parity = step & 1u;
-    mlt_splat(splats, h, lt, &now, (1.0f - accept) / (importance / b0 + large_density), parity, &n);
+    mlt_splat(splats, h, lt, &now, (1.0f - accept) / (importance / b0 + large_density), chain_half, &n);
     if (next_importance > 0.0f) {
       float denominator = next_importance / b0 + large_density;
-      mlt_splat(splats, h, lt, &next, accept / denominator, parity, &n);
-      if (m.large) mlt_splat(independent, h, lt, &next, 1.0f / denominator, parity, &n);
+      mlt_splat(splats, h, lt, &next, accept / denominator, chain_half, &n);
+      if (m.large) mlt_splat(large, h, lt, &next, 1.0f / denominator, chain_half, &n);
     }
     if (uint_to_unit(hash4(chain, step, h->seed, 0x61636370u)) < accept) {
       now = next;

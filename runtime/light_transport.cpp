@@ -92,7 +92,8 @@ void develop_splats(Film& f, const LightTransportHeader& lt, uint64_t* overflows
   develop_splat_layer(f, lt, overflows, "splats");
 }
 
-void develop_splat_layer(Film& f, const LightTransportHeader& lt, uint64_t* overflows, const char* layer) {
+void develop_splat_layer(Film& f, const LightTransportHeader& lt, uint64_t* overflows, const char* layer,
+                         double first_share) {
   size_t pixels = size_t(f.width) * f.height;
   const uint32_t spp = f.spp;
   f.mean.assign(3 * pixels, 0.0f);
@@ -100,6 +101,7 @@ void develop_splat_layer(Film& f, const LightTransportHeader& lt, uint64_t* over
   f.even_mean.assign(3 * pixels, 0.0f);
   f.odd_mean.assign(3 * pixels, 0.0f);
   double n_even = (spp + 1) / 2, n_odd = spp / 2, paths = double(pixels);
+  if (first_share > 0) n_even = spp * first_share, n_odd = spp * (1 - first_share);
   double unit = 1.0 / lt.splat_scale, unit2 = 1.0 / lt.square_scale;
   const uint32_t* plane = f.layer(size_t(f.layout.find(layer)));
   for (size_t p = 0; p < pixels; ++p) {
@@ -110,11 +112,17 @@ void develop_splat_layer(Film& f, const LightTransportHeader& lt, uint64_t* over
         if (s[k] >> 63) ++*overflows;
       double even = double(s[c]) * unit, odd = double(s[3 + c]) * unit, squares = double(s[6 + c]) * unit2;
       double mean = spp > 0 ? (even + odd) / spp : 0;
+      double even_mean = n_even > 0 ? even / n_even : 0, odd_mean = n_odd > 0 ? odd / n_odd : 0;
+      f.mean[3 * p + c] = float(mean);
+      f.even_mean[3 * p + c] = float(even_mean);
+      f.odd_mean[3 * p + c] = float(odd_mean);
+      if (first_share > 0) {
+        const double d = even_mean - odd_mean;
+        f.variance[3 * p + c] = float(first_share * (1 - first_share) * d * d);
+        continue;
+      }
       // BDPT's camera part (one sample per pixel and sample) and the light part (from `paths` paths).
       double camera = spp > 0 ? double(s[9 + c]) * unit / spp : 0, light = mean - camera;
-      f.mean[3 * p + c] = float(mean);
-      f.even_mean[3 * p + c] = n_even > 0 ? float(even / n_even) : 0.0f;
-      f.odd_mean[3 * p + c] = n_odd > 0 ? float(odd / n_odd) : 0.0f;
       double per_sample = spp > 0 ? std::max(0.0, squares / spp - camera * camera - light * light / paths) : 0;
       f.variance[3 * p + c] = float(spp > 0 ? per_sample / spp : 0);
     }

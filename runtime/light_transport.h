@@ -27,9 +27,14 @@ LightTransportSetup light_transport_setup(const DeviceScene& scene, uint32_t spp
 // The `splats` layer (PC_SPLAT_WORDS 64-bit sums per pixel; or the splat layer of that name) as the film's
 // means, variances and half images at film.spp: mean = (even + odd) / (scale spp); variance of the mean from
 // the squares (kernels/light_integrator.cl). overflows: sums at or above 2^63 (a hazard) are counted there.
+// With first_share > 0 the two halves hold two sets of independent estimates of the image instead of the even
+// and odd samples (mlt's first and second half of its chains), first_share of them in the first: each half
+// image is its set's own image (its sum over spp first_share, or spp (1 - first_share)), and the variance of
+// the mean first_share (1 - first_share) times their squared difference.
 struct Film;
 void develop_splats(Film& film, const LightTransportHeader& lt, uint64_t* overflows);
-void develop_splat_layer(Film& film, const LightTransportHeader& lt, uint64_t* overflows, const char* layer);
+void develop_splat_layer(Film& film, const LightTransportHeader& lt, uint64_t* overflows, const char* layer,
+                         double first_share = 0);
 
 // The splat film's -D flags on a device: 64-bit atomics where it has them (cl_khr_int64_base_atomics),
 // unless the build asks for word pairs.

@@ -1,5 +1,6 @@
 // Metropolis light transport in primary sample space over BDPT's strategies (kernels/mlt.cl): a chain per
-// pixel index, its state in the film's ordered "chains" layer, its splats in the commutative "splats" layer.
+// pixel index, its state in the film's ordered "chains" layer, its splats in the commutative "splats" and
+// "large" layers, the pixels' own samples of depths 0 and 1 in "independent".
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -24,12 +25,14 @@ constexpr uint32_t kMaxDepth = 16;
 // groups a BDPT sample of depth D reads.
 uint32_t state_words(uint32_t max_depth) { return kHeaderWords + 5 * (4 * max_depth + 4); }
 
-// The chains' states, the Metropolis samples' splats and the independent samples' (the large steps', and the
-// directly seen emitters; kernels/mlt.cl).
+// The chains' states, the Metropolis samples' splats, the pixels' own samples of depths 0 and 1 (halves: even
+// and odd steps) and the large steps' splats (halves, as the Metropolis samples': the first and the second
+// half of the chains; kernels/mlt.cl).
 std::vector<FilmLayer> mlt_layers(uint32_t max_depth) {
   return {{"chains", PC_LAYER_ORDERED, state_words(max_depth)},
           {"splats", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS},
-          {"independent", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS}};
+          {"independent", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS},
+          {"large", PC_LAYER_COMMUTATIVE, 2 * PC_SPLAT_WORDS}};
 }
 
 }  // namespace
@@ -80,17 +83,26 @@ Technique mlt_technique() {
     lt.mutation_size = float(o.mutation_size);
     // The splats are in pixel values (their weights take b0): light tracing's fixed-point scales.
   };
-  // The independent samples' splats, plus the Metropolis splats times b / b0 (kernels/mlt.cl): b0 the
-  // bootstrap's estimate of b, the image's mean luminance beyond depth 1, which their weights take (chain
-  // header word 1: the candidates' importance sum, over B); b from the candidates and every chain's large-step
-  // proposals (words 9-11: their count and importance sum), summed in chain order, each an independent
-  // uniform state of mean b / (D - 1). The variance treats the steps as independent: it is too low by the
-  // chains' correlation.
+  // The pixels' own samples and the large steps' splats, plus the Metropolis splats times b / b0
+  // (kernels/mlt.cl): b0 the bootstrap's estimate of b, the image's mean luminance beyond depth 1, which their
+  // weights take (chain header word 1: the candidates' importance sum, over B); b from the candidates and every
+  // chain's large-step proposals (words 9-11: their count and importance sum), summed in chain order, each an
+  // independent uniform state of mean b / (D - 1).
+  // The error: the chains' splats go to the half of their set of chains, so each half image is an independent
+  // estimate, and their difference measures the chains' error (the relMSE estimate, --target-error and the
+  // variance). A chain's even and odd steps are nearly the same paths: as halves they made the estimate 5 to
+  // 900 times too low (docs/light-transport.md). The pixels' own samples are independent from step to step.
   t.develop = [](Film& film, const LightTransportHeader& lt, uint64_t* overflows) {
+    const double first_share = std::ceil(film.layout.pixels / 2.0) / std::max<uint32_t>(film.layout.pixels, 1);
+    struct Developed {
+      std::vector<float> mean, variance, even_mean, odd_mean;
+    };
+    auto developed = [&film] { return Developed{film.mean, film.variance, film.even_mean, film.odd_mean}; };
     develop_splat_layer(film, lt, overflows, "independent");
-    const std::vector<float> large_mean = film.mean, large_variance = film.variance, large_even = film.even_mean,
-                             large_odd = film.odd_mean;
-    develop_splat_layer(film, lt, overflows, "splats");
+    const Developed own = developed();
+    develop_splat_layer(film, lt, overflows, "large", first_share);
+    const Developed large = developed();
+    develop_splat_layer(film, lt, overflows, "splats", first_share);
     const int layer = film.layout.find("chains");
     const uint32_t words = film.layout.layers[size_t(layer)].words;
     const uint32_t* chains = film.layer(size_t(layer));
@@ -110,10 +122,13 @@ Technique mlt_technique() {
     const double b = b0 > 0 ? depths * (word_float(chains[1]) + sum) / (double(lt.bootstrap) * depths + samples) : 0;
     const double scale = b0 > 0 ? b / b0 : 1;
     for (size_t i = 0; i < film.mean.size(); ++i) {
-      film.mean[i] = float(large_mean[i] + film.mean[i] * scale);
-      film.even_mean[i] = float(large_even[i] + film.even_mean[i] * scale);
-      film.odd_mean[i] = float(large_odd[i] + film.odd_mean[i] * scale);
-      film.variance[i] = float(large_variance[i] + film.variance[i] * scale * scale);
+      // a chain's large steps and Metropolis samples are of one estimate: their halves' differences add
+      const double chains_even = large.even_mean[i] + film.even_mean[i] * scale;
+      const double chains_odd = large.odd_mean[i] + film.odd_mean[i] * scale, d = chains_even - chains_odd;
+      film.mean[i] = float(own.mean[i] + large.mean[i] + film.mean[i] * scale);
+      film.even_mean[i] = float(own.even_mean[i] + chains_even);
+      film.odd_mean[i] = float(own.odd_mean[i] + chains_odd);
+      film.variance[i] = float(own.variance[i] + first_share * (1 - first_share) * d * d);
     }
   };
   return t;
