@@ -9,9 +9,9 @@
  * luminance of that value.
  *
  * Paths of depths 0 and 1 (emitters seen directly, direct light) are left to each pixel's own BDPT sample
- * without light tracing, one a step (stratified over the image: a lamp in view would otherwise hold a large
- * share of the chains on a flat region, and direct light is what next-event estimation does best); the
- * chains take the rest.
+ * without light tracing, one a step with the render's sampler (stratified over the image and, with Sobol, over
+ * a pixel's steps: a lamp in view would otherwise hold a large share of the chains on a flat region, and
+ * direct light is what next-event estimation does best); the chains take the rest.
  *
  * A render: chains, one per pixel index (the schedule's pixel units are runs of chains and levels of steps),
  * each making spp steps; a chain's state lives in the film's ordered layer "chains" (so units on any device,
@@ -69,10 +69,11 @@
 /* Work items of the bootstrap (runtime/technique_mlt.cpp's bootstrap_items: at most 4096, at most the pixels). */
 #define PC_MLT_BOOTSTRAP_ITEMS 4096u
 static inline uint mlt_bootstrap_items(__constant const SceneHeader* h) { return min(PC_MLT_BOOTSTRAP_ITEMS, h->width * h->height); }
-/* The keys (b of MltSampler and SampleKey.sample) of fresh states, beyond any step: the bootstrap's
- * candidates, and (or-ed with the step) a chain's BDPT samples of depths 0 and 1. */
+/* The key (b of MltSampler and SampleKey.sample) of the bootstrap's candidates, beyond any step. */
 #define PC_MLT_BOOTSTRAP_SAMPLE 0xfffff000u
-#define PC_MLT_NEAR_SAMPLE 0x40000000u
+/* The seed of the pixels' own samples of depths 0 and 1, xor the render's (their keys are (pixel, step) as a
+ * chain's: this keeps their cut-out seeds and numbers apart). */
+#define PC_MLT_NEAR_SEED 0x6e656172u
 
 static inline uint mlt_state_words(__constant const SceneHeader* h) { return PC_MLT_HEADER_WORDS + 5u * mlt_slots(h); }
 /* The chains take paths of depth 2 .. D (PC_MLT_FIRST_DEPTH); depths 0 and 1 are each pixel's BDPT sample. */
@@ -141,8 +142,8 @@ static inline float mlt_evaluate(const SceneData* sc, __constant const LightTran
   SampleKey key;
   key.pixel = pixel;
   key.sample = sample;
-  key.seed = h->seed;
-  key.mlt = m;
+  key.seed = all ? h->seed ^ PC_MLT_NEAR_SEED : h->seed;
+  key.mlt = m; /* 0 for the pixels' own samples: the render's sampler (sampler.cl's sample4) */
   uint strategies = depth + 2u;
   uint s = all ? PC_INVALID : min((uint)(sample4(h, key, PC_MLT_STRATEGY_GROUP(h)).x * (float)strategies), strategies - 1u);
   uint t = all ? PC_INVALID : depth + 2u - s;
@@ -247,19 +248,18 @@ static inline void mlt_splat(__global uint* splats, __constant const SceneHeader
     splat_filtered(splats, h, lt, c->raster, parity, v, n);
 }
 
-/* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (fresh numbers; without light tracing,
- * mlt_evaluate): emitters seen directly and direct light, which the chains leave out, into the independent
- * samples' layer at weight 1. */
+/* Pixel `chain`'s BDPT sample of depths 0 and 1 at step `step` (without light tracing, mlt_evaluate):
+ * emitters seen directly and direct light, which the chains leave out, into the independent samples' layer
+ * at weight 1. Its numbers are the render's sampler's, sample `step` of the pixel (Sobol's by default: the
+ * steps of a pixel are then stratified, as the path integrator's samples are), not a chain's. */
 static inline void mlt_near_sample(const SceneData* sc, __constant const LightTransportHeader* lt,
-                                   __global const float* emission_cdf, __global LightVertex* vertices, MltSlots* slots,
+                                   __global const float* emission_cdf, __global LightVertex* vertices,
                                    __global uint* independent, uint chain, uint step, SplatCounts* n) {
   __constant const SceneHeader* h = sc->h;
-  MltSampler m;
-  mlt_fresh(&m, slots, h, chain, PC_MLT_NEAR_SAMPLE | step);
   MltContribution camera;
   MltSplat splat;
-  mlt_evaluate(sc, lt, emission_cdf, vertices, &m, 0u, true, min(h->max_depth, PC_MLT_FIRST_DEPTH - 1u), chain,
-               PC_MLT_NEAR_SAMPLE | step, n, &camera, &splat);
+  mlt_evaluate(sc, lt, emission_cdf, vertices, (MltSampler*)0, 0u, true, min(h->max_depth, PC_MLT_FIRST_DEPTH - 1u),
+               chain, step, n, &camera, &splat);
   mlt_splat(independent, h, lt, &camera, 1.0f, step & 1u, n);
 }
 
@@ -284,7 +284,7 @@ PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const Lig
   const uint chain_half = 2u * chain >= h->width * h->height ? 1u : 0u;
   __global LightVertex* vertices = light_vertices + item * light_vertex_slots(h);
   SplatCounts n = {0u, 0u, 0u, 0u, 0u, 0u};
-  MltSlots slots, scratch;
+  MltSlots slots;
   MltSampler m;
   mlt_sampler_on(&m, &slots, h->seed);
   m.fresh = 0u;
@@ -343,7 +343,7 @@ PC_KERNEL_BODY void mlt_chains_item(const SceneData* scene, __constant const Lig
   /* The large steps' density over (depth, numbers), times their share of the steps. */
   float large_density = lt->large_step / (float)max(mlt_depths(h), 1u);
   for (uint step = sample_begin; step < sample_begin + sample_count; ++step) {
-    mlt_near_sample(&sc, lt, emission_cdf, vertices, &scratch, independent, chain, step, &n);
+    mlt_near_sample(&sc, lt, emission_cdf, vertices, independent, chain, step, &n);
     if (!(importance > 0.0f)) continue; /* a chain that found no light (a black scene) stays */
     m.large = uint_to_unit(hash4(chain, step, h->seed, 0x6d757461u)) < lt->large_step;
     m.b = step;

@@ -110,9 +110,8 @@ static inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
 }
 
 /* A state's numbers, mutated lazily (pbrt-v4's MLTSampler): a slot is brought to the current iteration
- * when read. Either fresh (every slot uniform from hash (a, b, its index): bootstrap candidates, a chain's
- * BDPT samples of depths 0 and 1) or a chain's step (a = chain, b = step): a large step takes uniform
- * numbers from (a, b); a small step moves a slot last changed n iterations ago by Kelemen's exponential
+ * when read. Either fresh (every slot uniform from hash (a, b, its index): bootstrap candidates) or a
+ * chain's step (a = chain, b = step): a large step takes uniform numbers from (a, b); a small step moves a slot last changed n iterations ago by Kelemen's exponential
  * mutation, its size times sqrt(n) (the n steps it missed, as if each had moved it: a symmetric move all the
  * same), after resetting it to its value at the last accepted large step if it was last changed before it.
  * The slots a step changes are kept to be put back if the proposal is rejected (mlt_reject); iterations count
@@ -197,11 +196,12 @@ static inline float4 mlt_numbers(MltSampler* m, uint slot) {
 }
 #endif
 
-/* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key (a Metropolis chain's:
- * its state's; the camera group's image position there is the pixel's, within the pixel the state takes). */
+/* Four uniform numbers in [0, 1) for dimensions 4 group .. 4 group + 3 of one key (a Metropolis chain's,
+ * key.mlt set: its state's, the camera group's image position there the pixel's, within the pixel the state
+ * takes; mlt's pixels' own samples, key.mlt 0: the render's sampler). */
 static inline float4 sample4(__constant const SceneHeader* h, SampleKey key, uint group) {
 #ifdef PC_MLT
-  uint slot = mlt_slot(h, group);
+  uint slot = key.mlt ? mlt_slot(h, group) : PC_INVALID;
   if (slot != PC_INVALID) {
     float4 u = mlt_numbers(key.mlt, slot);
     if (group == PC_DIM_CAMERA) u.xy = u.xy * (float2)((float)h->width, (float)h->height) - convert_float2(mlt_pixel(h, u.xy));
