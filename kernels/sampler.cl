@@ -111,11 +111,11 @@ static inline uint mlt_slot(__constant const SceneHeader* h, uint group) {
 
 /* A state's numbers, mutated lazily (pbrt-v4's MLTSampler): a slot is brought to the current iteration
  * when read. Either fresh (every slot uniform from hash (a, b, its index): bootstrap candidates) or a
- * chain's step (a = chain, b = step): a large step takes uniform numbers from (a, b); a small step moves a slot last changed n iterations ago by Kelemen's exponential
- * mutation, its size times sqrt(n) (the n steps it missed, as if each had moved it: a symmetric move all the
- * same), after resetting it to its value at the last accepted large step if it was last changed before it.
- * The slots a step changes are kept to be put back if the proposal is rejected (mlt_reject); iterations count
- * accepted steps. */
+ * chain's step (a = chain, b = step): a large step takes uniform numbers from (a, b); a small step moves a
+ * slot last changed n iterations ago by Kelemen's exponential mutation, its size times sqrt(n) (the n steps
+ * it missed, as if each had moved it: a symmetric move all the same), after resetting it to its value at
+ * the last accepted large step if it was last changed before it. The slots a step changes are kept to be
+ * put back if the proposal is rejected (mlt_reject); iterations count accepted steps. */
 typedef struct MltSampler {
   float* x;                 /* 4 per slot */
   uint* modified;           /* per slot: the iteration of its last change */
