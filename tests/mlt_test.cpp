@@ -96,8 +96,8 @@ TEST(Mlt, CornellBoxAgreesWithPathTracingPerPixel) {
 // A render's own error estimate (the relMSE estimate of --stats and --target-error, from the difference of
 // the film's half images: the first and the second half of the chains) against the error measured from the
 // spread of 8 independent seeds, at 64 and 256 steps a chain: within 4 standard errors of the two (each from
-// its spread over the seeds; z -2.5 and -2.2 here, the estimate 9 % lower: it leaves out the error of the
-// image's scale b, which both halves share). With the even and odd steps as the halves (a chain's consecutive
+// its spread over the seeds; z -2.5 and -2.2 here, the estimate 9 % lower, likely because it leaves out the
+// error of the image's scale b, which both halves share). With the even and odd steps as the halves (a chain's consecutive
 // steps are nearly the same paths) the estimate was 5 and 8 times too low (z -18 and -22).
 TEST(Mlt, OwnErrorEstimateMatchesTheSpreadOverSeeds) {
   DeviceScene scene = load_device_scene(std::string(PATHCL_SOURCE_DIR) + "/scenes/cornell-box.json");
