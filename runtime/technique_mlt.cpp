@@ -93,6 +93,7 @@ Technique mlt_technique() {
   // variance). A chain's even and odd steps are nearly the same paths: as halves they made the estimate 5 to
   // 900 times too low (docs/light-transport.md). The pixels' own samples are independent from step to step.
   t.develop = [](Film& film, const LightTransportHeader& lt, uint64_t* overflows) {
+    // The first half's share of the chains: kernels/mlt.cl's chain_half puts chains c with 2 c < pixels there.
     const double first_share = std::ceil(film.layout.pixels / 2.0) / std::max<uint32_t>(film.layout.pixels, 1);
     struct Developed {
       std::vector<float> mean, variance, even_mean, odd_mean;
